@@ -1,0 +1,8 @@
+// The subcommands of the jointcomp tool; each takes argv after the command name.
+#pragma once
+
+namespace jointcomp::cli {
+
+int runKinematics(int argc, char** argv);
+
+}  // namespace jointcomp::cli

@@ -1,0 +1,37 @@
+// jointcomp: the command-line tool. With no arguments it runs the main job on the built-in RX170.
+#include <cstdio>
+#include <cstring>
+#include <exception>
+#include <string>
+
+#include "cli/commands.hpp"
+
+namespace {
+
+void printUsage() {
+  std::printf(
+      "usage: jointcomp [command] [options]\n"
+      "commands:\n"
+      "  kinematics [--urdf FILE]   forward kinematics and gravity torques at a few poses\n"
+      "  help                       this text\n"
+      "With no command, jointcomp runs `kinematics` on the built-in Staubli RX170.\n");
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const std::string command = argc > 1 ? argv[1] : "kinematics";
+  try {
+    if (command == "help" || command == "--help" || command == "-h") {
+      printUsage();
+      return 0;
+    }
+    if (command == "kinematics") return jointcomp::cli::runKinematics(argc - 1, argv + 1);
+    std::fprintf(stderr, "jointcomp: unknown command '%s'\n", command.c_str());
+    printUsage();
+    return 2;
+  } catch (const std::exception& error) {
+    std::fprintf(stderr, "jointcomp %s: %s\n", command.c_str(), error.what());
+    return 1;
+  }
+}

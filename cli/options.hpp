@@ -1,0 +1,39 @@
+// A small command-line option reader: --name value pairs, with clear errors for unknown or missing ones.
+#pragma once
+
+#include <map>
+#include <set>
+#include <stdexcept>
+#include <string>
+
+namespace jointcomp::cli {
+
+class Options {
+public:
+  // Reads argv[1..argc) as --name value pairs (or bare --flag when `flags` holds the name).
+  Options(int argc, char** argv, const std::set<std::string>& known, const std::set<std::string>& flags = {}) {
+    for (int i = 1; i < argc; ++i) {
+      std::string name = argv[i];
+      if (name.rfind("--", 0) != 0 || known.count(name.substr(2)) == 0) {
+        throw std::invalid_argument("unknown option '" + name + "' (see jointcomp help)");
+      }
+      name = name.substr(2);
+      if (flags.count(name)) {
+        values_[name] = "1";
+        continue;
+      }
+      if (i + 1 >= argc) throw std::invalid_argument("option --" + name + " needs a value");
+      values_[name] = argv[++i];
+    }
+  }
+  bool has(const std::string& name) const { return values_.count(name) != 0; }
+  std::string get(const std::string& name, const std::string& fallback) const {
+    auto it = values_.find(name);
+    return it == values_.end() ? fallback : it->second;
+  }
+
+private:
+  std::map<std::string, std::string> values_;
+};
+
+}  // namespace jointcomp::cli

@@ -1,0 +1,167 @@
+// Dynamics in the base frame (Luh-Walker-Paul style): every vector of every body is expressed in base
+// coordinates, which keeps the recursions short and lets the mass matrix use composite bodies directly.
+#include "model/robot/dynamics.hpp"
+
+#include "model/common/errors.hpp"
+#include "model/robot/kinematics.hpp"
+
+namespace jointcomp {
+namespace {
+
+void requireInertials(const Robot& robot) {
+  if (!robot.hasInertials()) {
+    throw InvalidArgument(robot.source + ": link '" + robot.link_without_inertial +
+                          "' has no <inertial>; dynamics need the mass of every moving link");
+  }
+}
+
+void updateBodyInertias(const Robot& robot, RobotWorkspace& ws) {
+  for (int i = 0; i < robot.dof(); ++i) {
+    const Eigen::Matrix3d& rotation = ws.joint_pose[i].linear();
+    ws.inertia[i].noalias() = rotation * robot.joints[i].body.inertia * rotation.transpose();
+  }
+}
+
+// Newton-Euler at the configuration of the last forward kinematics; gravity is included when asked.
+void newtonEulerAtCurrentPose(const Robot& robot, RobotWorkspace& ws, const JointVector& qd, const JointVector& qdd,
+                              bool with_gravity, JointVector& tau) {
+  const int n = robot.dof();
+  updateBodyInertias(robot, ws);
+  const Eigen::Vector3d base_acc = with_gravity ? Eigen::Vector3d(-robot.gravity) : Eigen::Vector3d::Zero();
+  Eigen::Vector3d omega = Eigen::Vector3d::Zero();
+  Eigen::Vector3d omega_dot = Eigen::Vector3d::Zero();
+  Eigen::Vector3d origin_acc = base_acc;  // linear acceleration of the current joint origin
+  Eigen::Vector3d previous_origin = Eigen::Vector3d::Zero();
+  for (int i = 0; i < n; ++i) {
+    const Eigen::Vector3d step = ws.origin[i] - previous_origin;
+    origin_acc += omega_dot.cross(step) + omega.cross(omega.cross(step));
+    const Eigen::Vector3d joint_rate = ws.axis[i] * qd[i];
+    omega_dot += ws.axis[i] * qdd[i] + omega.cross(joint_rate);
+    omega += joint_rate;
+    ws.omega[i] = omega;
+    ws.omega_dot[i] = omega_dot;
+    const Eigen::Vector3d r = ws.com[i] - ws.origin[i];
+    ws.acc[i] = origin_acc + omega_dot.cross(r) + omega.cross(omega.cross(r));
+    previous_origin = ws.origin[i];
+  }
+  Eigen::Vector3d force = Eigen::Vector3d::Zero();
+  Eigen::Vector3d moment = Eigen::Vector3d::Zero();  // about the current joint origin
+  for (int i = n - 1; i >= 0; --i) {
+    const double mass = robot.joints[i].body.mass;
+    const Eigen::Vector3d body_force = mass * ws.acc[i];
+    const Eigen::Vector3d body_moment = ws.inertia[i] * ws.omega_dot[i] + ws.omega[i].cross(ws.inertia[i] * ws.omega[i]);
+    if (i + 1 < n) moment += (ws.origin[i + 1] - ws.origin[i]).cross(force);
+    moment += body_moment + (ws.com[i] - ws.origin[i]).cross(body_force);
+    force += body_force;
+    ws.force[i] = force;
+    ws.moment[i] = moment;
+    tau[i] = ws.axis[i].dot(moment);
+  }
+}
+
+void massMatrixAtCurrentPose(const Robot& robot, RobotWorkspace& ws, JointMatrix& mass) {
+  const int n = robot.dof();
+  updateBodyInertias(robot, ws);
+  mass.resize(n, n);
+  // Composite body of joints j..n-1: mass, first moment, inertia about the base origin.
+  double composite_mass = 0.0;
+  Eigen::Vector3d first_moment = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d inertia_about_origin = Eigen::Matrix3d::Zero();
+  for (int j = n - 1; j >= 0; --j) {
+    const double m = robot.joints[j].body.mass;
+    const Eigen::Vector3d& c = ws.com[j];
+    composite_mass += m;
+    first_moment += m * c;
+    inertia_about_origin += ws.inertia[j] + m * (c.squaredNorm() * Eigen::Matrix3d::Identity() - c * c.transpose());
+    // Force and moment (about the base origin) that a unit acceleration of joint j asks of the composite.
+    const Eigen::Vector3d& axis = ws.axis[j];
+    const Eigen::Vector3d force = axis.cross(first_moment - composite_mass * ws.origin[j]);
+    const Eigen::Vector3d moment = inertia_about_origin * axis - first_moment.cross(axis.cross(ws.origin[j]));
+    for (int i = 0; i <= j; ++i) {
+      const double value = ws.axis[i].dot(moment - ws.origin[i].cross(force));
+      mass(i, j) = value;
+      mass(j, i) = value;
+    }
+  }
+}
+
+}  // namespace
+
+void gravityTorquesAtCurrentPose(const Robot& robot, RobotWorkspace& ws, JointVector& tau) {
+  requireInertials(robot);
+  tau.resize(robot.dof());
+  // tau_i = axis_i . sum_{j >= i} (c_j - o_i) x (-m_j g): accumulate the distal mass and first moment.
+  double distal_mass = 0.0;
+  Eigen::Vector3d distal_moment = Eigen::Vector3d::Zero();
+  for (int i = robot.dof() - 1; i >= 0; --i) {
+    const double m = robot.joints[i].body.mass;
+    distal_mass += m;
+    distal_moment += m * ws.com[i];
+    tau[i] = -ws.axis[i].dot((distal_moment - distal_mass * ws.origin[i]).cross(robot.gravity));
+  }
+}
+
+void gravityTorques(const Robot& robot, RobotWorkspace& ws, const JointVector& q, JointVector& tau) {
+  forwardKinematics(robot, ws, q);
+  gravityTorquesAtCurrentPose(robot, ws, tau);
+}
+
+void inverseDynamics(const Robot& robot, RobotWorkspace& ws, const JointVector& q, const JointVector& qd,
+                     const JointVector& qdd, JointVector& tau) {
+  requireInertials(robot);
+  checkJointVector(robot, qd, "qd");
+  checkJointVector(robot, qdd, "qdd");
+  forwardKinematics(robot, ws, q);
+  tau.resize(robot.dof());
+  newtonEulerAtCurrentPose(robot, ws, qd, qdd, true, tau);
+}
+
+void massMatrix(const Robot& robot, RobotWorkspace& ws, const JointVector& q, JointMatrix& mass) {
+  requireInertials(robot);
+  forwardKinematics(robot, ws, q);
+  massMatrixAtCurrentPose(robot, ws, mass);
+}
+
+void forwardDynamics(const Robot& robot, RobotWorkspace& ws, const JointVector& q, const JointVector& qd,
+                     const JointVector& tau, JointVector& qdd) {
+  requireInertials(robot);
+  checkJointVector(robot, qd, "qd");
+  checkJointVector(robot, tau, "tau");
+  forwardKinematics(robot, ws, q);
+  const int n = robot.dof();
+  qdd.setZero(n);
+  ws.bias.resize(n);
+  newtonEulerAtCurrentPose(robot, ws, qd, qdd, true, ws.bias);
+  massMatrixAtCurrentPose(robot, ws, ws.mass_matrix);
+  ws.mass_llt.compute(ws.mass_matrix);
+  if (ws.mass_llt.info() != Eigen::Success) {
+    throw SolverError(robot.source + ": the mass matrix is not positive definite at this configuration");
+  }
+  qdd = tau - ws.bias;
+  ws.mass_llt.solveInPlace(qdd);
+}
+
+void wrenchTorquesAtCurrentPose(const Robot& robot, const RobotWorkspace& ws, const Vector6& wrench, JointVector& tau) {
+  tau.resize(robot.dof());
+  const Eigen::Vector3d point = ws.tool_pose.translation();
+  for (int i = 0; i < robot.dof(); ++i) {
+    tau[i] = ws.axis[i].cross(point - ws.origin[i]).dot(wrench.head<3>()) + ws.axis[i].dot(wrench.tail<3>());
+  }
+}
+
+double potentialEnergy(const Robot& robot, RobotWorkspace& ws, const JointVector& q) {
+  requireInertials(robot);
+  forwardKinematics(robot, ws, q);
+  double energy = 0.0;
+  for (int i = 0; i < robot.dof(); ++i) energy -= robot.joints[i].body.mass * robot.gravity.dot(ws.com[i]);
+  return energy;
+}
+
+double kineticEnergy(const Robot& robot, RobotWorkspace& ws, const JointVector& q, const JointVector& qd) {
+  checkJointVector(robot, qd, "qd");
+  JointMatrix mass;
+  massMatrix(robot, ws, q, mass);
+  return 0.5 * qd.dot(mass * qd);
+}
+
+}  // namespace jointcomp

@@ -1,0 +1,37 @@
+// Rigid-body dynamics of the chain: gravity, recursive Newton-Euler, mass matrix, forward dynamics.
+// Each call needs robot.hasInertials() (else InvalidArgument naming the link), allocates nothing, and
+// runs forward kinematics itself unless its name says it reuses the last one.
+#pragma once
+
+#include "model/robot/workspace.hpp"
+
+namespace jointcomp {
+
+// Joint torques that hold the robot still against gravity at q: tau = dV/dq.
+void gravityTorques(const Robot& robot, RobotWorkspace& ws, const JointVector& q, JointVector& tau);
+// The same at the configuration of the last forwardKinematics call.
+void gravityTorquesAtCurrentPose(const Robot& robot, RobotWorkspace& ws, JointVector& tau);
+
+// Inverse dynamics by recursive Newton-Euler: tau = M(q) qdd + C(q, qd) qd + g(q).
+void inverseDynamics(const Robot& robot, RobotWorkspace& ws, const JointVector& q, const JointVector& qd,
+                     const JointVector& qdd, JointVector& tau);
+
+// Joint-space mass matrix M(q) (composite rigid bodies), symmetric, into ws.mass_matrix and `mass`.
+void massMatrix(const Robot& robot, RobotWorkspace& ws, const JointVector& q, JointMatrix& mass);
+
+// Forward dynamics: qdd = M(q)^-1 (tau - C(q, qd) qd - g(q)). Throws SolverError if M is not positive
+// definite (massless chain ends).
+void forwardDynamics(const Robot& robot, RobotWorkspace& ws, const JointVector& q, const JointVector& qd,
+                     const JointVector& tau, JointVector& qdd);
+
+// Joint torques that balance a wrench (force, then moment about the tool point; base frame) applied at
+// the tool: tau = J^T w, at the last forwardKinematics call.
+void wrenchTorquesAtCurrentPose(const Robot& robot, const RobotWorkspace& ws, const Vector6& wrench,
+                                JointVector& tau);
+
+// Potential energy of gravity (J), for tests and energy checks.
+double potentialEnergy(const Robot& robot, RobotWorkspace& ws, const JointVector& q);
+// Kinetic energy 1/2 qd^T M qd (J).
+double kineticEnergy(const Robot& robot, RobotWorkspace& ws, const JointVector& q, const JointVector& qd);
+
+}  // namespace jointcomp

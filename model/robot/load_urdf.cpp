@@ -1,0 +1,255 @@
+#include "model/robot/load_urdf.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <limits>
+#include <mutex>
+#include <sstream>
+
+#include <Eigen/Eigenvalues>
+#include <console_bridge/console.h>
+#include <urdf_parser/urdf_parser.h>
+
+#include "model/common/errors.hpp"
+
+namespace jointcomp {
+namespace {
+
+// urdfdom reports why a file is rejected only through console_bridge. This handler keeps the last
+// messages of the calling thread so that they can go into our exception instead of onto stderr.
+class CapturingOutputHandler : public console_bridge::OutputHandler {
+public:
+  void log(const std::string& text, console_bridge::LogLevel level, const char*, int) override {
+    if (level < console_bridge::CONSOLE_BRIDGE_LOG_WARN) return;
+    std::string& buffer = capturedText();
+    if (buffer.size() < 4096) buffer += (buffer.empty() ? "" : "; ") + text;
+  }
+  static std::string& capturedText() {
+    thread_local std::string buffer;
+    return buffer;
+  }
+};
+
+void installCapturingHandlerOnce() {
+  static CapturingOutputHandler handler;
+  static std::once_flag once;
+  std::call_once(once, [] { console_bridge::useOutputHandler(&handler); });
+}
+
+Eigen::Isometry3d toIsometry(const urdf::Pose& pose) {
+  Eigen::Isometry3d transform = Eigen::Isometry3d::Identity();
+  Eigen::Quaterniond rotation(pose.rotation.w, pose.rotation.x, pose.rotation.y, pose.rotation.z);
+  transform.linear() = rotation.normalized().toRotationMatrix();
+  transform.translation() = Eigen::Vector3d(pose.position.x, pose.position.y, pose.position.z);
+  return transform;
+}
+
+bool isFinite(const urdf::Pose& pose) {
+  return std::isfinite(pose.position.x) && std::isfinite(pose.position.y) &&
+         std::isfinite(pose.position.z) && std::isfinite(pose.rotation.x) &&
+         std::isfinite(pose.rotation.y) && std::isfinite(pose.rotation.z) && std::isfinite(pose.rotation.w);
+}
+
+const char* jointTypeName(int type) {
+  switch (type) {
+    case urdf::Joint::REVOLUTE: return "revolute";
+    case urdf::Joint::CONTINUOUS: return "continuous";
+    case urdf::Joint::PRISMATIC: return "prismatic";
+    case urdf::Joint::FLOATING: return "floating";
+    case urdf::Joint::PLANAR: return "planar";
+    case urdf::Joint::FIXED: return "fixed";
+    default: return "unknown";
+  }
+}
+
+class ChainBuilder {
+public:
+  ChainBuilder(const urdf::ModelInterface& model, std::string source) : model_(model), source_(std::move(source)) {}
+
+  Robot build(const UrdfChainOptions& options) {
+    Robot robot;
+    robot.name = model_.getName();
+    robot.source = source_;
+    robot.root_link = options.root_link.empty() ? model_.getRoot()->name : options.root_link;
+    urdf::LinkConstSharedPtr root = model_.getLink(robot.root_link);
+    if (!root) fail("root link '" + robot.root_link + "' does not exist");
+    robot.tip_link = options.tip_link.empty() ? onlyLeafBelow(root) : options.tip_link;
+    urdf::LinkConstSharedPtr tip = model_.getLink(robot.tip_link);
+    if (!tip) fail("tip link '" + robot.tip_link + "' does not exist");
+
+    std::vector<urdf::JointConstSharedPtr> path = pathFromRoot(root, tip);
+    Eigen::Isometry3d pending = Eigen::Isometry3d::Identity();
+    for (const auto& urdf_joint : path) {
+      const std::string where = "joint '" + urdf_joint->name + "'";
+      if (!isFinite(urdf_joint->parent_to_joint_origin_transform)) fail(where + ": <origin> is not finite");
+      pending = pending * toIsometry(urdf_joint->parent_to_joint_origin_transform);
+      if (urdf_joint->type == urdf::Joint::FIXED) continue;
+      if (urdf_joint->type != urdf::Joint::REVOLUTE && urdf_joint->type != urdf::Joint::CONTINUOUS) {
+        fail(where + " is " + jointTypeName(urdf_joint->type) +
+             "; jointcomp models chains of revolute (and continuous) joints only");
+      }
+      robot.joints.push_back(makeJoint(*urdf_joint, pending, where));
+      pending.setIdentity();
+    }
+    if (robot.joints.empty()) fail("no revolute joint between '" + robot.root_link + "' and '" + robot.tip_link + "'");
+    if (robot.dof() > kMaxJoints) {
+      fail("the chain has " + std::to_string(robot.dof()) + " moving joints; at most " +
+           std::to_string(kMaxJoints) + " are supported");
+    }
+    robot.tool = pending;
+
+    // Every link moved by joint i and rigidly attached to its child link belongs to body i.
+    for (int i = 0; i < robot.dof(); ++i) {
+      Joint& joint = robot.joints[i];
+      const std::string next_on_chain = i + 1 < robot.dof() ? robot.joints[i + 1].name : std::string();
+      accumulateBody(model_.getLink(joint.child_link), Eigen::Isometry3d::Identity(), next_on_chain, path,
+                     joint.body);
+      if (joint.body.mass <= 0.0 && robot.link_without_inertial.empty()) {
+        robot.link_without_inertial = joint.child_link;
+      }
+    }
+    return robot;
+  }
+
+private:
+  [[noreturn]] void fail(const std::string& what) const { throw UrdfError(source_ + ": " + what); }
+
+  std::string onlyLeafBelow(urdf::LinkConstSharedPtr link) const {
+    while (!link->child_joints.empty()) {
+      if (link->child_joints.size() > 1) {
+        fail("the tree branches at link '" + link->name + "' (" + std::to_string(link->child_joints.size()) +
+             " child joints); name the tip link of the chain");
+      }
+      link = model_.getLink(link->child_joints.front()->child_link_name);
+    }
+    return link->name;
+  }
+
+  std::vector<urdf::JointConstSharedPtr> pathFromRoot(const urdf::LinkConstSharedPtr& root,
+                                                      urdf::LinkConstSharedPtr link) const {
+    std::vector<urdf::JointConstSharedPtr> reversed;
+    const std::string tip_name = link->name;
+    while (link->name != root->name) {
+      if (!link->parent_joint) fail("tip link '" + tip_name + "' is not below root link '" + root->name + "'");
+      reversed.push_back(link->parent_joint);
+      link = model_.getLink(link->parent_joint->parent_link_name);
+    }
+    return {reversed.rbegin(), reversed.rend()};
+  }
+
+  Joint makeJoint(const urdf::Joint& urdf_joint, const Eigen::Isometry3d& placement, const std::string& where) const {
+    Joint joint;
+    joint.name = urdf_joint.name;
+    joint.child_link = urdf_joint.child_link_name;
+    joint.placement = placement;
+    Eigen::Vector3d axis(urdf_joint.axis.x, urdf_joint.axis.y, urdf_joint.axis.z);
+    if (!axis.allFinite() || axis.norm() < 1e-9) fail(where + ": <axis> is zero or not finite");
+    joint.axis = axis.normalized();
+    if (urdf_joint.type == urdf::Joint::CONTINUOUS) {
+      joint.lower = -std::numeric_limits<double>::infinity();
+      joint.upper = std::numeric_limits<double>::infinity();
+    } else {
+      if (!urdf_joint.limits) fail(where + ": a revolute joint needs <limit lower upper>");
+      joint.lower = urdf_joint.limits->lower;
+      joint.upper = urdf_joint.limits->upper;
+      if (!std::isfinite(joint.lower) || !std::isfinite(joint.upper)) fail(where + ": <limit> is not finite");
+      if (joint.lower > joint.upper) {
+        fail(where + ": <limit> lower " + std::to_string(joint.lower) + " > upper " + std::to_string(joint.upper));
+      }
+    }
+    if (urdf_joint.limits) {
+      joint.velocity_limit = urdf_joint.limits->velocity;
+      joint.effort_limit = urdf_joint.limits->effort;
+      if (!std::isfinite(joint.velocity_limit) || joint.velocity_limit < 0.0 ||
+          !std::isfinite(joint.effort_limit) || joint.effort_limit < 0.0) {
+        fail(where + ": <limit> velocity and effort must be finite and non-negative");
+      }
+    }
+    return joint;
+  }
+
+  // Adds the inertial of `link` (whose frame is `link_in_body` in the body frame) and of every link
+  // fixed to it. A moving joint off the chain is a branch the model cannot represent.
+  void accumulateBody(const urdf::LinkConstSharedPtr& link, const Eigen::Isometry3d& link_in_body,
+                      const std::string& next_on_chain, const std::vector<urdf::JointConstSharedPtr>& path,
+                      BodyInertia& body) const {
+    if (link->inertial) addInertial(*link, link_in_body, body);
+    for (const auto& child : link->child_joints) {
+      if (child->name == next_on_chain) continue;
+      const bool on_path = std::any_of(path.begin(), path.end(), [&](const auto& j) { return j->name == child->name; });
+      if (child->type != urdf::Joint::FIXED) {
+        if (on_path) continue;
+        fail("joint '" + child->name + "' branches off the chain at link '" + link->name +
+             "'; jointcomp models a single serial chain (choose another tip link or remove the branch)");
+      }
+      accumulateBody(model_.getLink(child->child_link_name),
+                     link_in_body * toIsometry(child->parent_to_joint_origin_transform), next_on_chain, path, body);
+    }
+  }
+
+  void addInertial(const urdf::Link& link, const Eigen::Isometry3d& link_in_body, BodyInertia& body) const {
+    const urdf::Inertial& inertial = *link.inertial;
+    const std::string where = "link '" + link.name + "' <inertial>";
+    Eigen::Matrix3d inertia;
+    inertia << inertial.ixx, inertial.ixy, inertial.ixz, inertial.ixy, inertial.iyy, inertial.iyz, inertial.ixz,
+        inertial.iyz, inertial.izz;
+    if (!std::isfinite(inertial.mass) || !inertia.allFinite() || !isFinite(inertial.origin)) {
+      fail(where + " has a value that is not finite");
+    }
+    if (inertial.mass <= 0.0) fail(where + ": <mass> must be positive, is " + std::to_string(inertial.mass));
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> principal(inertia);
+    const Eigen::Vector3d moments = principal.eigenvalues();
+    const double tolerance = 1e-9 * std::max(1.0, moments.cwiseAbs().maxCoeff());
+    if (moments.minCoeff() < -tolerance || moments[0] + moments[1] < moments[2] - tolerance) {
+      fail(where + ": <inertia> is not a physical inertia tensor (principal moments must be non-negative and "
+                   "satisfy the triangle inequality)");
+    }
+    const Eigen::Isometry3d inertial_in_body = link_in_body * toIsometry(inertial.origin);
+    const Eigen::Vector3d com = inertial_in_body.translation();
+    const Eigen::Matrix3d rotated = inertial_in_body.linear() * inertia * inertial_in_body.linear().transpose();
+    // Combine the two bodies about their common centre of mass (parallel-axis theorem).
+    const double total = body.mass + inertial.mass;
+    const Eigen::Vector3d combined_com = (body.mass * body.com + inertial.mass * com) / total;
+    auto shifted = [&](double mass, const Eigen::Vector3d& from) {
+      const Eigen::Vector3d d = from - combined_com;
+      return Eigen::Matrix3d(mass * (d.squaredNorm() * Eigen::Matrix3d::Identity() - d * d.transpose()));
+    };
+    body.inertia = body.inertia + shifted(body.mass, body.com) + rotated + shifted(inertial.mass, com);
+    body.com = combined_com;
+    body.mass = total;
+  }
+
+  const urdf::ModelInterface& model_;
+  std::string source_;
+};
+
+}  // namespace
+
+Robot loadRobotFromUrdfString(const std::string& urdf_xml, const std::string& source_name,
+                              const UrdfChainOptions& options) {
+  installCapturingHandlerOnce();
+  CapturingOutputHandler::capturedText().clear();
+  urdf::ModelInterfaceSharedPtr model;
+  try {
+    model = urdf::parseURDF(urdf_xml);
+  } catch (const std::exception& error) {
+    throw UrdfError(source_name + ": " + error.what());
+  }
+  if (!model) {
+    std::string reason = CapturingOutputHandler::capturedText();
+    throw UrdfError(source_name + ": not a valid URDF" + (reason.empty() ? std::string() : " (" + reason + ")"));
+  }
+  return ChainBuilder(*model, source_name).build(options);
+}
+
+Robot loadRobotFromUrdfFile(const std::string& path, const UrdfChainOptions& options) {
+  std::ifstream file(path, std::ios::binary);
+  if (!file) throw UrdfError(path + ": cannot open the URDF file");
+  std::ostringstream text;
+  text << file.rdbuf();
+  if (!file.good() && !file.eof()) throw UrdfError(path + ": cannot read the URDF file");
+  return loadRobotFromUrdfString(text.str(), path, options);
+}
+
+}  // namespace jointcomp
