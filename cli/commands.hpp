@@ -4,5 +4,6 @@
 namespace jointcomp::cli {
 
 int runKinematics(int argc, char** argv);
+int runPaper(int argc, char** argv);
 
 }  // namespace jointcomp::cli

@@ -12,20 +12,23 @@ void printUsage() {
   std::printf(
       "usage: jointcomp [command] [options]\n"
       "commands:\n"
+      "  paper [--urdf FILE] [--params FILE] [--out DIR] [--seed N] [--compensate-joints 2,3] [--no-plot]\n"
+      "                             the paper's spiral test on a simulated robot: Table II analogue\n"
       "  kinematics [--urdf FILE]   forward kinematics and gravity torques at a few poses\n"
       "  help                       this text\n"
-      "With no command, jointcomp runs `kinematics` on the built-in Staubli RX170.\n");
+      "With no command, jointcomp runs `paper` on the built-in Staubli RX170.\n");
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
-  const std::string command = argc > 1 ? argv[1] : "kinematics";
+  const std::string command = argc > 1 ? argv[1] : "paper";
   try {
     if (command == "help" || command == "--help" || command == "-h") {
       printUsage();
       return 0;
     }
+    if (command == "paper") return jointcomp::cli::runPaper(argc > 1 ? argc - 1 : 0, argv + 1);
     if (command == "kinematics") return jointcomp::cli::runKinematics(argc - 1, argv + 1);
     std::fprintf(stderr, "jointcomp: unknown command '%s'\n", command.c_str());
     printUsage();

@@ -1,0 +1,110 @@
+// Compensation throughput: trajectory points per second per core over the paper's spiral, all effects
+// on, iterated to 1e-12 rad; next to the same computation with KDL's gravity solver, in the same run.
+#include <benchmark/benchmark.h>
+
+#include <kdl/chaindynparam.hpp>
+#include <kdl_parser/kdl_parser.hpp>
+
+#include <memory>
+#include <stdexcept>
+
+#include "model/compensation/compensator.hpp"
+#include "model/compensation/spiral_experiment.hpp"
+#include "model/io/parameter_file.hpp"
+#include "model/robot/load_urdf.hpp"
+
+namespace {
+
+using namespace jointcomp;
+
+struct Fixture {
+  std::shared_ptr<const Robot> robot;
+  std::unique_ptr<JointErrorModel> model;
+  JointTrajectory trajectory;
+  KDL::Chain chain;
+
+  Fixture() {
+    const std::string urdf = JOINTCOMP_DATA_DIR "/robots/rx170.urdf";
+    robot = std::make_shared<const Robot>(loadRobotFromUrdfFile(urdf));
+    model = std::make_unique<JointErrorModel>(loadParameterFile(JOINTCOMP_DATA_DIR "/params/rx170.json", robot));
+    const SpiralExperimentSpec spec;
+    const std::vector<FeedRateSample> samples = planFeedRate(logarithmicSpiral(spec.spiral), spec.feed_rate);
+    JointVector seed = JointVector::Zero(6);
+    seed << 0.0, 1.05, 1.05, 0.0, 1.05, 0.0;
+    trajectory = planJointTrajectory(*robot, samples, toolPointingDown(), seed);
+    KDL::Tree tree;
+    if (!kdl_parser::treeFromFile(urdf, tree) || !tree.getChain("base_link", "flange", chain)) {
+      throw std::runtime_error("KDL could not read " + urdf);
+    }
+  }
+};
+
+const Fixture& fixture() {
+  static const Fixture instance;
+  return instance;
+}
+
+void BM_Ours_CompensateSpiralPoint(benchmark::State& state) {
+  const Fixture& f = fixture();
+  Compensator compensator(*f.model, f.model->allEffects(), FixedPointOptions{1e-12, 50});
+  JointContext ctx(6);
+  JointVector reference;
+  std::size_t k = 0;
+  int iterations = 0;
+  for (auto _ : state) {
+    ctx.q = f.trajectory.q[k];
+    ctx.velocity = f.trajectory.qd[k];
+    const FixedPointReport report = compensator.compensate(ctx, reference);
+    iterations += report.iterations;
+    benchmark::DoNotOptimize(reference.data());
+    if (++k == f.trajectory.size()) k = 0;
+  }
+  state.SetItemsProcessed(state.iterations());
+  state.counters["fixed_point_iterations"] =
+      benchmark::Counter(static_cast<double>(iterations) / static_cast<double>(state.iterations()));
+}
+BENCHMARK(BM_Ours_CompensateSpiralPoint);
+
+// The same fixed point, with the load torque from KDL's gravity solver (plus the same spring balancer).
+void BM_Kdl_CompensateSpiralPoint(benchmark::State& state) {
+  const Fixture& f = fixture();
+  const JointErrorModel& model = *f.model;
+  const EffectMask mask = model.allEffects();
+  KDL::ChainDynParam dynamics(f.chain, KDL::Vector(0.0, 0.0, -9.81));
+  KDL::JntArray q_kdl(6), gravity(6);
+  RobotWorkspace ws(model.robot());
+  JointContext ctx(6);
+  JointVector reference, dq;
+  std::size_t k = 0;
+  for (auto _ : state) {
+    ctx.q = f.trajectory.q[k];
+    ctx.velocity = f.trajectory.qd[k];
+    for (int j = 0; j < 6; ++j) q_kdl(j) = ctx.q[j];
+    dynamics.JntToGravity(q_kdl, gravity);
+    // KDL's G(q) of tau = M qdd + C qd + G is the torque the joints carry, as ours.
+    for (int j = 0; j < 6; ++j) ctx.load_torque[j] = gravity(j);
+    for (int i = 0; i < model.effectCount(); ++i) {
+      if (((mask >> i) & 1U) && model.effect(i).role() == EffectRole::Load) {
+        model.effect(i).addLoadTorque(model.robot(), ws, ctx);
+      }
+    }
+    ctx.command = ctx.q;
+    for (int iteration = 0; iteration < 50; ++iteration) {
+      updateMotorAngles(model, ctx);
+      dq.setZero(6);
+      addSelectedJointErrors(model, mask, ctx, dq);
+      reference = ctx.q - dq;
+      const double change = (reference - ctx.command).cwiseAbs().maxCoeff();
+      ctx.command = reference;
+      if (change <= 1e-12) break;
+    }
+    benchmark::DoNotOptimize(reference.data());
+    if (++k == f.trajectory.size()) k = 0;
+  }
+  state.SetItemsProcessed(state.iterations());
+}
+BENCHMARK(BM_Kdl_CompensateSpiralPoint);
+
+}  // namespace
+
+BENCHMARK_MAIN();

@@ -1,0 +1,39 @@
+"""Plots the Z deviation of the three spiral runs along the path, in the manner of Fig. 13 of
+Olabi et al. (IEEE ICIT 2012). usage: plot_spiral_runs.py spiral_runs.csv out.png
+Runs on Debian's /usr/bin/python3 with python3-numpy and python3-matplotlib."""
+import sys
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+NAMES = ["without correction", "stiffness correction", "stiffness and kinematic correction"]
+
+
+def main(csv_path, png_path):
+    data = np.genfromtxt(csv_path, delimiter=",", names=True)
+    figure, (along, plan) = plt.subplots(1, 2, figsize=(13, 4.8))
+    for run, name in enumerate(NAMES):
+        rows = data[data["run"] == run]
+        z = rows["error_z_mm"]
+        along.plot(rows["t_s"], z, lw=0.7, label=f"{name}: Ra {np.mean(np.abs(z)):.4f} mm, Rz {np.ptp(z):.4f} mm")
+    along.set_xlabel("time along the spiral [s]")
+    along.set_ylabel("Z deviation [mm]")
+    along.axhline(0.0, color="black", lw=0.5)
+    along.legend(fontsize=8)
+    along.set_title("Z deviation measured along the spiral")
+    rows = data[data["run"] == 0]
+    points = plan.scatter(rows["planned_x_mm"], rows["planned_y_mm"], c=rows["error_z_mm"], s=2, cmap="coolwarm")
+    figure.colorbar(points, ax=plan, label="Z deviation without correction [mm]")
+    plan.set_aspect("equal")
+    plan.set_xlabel("X [mm]")
+    plan.set_ylabel("Y [mm]")
+    plan.set_title("spiral in the XY plane")
+    figure.tight_layout()
+    figure.savefig(png_path, dpi=110)
+
+
+if __name__ == "__main__":
+    main(sys.argv[1], sys.argv[2])

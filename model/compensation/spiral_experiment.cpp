@@ -1,0 +1,96 @@
+#include "model/compensation/spiral_experiment.hpp"
+
+#include "model/common/errors.hpp"
+#include "model/common/random.hpp"
+#include "model/robot/kinematics.hpp"
+
+namespace jointcomp {
+namespace {
+
+constexpr double kDegree = 3.14159265358979323846 / 180.0;
+
+void tell(const std::function<void(const std::string&)>& progress, const std::string& what) {
+  if (progress) progress(what);
+}
+
+}  // namespace
+
+SpiralSpec SpiralExperimentSpec::defaultSpiral() {
+  SpiralSpec spiral;
+  spiral.centre = Eigen::Vector3d(1.2, 0.0, 0.2);
+  return spiral;
+}
+
+SpiralExperimentResult runSpiralExperiment(const JointErrorModel& nominal, const SpiralExperimentSpec& spec,
+                                           const std::function<void(const std::string&)>& progress) {
+  const Robot& robot = nominal.robot();
+  for (int joint : spec.compensated_joints) {
+    if (joint < 0 || joint >= robot.dof()) {
+      throw InvalidArgument("compensated joint index " + std::to_string(joint) + " is out of range");
+    }
+  }
+  SpiralExperimentResult result;
+  tell(progress, "planning the spiral (feed rate, inverse kinematics)");
+  const Path path = logarithmicSpiral(spec.spiral);
+  const std::vector<FeedRateSample> samples = planFeedRate(path, spec.feed_rate);
+  JointVector seed = spec.seed_posture;
+  if (seed.size() == 0) {
+    seed = JointVector::Zero(robot.dof());
+    if (robot.dof() >= 5) {
+      seed[1] = 60 * kDegree;
+      seed[2] = 60 * kDegree;
+      seed[4] = 60 * kDegree;
+    }
+  }
+  result.planned = planJointTrajectory(robot, samples, toolPointingDown(), seed);
+
+  const JointErrorModel truth = perturbedModel(nominal, spec.truth);
+  const EffectMask truth_mask = truth.allEffects();
+  const EffectMask run_masks[3] = {0, nominal.loadsAnd({"compliance"}),
+                                   nominal.loadsAnd({"compliance", "transmission_error"})};
+  const char* run_names[3] = {"without correction", "stiffness correction", "stiffness and kinematic correction"};
+
+  JointErrorWorkspace ws(robot);
+  for (int r = 0; r < 3; ++r) {
+    SpiralRun& run = result.runs[r];
+    run.name = run_names[r];
+    tell(progress, std::string("run ") + std::to_string(r + 1) + "/3: " + run.name);
+    run.compensation = compensateTrajectory(nominal, run_masks[r], result.planned.q, result.planned.qd,
+                                            run.reference, spec.compensation);
+    if (!spec.compensated_joints.empty()) {
+      for (std::size_t k = 0; k < run.reference.size(); ++k) {
+        for (int j = 0; j < robot.dof(); ++j) {
+          bool selected = false;
+          for (int c : spec.compensated_joints) selected = selected || c == j;
+          if (!selected) run.reference[k][j] = result.planned.q[k][j];
+        }
+      }
+    }
+    DeterministicRandom noise(spec.noise_seed * 1000003ULL + static_cast<std::uint64_t>(r));
+    JointContext ctx(robot.dof());
+    run.actual.resize(run.reference.size());
+    run.measured.resize(run.reference.size());
+    run.error.resize(run.reference.size());
+    for (std::size_t k = 0; k < run.reference.size(); ++k) {
+      ctx.command = run.reference[k];
+      ctx.velocity = result.planned.qd[k];
+      ctx.time = result.planned.time[k];
+      const FixedPointReport settled = settleStatically(truth, truth_mask, ws, ctx, spec.compensation);
+      if (!settled.converged) {
+        throw SolverError("the simulated robot did not settle at sample " + std::to_string(k));
+      }
+      run.actual[k] = ctx.q;
+      forwardKinematics(robot, ws.robot, ctx.q);
+      const Eigen::Vector3d position = ws.robot.tool_pose.translation();
+      const double sigma =
+          spec.noise.constant_m + spec.noise.per_metre * (position - spec.noise.tracker_position).norm();
+      const Eigen::Vector3d measured = position + sigma * Eigen::Vector3d(noise.normal(), noise.normal(), noise.normal());
+      run.measured[k] = measured;
+      run.error[k] = measured - result.planned.tool_position[k];
+    }
+    run.metrics = accuracyMetrics(run.error);
+  }
+  return result;
+}
+
+}  // namespace jointcomp

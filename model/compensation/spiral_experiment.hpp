@@ -1,0 +1,62 @@
+// The paper's experiment (Olabi et al. 2012, Table II): the logarithmic spiral followed by a simulated
+// robot whose true joint errors differ from the nominal model, in three runs (no correction, stiffness
+// correction, stiffness and kinematic correction), scored on the tracker-measured Z deviation.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "model/compensation/compensator.hpp"
+#include "model/compensation/feed_rate.hpp"
+#include "model/compensation/joint_trajectory.hpp"
+#include "model/compensation/metrics.hpp"
+#include "model/compensation/path.hpp"
+#include "model/effects/perturbation.hpp"
+
+namespace jointcomp {
+
+// A laser tracker's noise, 1 sigma per axis: constant + per_metre * distance from the tracker.
+struct TrackerNoise {
+  double constant_m = 3.75e-6;   // (15 um MPE) / 4: MPE taken as about 2 sigma, typical as half the MPE
+  double per_metre = 1.5e-6;     // (6 um/m MPE) / 4
+  Eigen::Vector3d tracker_position{3.0, -2.0, 0.5};  // m, base frame
+};
+
+struct SpiralExperimentSpec {
+  SpiralSpec spiral = defaultSpiral();
+  FeedRateSpec feed_rate;
+  PerturbationSpec truth;
+  TrackerNoise noise;
+  std::uint64_t noise_seed = 7;
+  JointVector seed_posture;          // IK seed; empty: a forward, elbow-up posture
+  std::vector<int> compensated_joints;  // empty: all joints (the paper compensated joint 2 only)
+  FixedPointOptions compensation;
+
+  // The paper's spiral: a = 24 mm, b = 0.15, theta 0 to 4 pi, in the plane Z = 200 mm, centred at
+  // X = 1.2 m in front of the robot where the arm reaches out and joint 2 carries most of the error.
+  static SpiralSpec defaultSpiral();
+};
+
+struct SpiralRun {
+  std::string name;                         // "without correction", ...
+  std::vector<JointVector> reference;       // commanded joints
+  std::vector<JointVector> actual;          // where the simulated links went
+  std::vector<Eigen::Vector3d> measured;    // tool position measured by the tracker (with noise)
+  std::vector<Eigen::Vector3d> error;       // measured - planned
+  AccuracyMetrics metrics;
+  TrajectoryCompensationReport compensation;
+};
+
+struct SpiralExperimentResult {
+  JointTrajectory planned;
+  std::array<SpiralRun, 3> runs;
+};
+
+// `progress` (may be empty) is told what is being done, for tools that show it.
+SpiralExperimentResult runSpiralExperiment(const JointErrorModel& nominal, const SpiralExperimentSpec& spec,
+                                           const std::function<void(const std::string&)>& progress = {});
+
+}  // namespace jointcomp

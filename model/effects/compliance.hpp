@@ -1,0 +1,33 @@
+// Joint compliance: each joint's transmission twists under the torque it carries, dq = -tau / K
+// (the link lags the motor by the deflection of the joint spring). The default stiffnesses of the RX170
+// are the paper's Table I.
+#pragma once
+
+#include "model/effects/effect.hpp"
+
+namespace jointcomp {
+
+class ComplianceEffect : public Effect {
+public:
+  static constexpr const char* kType = "compliance";
+  ComplianceEffect(const Robot& robot, std::vector<double> stiffness_nm_per_rad);
+  static std::unique_ptr<Effect> fromJson(const nlohmann::json& json, const Robot& robot, const std::string& path);
+
+  std::string type() const override { return kType; }
+  EffectRole role() const override { return EffectRole::JointError; }
+  void addJointError(const Robot& robot, const JointContext& ctx, JointVector& dq) const override;
+  std::vector<std::string> parameterNames() const override;
+  std::vector<double> parameters() const override { return stiffness_; }
+  void setParameters(const std::vector<double>& values) override;
+  nlohmann::json toJson() const override;
+  std::unique_ptr<Effect> clone() const override { return std::make_unique<ComplianceEffect>(*this); }
+
+  double stiffness(int joint) const { return stiffness_[joint]; }
+
+private:
+  std::vector<std::string> joint_names_;
+  std::vector<double> stiffness_;  // N m / rad
+  JointVector compliance_;         // rad / (N m), 1 / stiffness
+};
+
+}  // namespace jointcomp

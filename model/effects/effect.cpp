@@ -1,0 +1,16 @@
+#include "model/effects/effect.hpp"
+
+namespace jointcomp {
+
+JointContext::JointContext(int dof)
+    : q(JointVector::Zero(dof)),
+      command(JointVector::Zero(dof)),
+      motor(JointVector::Zero(dof)),
+      velocity(JointVector::Zero(dof)),
+      load_torque(JointVector::Zero(dof)) {}
+
+void Effect::addLoadTorque(const Robot&, const RobotWorkspace&, JointContext&) const {}
+
+void Effect::addJointError(const Robot&, const JointContext&, JointVector&) const {}
+
+}  // namespace jointcomp

@@ -1,0 +1,71 @@
+// One interface for every joint-error effect.
+//
+// An effect either adds to the torque each joint's transmission carries (a load: the spring balancer,
+// a payload), or predicts a joint-angle error (link angle minus commanded angle) from the joint context
+// (compliance from that torque, transmission error from the gear-stage angles). Effects expose named
+// parameters so that identification can fit them, and are created by type name (registry.hpp).
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json_fwd.hpp>
+
+#include "model/robot/workspace.hpp"
+
+namespace jointcomp {
+
+// Everything an effect may depend on at one instant. The caller fills q, command, motor, velocity,
+// time and temperature; JointErrorModel fills load_torque before asking for errors.
+struct JointContext {
+  JointVector q;            // link-side joint positions: where the robot actually is (rad)
+  JointVector command;      // commanded joint positions as the controller sees them (rad)
+  JointVector motor;        // motor angles (rad), motor = G * command through the gear train
+  JointVector velocity;     // link-side joint velocities (rad/s): the direction of motion
+  double time = 0.0;        // s
+  double temperature = 20.0;  // degC
+  Vector6 tool_wrench = Vector6::Zero();  // wrench applied by the environment at the tool, base frame
+  double payload_mass = 0.0;                          // kg, carried at the tool
+  Eigen::Vector3d payload_com = Eigen::Vector3d::Zero();  // m, tool frame
+  // Torque each joint's transmission carries to hold the link (N m): gravity and payload and wrench,
+  // plus what the load effects add. Positive like gravityTorques().
+  JointVector load_torque;
+
+  explicit JointContext(int dof = 0);
+};
+
+enum class EffectRole {
+  Load,        // contributes to load_torque (acts in parallel with the transmission)
+  JointError,  // predicts a joint-angle error
+};
+
+class Effect {
+public:
+  virtual ~Effect() = default;
+
+  virtual std::string type() const = 0;  // the registry name
+  virtual EffectRole role() const = 0;
+
+  // Load effects: add this effect's contribution to ctx.load_torque (ws holds forward kinematics at ctx.q).
+  virtual void addLoadTorque(const Robot& robot, const RobotWorkspace& ws, JointContext& ctx) const;
+  // Joint-error effects: add the predicted link-minus-command error to dq.
+  virtual void addJointError(const Robot& robot, const JointContext& ctx, JointVector& dq) const;
+  // True when the error depends on ctx.command or ctx.motor (so compensation must iterate on it).
+  virtual bool dependsOnCommand() const { return false; }
+
+  // Named parameters for identification, SI units, names with the unit ("joint_2.stiffness_nm_per_rad").
+  virtual std::vector<std::string> parameterNames() const = 0;
+  virtual std::vector<double> parameters() const = 0;
+  // Throws ParameterError naming the parameter for a value out of range.
+  virtual void setParameters(const std::vector<double>& values) = 0;
+
+  // The effect as it appears in the parameter file.
+  virtual nlohmann::json toJson() const = 0;
+  virtual std::unique_ptr<Effect> clone() const = 0;
+
+  // Free-text note when the values are estimates rather than measurements ("" when measured).
+  std::string estimate_note;
+};
+
+}  // namespace jointcomp

@@ -1,0 +1,100 @@
+#include "model/effects/gear_train.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include "model/common/errors.hpp"
+#include "model/common/json_fields.hpp"
+
+namespace jointcomp {
+
+GearTrain GearTrain::direct(int dof) {
+  GearTrain gears;
+  gears.stage_ratios_.assign(dof, std::vector<double>{1.0});
+  gears.motor_from_joint_ = JointMatrix::Identity(dof, dof);
+  gears.updateDerived();
+  return gears;
+}
+
+void GearTrain::updateDerived() {
+  ratio_before_.clear();
+  for (const auto& stages : stage_ratios_) {
+    std::vector<double> before{1.0};
+    for (double ratio : stages) before.push_back(before.back() * ratio);
+    ratio_before_.push_back(before);
+  }
+}
+
+GearTrain GearTrain::fromJson(const nlohmann::json& gears_json, const Robot& robot, const std::string& path) {
+  GearTrain gears = direct(robot.dof());
+  JsonFields fields(gears_json, path);
+  const nlohmann::json& joints = fields.array("joints");
+  if (static_cast<int>(joints.size()) != robot.dof()) {
+    fields.fail("joints", "expected one entry per joint (" + std::to_string(robot.dof()) + "), found " +
+                              std::to_string(joints.size()));
+  }
+  for (int j = 0; j < robot.dof(); ++j) {
+    JsonFields joint(joints[j], fields.pathOf("joints[" + std::to_string(j) + "]"));
+    const std::string name = joint.text("joint");
+    if (name != robot.joints[j].name) joint.fail("joint", "expected '" + robot.joints[j].name + "' at this position");
+    std::vector<double> ratios = joint.numbers("stage_ratios");
+    if (ratios.empty()) joint.fail("stage_ratios", "needs at least one stage");
+    double total = 1.0;
+    for (std::size_t k = 0; k < ratios.size(); ++k) {
+      if (ratios[k] == 0.0) joint.fail("stage_ratios[" + std::to_string(k) + "]", "must not be zero");
+      total *= ratios[k];
+    }
+    gears.stage_ratios_[j] = ratios;
+    gears.motor_from_joint_(j, j) = total;
+    joint.rejectUnknownKeys();
+  }
+  if (fields.has("coupling")) {
+    const nlohmann::json& coupling = fields.array("coupling");
+    for (std::size_t c = 0; c < coupling.size(); ++c) {
+      JsonFields entry(coupling[c], fields.pathOf("coupling[" + std::to_string(c) + "]"));
+      const std::string motor_name = entry.text("motor_of");
+      const std::string joint_name = entry.text("joint");
+      int motor = -1;
+      int joint = -1;
+      for (int j = 0; j < robot.dof(); ++j) {
+        if (robot.joints[j].name == motor_name) motor = j;
+        if (robot.joints[j].name == joint_name) joint = j;
+      }
+      if (motor < 0) entry.fail("motor_of", "no joint named '" + motor_name + "'");
+      if (joint < 0) entry.fail("joint", "no joint named '" + joint_name + "'");
+      if (motor == joint) entry.fail("joint", "coupling must be between two different joints");
+      gears.motor_from_joint_(motor, joint) = entry.number("motor_rad_per_joint_rad");
+      entry.rejectUnknownKeys();
+    }
+  }
+  fields.rejectUnknownKeys();
+  gears.updateDerived();
+  return gears;
+}
+
+nlohmann::json GearTrain::toJson(const Robot& robot) const {
+  nlohmann::json joints = nlohmann::json::array();
+  for (int j = 0; j < dof(); ++j) joints.push_back({{"joint", robot.joints[j].name}, {"stage_ratios", stage_ratios_[j]}});
+  nlohmann::json coupling = nlohmann::json::array();
+  for (int m = 0; m < dof(); ++m) {
+    for (int j = 0; j < dof(); ++j) {
+      if (m != j && motor_from_joint_(m, j) != 0.0) {
+        coupling.push_back({{"motor_of", robot.joints[m].name},
+                            {"joint", robot.joints[j].name},
+                            {"motor_rad_per_joint_rad", motor_from_joint_(m, j)}});
+      }
+    }
+  }
+  nlohmann::json result = {{"joints", joints}};
+  if (!coupling.empty()) result["coupling"] = coupling;
+  return result;
+}
+
+void GearTrain::motorAngles(const JointVector& joint_angles, JointVector& motor) const {
+  motor.noalias() = motor_from_joint_ * joint_angles;
+}
+
+double GearTrain::stageInputAngle(int joint, int stage, const JointVector& motor) const {
+  return motor[joint] / ratio_before_[joint][stage - 1];
+}
+
+}  // namespace jointcomp

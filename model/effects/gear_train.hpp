@@ -1,0 +1,40 @@
+// The gear stages between each motor and its joint, and the coupling between axes (the Staubli wrist
+// drives joint 6 from motor 5 too): motor angles = G * joint angles, G = diag(total ratios) + coupling.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <nlohmann/json_fwd.hpp>
+
+#include "model/robot/robot.hpp"
+
+namespace jointcomp {
+
+class GearTrain {
+public:
+  // Every joint driven directly (ratio 1, one stage), no coupling.
+  static GearTrain direct(int dof);
+  // Reads the "gears" object of a parameter file; `path` names it in messages.
+  static GearTrain fromJson(const nlohmann::json& gears, const Robot& robot, const std::string& path);
+  nlohmann::json toJson(const Robot& robot) const;
+
+  int dof() const { return static_cast<int>(stage_ratios_.size()); }
+  int stageCount(int joint) const { return static_cast<int>(stage_ratios_[joint].size()); }
+  const std::vector<double>& stageRatios(int joint) const { return stage_ratios_[joint]; }
+  double totalRatio(int joint) const { return motor_from_joint_(joint, joint); }
+  const JointMatrix& motorFromJoint() const { return motor_from_joint_; }
+
+  // motor = G * joint angles.
+  void motorAngles(const JointVector& joint_angles, JointVector& motor) const;
+  // Angle of the input shaft of stage `stage` (1 = the motor, stageCount + 1 = the output) of a joint.
+  double stageInputAngle(int joint, int stage, const JointVector& motor) const;
+
+private:
+  std::vector<std::vector<double>> stage_ratios_;  // per joint, motor side first
+  std::vector<std::vector<double>> ratio_before_;   // product of the ratios before each stage input
+  JointMatrix motor_from_joint_;
+  void updateDerived();
+};
+
+}  // namespace jointcomp

@@ -1,0 +1,113 @@
+#include "model/effects/joint_error_model.hpp"
+
+#include <cmath>
+
+#include "model/common/errors.hpp"
+#include "model/robot/dynamics.hpp"
+#include "model/robot/kinematics.hpp"
+
+namespace jointcomp {
+
+JointErrorModel::JointErrorModel(std::shared_ptr<const Robot> robot, GearTrain gears,
+                                 std::vector<std::unique_ptr<Effect>> effects)
+    : robot_(std::move(robot)), gears_(std::move(gears)) {
+  if (!robot_) throw InvalidArgument("joint-error model needs a robot");
+  if (gears_.dof() != robot_->dof()) throw InvalidArgument("gear train and robot differ in joint count");
+  for (auto& effect : effects) addEffect(std::move(effect));
+}
+
+JointErrorModel::JointErrorModel(const JointErrorModel& other)
+    : notes(other.notes), robot_(other.robot_), gears_(other.gears_) {
+  for (const auto& effect : other.effects_) effects_.push_back(effect->clone());
+}
+
+JointErrorModel& JointErrorModel::operator=(const JointErrorModel& other) {
+  if (this != &other) *this = JointErrorModel(other);
+  return *this;
+}
+
+void JointErrorModel::addEffect(std::unique_ptr<Effect> effect) {
+  if (!effect) throw InvalidArgument("joint-error model: null effect");
+  if (effectCount() >= kMaxEffects) throw InvalidArgument("joint-error model: more than 64 effects");
+  effects_.push_back(std::move(effect));
+}
+
+int JointErrorModel::findEffect(const std::string& type) const {
+  for (int i = 0; i < effectCount(); ++i) {
+    if (effects_[i]->type() == type) return i;
+  }
+  return -1;
+}
+
+EffectMask JointErrorModel::allEffects() const {
+  return effectCount() == kMaxEffects ? ~EffectMask(0) : (EffectMask(1) << effectCount()) - 1;
+}
+
+EffectMask JointErrorModel::loadsAnd(std::initializer_list<const char*> error_types) const {
+  EffectMask mask = 0;
+  for (int i = 0; i < effectCount(); ++i) {
+    bool selected = effects_[i]->role() == EffectRole::Load;
+    for (const char* type : error_types) selected = selected || effects_[i]->type() == type;
+    if (selected) mask |= EffectMask(1) << i;
+  }
+  return mask;
+}
+
+JointErrorWorkspace::JointErrorWorkspace(const Robot& robot_model)
+    : robot(robot_model), jacobian(6, robot_model.dof()), scratch(JointVector::Zero(robot_model.dof())) {}
+
+void computeLoadTorque(const JointErrorModel& model, EffectMask mask, JointErrorWorkspace& ws, JointContext& ctx) {
+  const Robot& robot = model.robot();
+  forwardKinematics(robot, ws.robot, ctx.q);
+  gravityTorquesAtCurrentPose(robot, ws.robot, ctx.load_torque);
+  if (ctx.payload_mass != 0.0) {
+    const Eigen::Vector3d point = ws.robot.tool_pose * ctx.payload_com;
+    pointJacobian(robot, ws.robot, point, ws.jacobian);
+    ctx.load_torque.noalias() -= ws.jacobian.topRows<3>().transpose() * (ctx.payload_mass * robot.gravity);
+  }
+  if (!ctx.tool_wrench.isZero(0.0)) {
+    wrenchTorquesAtCurrentPose(robot, ws.robot, ctx.tool_wrench, ws.scratch);
+    ctx.load_torque -= ws.scratch;
+  }
+  for (int i = 0; i < model.effectCount(); ++i) {
+    if ((mask >> i) & 1U) model.effect(i).addLoadTorque(robot, ws.robot, ctx);
+  }
+}
+
+void addSelectedJointErrors(const JointErrorModel& model, EffectMask mask, const JointContext& ctx, JointVector& dq) {
+  for (int i = 0; i < model.effectCount(); ++i) {
+    if (((mask >> i) & 1U) && model.effect(i).role() == EffectRole::JointError) {
+      model.effect(i).addJointError(model.robot(), ctx, dq);
+    }
+  }
+}
+
+void updateMotorAngles(const JointErrorModel& model, JointContext& ctx) {
+  model.gears().motorAngles(ctx.command, ctx.motor);
+}
+
+FixedPointReport settleStatically(const JointErrorModel& model, EffectMask mask, JointErrorWorkspace& ws,
+                                  JointContext& ctx, const FixedPointOptions& options) {
+  checkJointVector(model.robot(), ctx.command, "command");
+  updateMotorAngles(model, ctx);
+  ctx.q = ctx.command;
+  FixedPointReport report;
+  JointVector dq;
+  for (report.iterations = 1; report.iterations <= options.max_iterations; ++report.iterations) {
+    computeLoadTorque(model, mask, ws, ctx);
+    dq.setZero(model.robot().dof());
+    addSelectedJointErrors(model, mask, ctx, dq);
+    const JointVector next = ctx.command + dq;
+    report.residual = (next - ctx.q).cwiseAbs().maxCoeff();
+    ctx.q = next;
+    if (!std::isfinite(report.residual)) break;
+    if (report.residual <= options.tolerance) {
+      report.converged = true;
+      return report;
+    }
+  }
+  report.iterations = std::min(report.iterations, options.max_iterations);
+  return report;
+}
+
+}  // namespace jointcomp

@@ -1,0 +1,87 @@
+// The joint-error model of one robot: its gear train and the list of effects, with the two questions
+// everything else asks of it: what torque does each joint carry at a pose, and what joint error follows.
+#pragma once
+
+#include <cstdint>
+#include <initializer_list>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "model/effects/effect.hpp"
+#include "model/effects/gear_train.hpp"
+
+namespace jointcomp {
+
+// Which effects of a model take part: bit i stands for effect i.
+using EffectMask = std::uint64_t;
+constexpr int kMaxEffects = 64;
+
+class JointErrorModel {
+public:
+  JointErrorModel(std::shared_ptr<const Robot> robot, GearTrain gears, std::vector<std::unique_ptr<Effect>> effects);
+  JointErrorModel(const JointErrorModel& other);
+  JointErrorModel& operator=(const JointErrorModel& other);
+  JointErrorModel(JointErrorModel&&) = default;
+  JointErrorModel& operator=(JointErrorModel&&) = default;
+
+  const Robot& robot() const { return *robot_; }
+  std::shared_ptr<const Robot> sharedRobot() const { return robot_; }
+  const GearTrain& gears() const { return gears_; }
+  int effectCount() const { return static_cast<int>(effects_.size()); }
+  const Effect& effect(int i) const { return *effects_[i]; }
+  Effect& effect(int i) { return *effects_[i]; }
+  void addEffect(std::unique_ptr<Effect> effect);
+  // Index of the first effect of that type, -1 if none.
+  int findEffect(const std::string& type) const;
+
+  EffectMask allEffects() const;
+  // Every load effect plus the joint-error effects of the given types (the paper's runs: {} for none,
+  // {"compliance"} for stiffness, {"compliance", "transmission_error"} for both).
+  EffectMask loadsAnd(std::initializer_list<const char*> error_types) const;
+
+  // Free text kept from the parameter file.
+  std::string notes;
+
+private:
+  std::shared_ptr<const Robot> robot_;
+  GearTrain gears_;
+  std::vector<std::unique_ptr<Effect>> effects_;
+};
+
+// Scratch for the model's calls; one per thread.
+struct JointErrorWorkspace {
+  explicit JointErrorWorkspace(const Robot& robot);
+  RobotWorkspace robot;
+  Jacobian jacobian;
+  JointVector scratch;
+};
+
+// ctx.load_torque at ctx.q: gravity, payload, minus J^T of the tool wrench, plus the selected loads.
+// Runs forward kinematics at ctx.q into ws.robot.
+void computeLoadTorque(const JointErrorModel& model, EffectMask mask, JointErrorWorkspace& ws, JointContext& ctx);
+
+// Joint errors (link minus command) of the selected error effects, from ctx as it is (load_torque
+// already computed, motor angles already set).
+void addSelectedJointErrors(const JointErrorModel& model, EffectMask mask, const JointContext& ctx, JointVector& dq);
+
+// ctx.motor = G * ctx.command.
+void updateMotorAngles(const JointErrorModel& model, JointContext& ctx);
+
+struct FixedPointReport {
+  int iterations = 0;
+  double residual = 0.0;  // rad, max |change| of the last iteration
+  bool converged = false;
+};
+
+struct FixedPointOptions {
+  double tolerance = 1e-12;  // rad
+  int max_iterations = 50;
+};
+
+// The quasi-static robot: where the links are when commanded ctx.command, solving
+// q = command + dq(q, command) by fixed-point iteration from q = command. Result in ctx.q.
+FixedPointReport settleStatically(const JointErrorModel& model, EffectMask mask, JointErrorWorkspace& ws,
+                                  JointContext& ctx, const FixedPointOptions& options = {});
+
+}  // namespace jointcomp

@@ -1,0 +1,129 @@
+#include "model/effects/transmission_error.hpp"
+
+#include <cmath>
+
+#include <nlohmann/json.hpp>
+
+#include "model/common/errors.hpp"
+#include "model/common/json_fields.hpp"
+
+namespace jointcomp {
+namespace {
+constexpr double kDegree = 3.14159265358979323846 / 180.0;
+}
+
+TransmissionErrorEffect::TransmissionErrorEffect(const Robot& robot, GearTrain gears, std::vector<Harmonic> harmonics)
+    : gears_(std::move(gears)), harmonics_(std::move(harmonics)) {
+  for (const Joint& joint : robot.joints) joint_names_.push_back(joint.name);
+  for (const Harmonic& h : harmonics_) {
+    if (h.joint < 0 || h.joint >= robot.dof()) throw ParameterError("transmission_error: joint index out of range");
+    if (h.stage < 1 || h.stage > gears_.stageCount(h.joint) + 1) {
+      throw ParameterError("transmission_error: " + joint_names_[h.joint] + " has no stage " + std::to_string(h.stage));
+    }
+  }
+  setParameters(parameters());
+}
+
+std::string TransmissionErrorEffect::partName(int joint, int stage) const {
+  if (stage == 1) return "motor";
+  if (stage == gears_.stageCount(joint) + 1) return "output";
+  return "stage_" + std::to_string(stage);
+}
+
+std::unique_ptr<Effect> TransmissionErrorEffect::fromJson(const nlohmann::json& json, const Robot& robot,
+                                                          const GearTrain& gears, const std::string& path) {
+  JsonFields fields(json, path);
+  fields.text("type");
+  std::vector<Harmonic> harmonics;
+  const nlohmann::json& list = fields.array("harmonics");
+  for (std::size_t i = 0; i < list.size(); ++i) {
+    JsonFields entry(list[i], fields.pathOf("harmonics[" + std::to_string(i) + "]"));
+    Harmonic h;
+    const std::string joint_name = entry.text("joint");
+    h.joint = -1;
+    for (int j = 0; j < robot.dof(); ++j) {
+      if (robot.joints[j].name == joint_name) h.joint = j;
+    }
+    if (h.joint < 0) entry.fail("joint", "robot '" + robot.name + "' has no joint named '" + joint_name + "'");
+    const std::string part = entry.text("of");
+    const int stages = gears.stageCount(h.joint);
+    if (part == "motor") {
+      h.stage = 1;
+    } else if (part == "output") {
+      h.stage = stages + 1;
+    } else if (part.rfind("stage_", 0) == 0 && part.size() > 6 &&
+               part.find_first_not_of("0123456789", 6) == std::string::npos && part.size() < 9) {
+      h.stage = std::stoi(part.substr(6));
+      if (h.stage < 1 || h.stage > stages) {
+        entry.fail("of", "'" + part + "': " + joint_name + " has stages 1 to " + std::to_string(stages));
+      }
+    } else {
+      entry.fail("of", "expected \"motor\", \"stage_K\" (input of stage K) or \"output\", found \"" + part + "\"");
+    }
+    h.cycles_per_revolution = entry.positiveNumber("cycles_per_revolution");
+    h.amplitude_rad = entry.nonNegativeNumber("amplitude_deg") * kDegree;
+    h.phase_rad = entry.number("phase_rad");
+    entry.rejectUnknownKeys();
+    harmonics.push_back(h);
+  }
+  const std::string note = fields.textOr("estimate", "");
+  fields.rejectUnknownKeys();
+  auto effect = std::make_unique<TransmissionErrorEffect>(robot, gears, harmonics);
+  effect->estimate_note = note;
+  return effect;
+}
+
+void TransmissionErrorEffect::addJointError(const Robot&, const JointContext& ctx, JointVector& dq) const {
+  for (const Harmonic& h : harmonics_) {
+    const double angle = gears_.stageInputAngle(h.joint, h.stage, ctx.motor);
+    dq[h.joint] += h.amplitude_rad * std::sin(h.cycles_per_revolution * angle + h.phase_rad);
+  }
+}
+
+std::vector<std::string> TransmissionErrorEffect::parameterNames() const {
+  std::vector<std::string> names;
+  for (const Harmonic& h : harmonics_) {
+    char order[32];
+    std::snprintf(order, sizeof order, "%g", h.cycles_per_revolution);
+    const std::string prefix = joint_names_[h.joint] + ".harmonic_" + partName(h.joint, h.stage) + "_x" + order + ".";
+    names.push_back(prefix + "amplitude_rad");
+    names.push_back(prefix + "phase_rad");
+  }
+  return names;
+}
+
+std::vector<double> TransmissionErrorEffect::parameters() const {
+  std::vector<double> values;
+  for (const Harmonic& h : harmonics_) {
+    values.push_back(h.amplitude_rad);
+    values.push_back(h.phase_rad);
+  }
+  return values;
+}
+
+void TransmissionErrorEffect::setParameters(const std::vector<double>& values) {
+  if (values.size() != 2 * harmonics_.size()) throw ParameterError("transmission_error: wrong number of parameters");
+  for (std::size_t i = 0; i < harmonics_.size(); ++i) {
+    if (!std::isfinite(values[2 * i]) || !std::isfinite(values[2 * i + 1])) {
+      throw ParameterError("transmission_error: harmonic " + std::to_string(i) + " has a value that is not finite");
+    }
+    harmonics_[i].amplitude_rad = values[2 * i];
+    harmonics_[i].phase_rad = values[2 * i + 1];
+  }
+}
+
+nlohmann::json TransmissionErrorEffect::toJson() const {
+  nlohmann::json list = nlohmann::json::array();
+  for (const Harmonic& h : harmonics_) {
+    list.push_back({{"joint", joint_names_[h.joint]},
+                    {"of", partName(h.joint, h.stage)},
+                    {"cycles_per_revolution", h.cycles_per_revolution},
+                    {"amplitude_deg", h.amplitude_rad / kDegree},
+                    {"phase_rad", h.phase_rad}});
+  }
+  nlohmann::json json = {{"type", kType}, {"harmonics", list}};
+  if (!estimate_note.empty()) json["estimate"] = estimate_note;
+  return json;
+}
+
+}  // namespace jointcomp

@@ -1,0 +1,48 @@
+// Transmission (kinematic) error of the gears: the link angle differs from motor angle / ratio by a
+// periodic function of the angles of the rotating parts. Each harmonic is counted per revolution of a
+// named part of one joint's gear train (the motor, the input of stage k, or the output):
+//   dq_joint += amplitude * sin(cycles_per_revolution * angle_of_part + phase).
+// The harmonic-drive signature of the paper is 2 cycles per input revolution of the second stage.
+#pragma once
+
+#include "model/effects/effect.hpp"
+#include "model/effects/gear_train.hpp"
+
+namespace jointcomp {
+
+struct Harmonic {
+  int joint = 0;
+  int stage = 1;  // 1 = motor (input of stage 1), k = input of stage k, stageCount + 1 = output
+  double cycles_per_revolution = 1.0;
+  double amplitude_rad = 0.0;
+  double phase_rad = 0.0;
+};
+
+class TransmissionErrorEffect : public Effect {
+public:
+  static constexpr const char* kType = "transmission_error";
+  TransmissionErrorEffect(const Robot& robot, GearTrain gears, std::vector<Harmonic> harmonics);
+  static std::unique_ptr<Effect> fromJson(const nlohmann::json& json, const Robot& robot, const GearTrain& gears,
+                                          const std::string& path);
+
+  std::string type() const override { return kType; }
+  EffectRole role() const override { return EffectRole::JointError; }
+  bool dependsOnCommand() const override { return true; }
+  void addJointError(const Robot& robot, const JointContext& ctx, JointVector& dq) const override;
+  std::vector<std::string> parameterNames() const override;
+  std::vector<double> parameters() const override;
+  void setParameters(const std::vector<double>& values) override;
+  nlohmann::json toJson() const override;
+  std::unique_ptr<Effect> clone() const override { return std::make_unique<TransmissionErrorEffect>(*this); }
+
+  const std::vector<Harmonic>& harmonics() const { return harmonics_; }
+  // "motor", "stage_k" or "output" for a stage number of a joint.
+  std::string partName(int joint, int stage) const;
+
+private:
+  std::vector<std::string> joint_names_;
+  GearTrain gears_;
+  std::vector<Harmonic> harmonics_;
+};
+
+}  // namespace jointcomp
