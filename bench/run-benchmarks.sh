@@ -1,0 +1,95 @@
+#!/usr/bin/env bash
+# Builds the benchmarks (Release, build/bench) and compares jointcomp's robot algorithms with KDL on the
+# RX170: per call, the median over 3 repetitions of the CPU time, ours / KDL, and the allocations per call.
+# Run from anywhere; arguments are passed on to the benchmark binary (e.g. --benchmark_filter=Gravity).
+#   bench/run-benchmarks.sh
+set -euo pipefail
+
+root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+cd "$root"
+build_dir="build/bench"
+json="$build_dir/robot_bench.json"
+python=/usr/bin/python3  # Debian's interpreter: the python3 first on PATH may be another one
+
+cmake -S . -B "$build_dir" -DCMAKE_BUILD_TYPE=Release -DJOINTCOMP_BUILD_TESTS=OFF >/dev/null
+cmake --build "$build_dir" --target robot_bench -j"$(nproc)"
+
+# The binary cross-checks ours against KDL before timing anything (exit 2 if they disagree) and fails
+# (exit 3) if one of our calls allocated in its timed loop.
+echo "running robot_bench (3 repetitions of each benchmark, medians; about half a minute) ..." >&2
+status=0
+# 0.25 s per repetition keeps the whole run near 30 s on 2 cores; later arguments override these.
+"$build_dir/bench/robot_bench" --benchmark_format=json --benchmark_repetitions=3 \
+  --benchmark_report_aggregates_only=true --benchmark_min_time=0.25 "$@" >"$json" || status=$?
+if [ "$status" -ne 0 ]; then
+  echo "robot_bench failed (exit $status); see the message above. JSON so far: $json" >&2
+  exit "$status"
+fi
+
+"$python" - "$json" <<'EOF'
+import json
+import sys
+
+with open(sys.argv[1]) as f:
+    report = json.load(f)
+
+scale = {"ns": 1.0, "us": 1e3, "ms": 1e6, "s": 1e9}
+median = {}  # run name -> (cpu ns per call, allocs per call)
+for b in report["benchmarks"]:
+    if b.get("run_type") == "aggregate" and b.get("aggregate_name") != "median":
+        continue
+    name = b.get("run_name", b["name"])
+    median[name] = (b["cpu_time"] * scale[b.get("time_unit", "ns")], b.get("allocs_per_call", float("nan")))
+
+calls = [
+    ("ForwardKinematics", "forward kinematics"),
+    ("Jacobian", "Jacobian (with its FK)"),
+    ("Gravity", "gravity torques"),
+    ("FkJacobianGravity", "FK+Jacobian+gravity"),
+    ("InverseDynamics", "RNEA (inverse dynamics)"),
+    ("MassMatrix", "mass matrix"),
+    ("ForwardDynamics", "forward dynamics"),
+]
+targets = {"FkJacobianGravity": 0.5, "ForwardDynamics": 0.5}
+
+def kdl_fastest(call):
+    """KDL's fastest way to do the call: BM_Kdl_<call> or one of its variants BM_Kdl_<call>_<variant>."""
+    candidates = [(t, a, n) for n, (t, a) in median.items()
+                  if n == "BM_Kdl_" + call or n.startswith("BM_Kdl_" + call + "_")]
+    return min(candidates) if candidates else None
+
+rows = []
+ratios = {}
+for call, label in calls:
+    ours = median.get("BM_Ours_" + call)
+    kdl = kdl_fastest(call)
+    if ours is None or kdl is None:
+        continue
+    ratio = ours[0] / kdl[0]
+    ratios[call] = ratio
+    variant = kdl[2][len("BM_Kdl_" + call):].lstrip("_")
+    rows.append((label, f"{ours[0]:.0f}", f"{kdl[0]:.0f}" + (f" ({variant})" if variant else ""),
+                 f"{ratio:.3f}", f"{ours[1]:g} / {kdl[1]:g}"))
+
+header = ("call", "ours ns", "KDL ns", "ours/KDL", "allocs per call (ours / KDL)")
+widths = [max(len(r[i]) for r in rows + [header]) for i in range(len(header))]
+line = lambda r: "  ".join(c.ljust(w) if i == 0 else c.rjust(w) for i, (c, w) in enumerate(zip(r, widths)))
+print()
+print("RX170, median of 3 repetitions, CPU time per call; 64 seeded configurations cycled")
+print(line(header))
+print(line(tuple("-" * w for w in widths)))
+for r in rows:
+    print(line(r))
+print()
+for call, label in calls:
+    alternatives = sorted((n, t) for n, (t, _) in median.items() if n.startswith("BM_Kdl_" + call + "_"))
+    if len(alternatives) > 1:
+        print(f"KDL {label}: fastest variant taken; " +
+              ", ".join(f"{n[len('BM_Kdl_' + call) + 1:]} {t:.0f} ns" for n, t in alternatives))
+print("target: FK+Jacobian+gravity and forward dynamics at most 0.5 of KDL")
+for call, limit in targets.items():
+    if call in ratios:
+        verdict = "met" if ratios[call] <= limit else "NOT met"
+        label = dict(calls)[call]
+        print(f"  {label}: {ratios[call]:.3f} of KDL -> {verdict}")
+EOF
