@@ -12,7 +12,8 @@ void printUsage() {
   std::printf(
       "usage: jointcomp [command] [options]\n"
       "commands:\n"
-      "  paper [--urdf FILE] [--params FILE] [--out DIR] [--seed N] [--compensate-joints 2,3] [--no-plot]\n"
+      "  paper [--urdf FILE] [--params FILE] [--out DIR] [--seed N] [--compensate-joints 2,3] [--quasi-static]\n"
+      "        [--no-plot]\n"
       "                             the paper's spiral test on a simulated robot: Table II analogue\n"
       "  kinematics [--urdf FILE]   forward kinematics and gravity torques at a few poses\n"
       "  help                       this text\n"

@@ -1,5 +1,7 @@
 #include "model/compensation/spiral_experiment.hpp"
 
+#include <chrono>
+
 #include "model/common/errors.hpp"
 #include "model/common/random.hpp"
 #include "model/robot/kinematics.hpp"
@@ -51,6 +53,9 @@ SpiralExperimentResult runSpiralExperiment(const JointErrorModel& nominal, const
   const char* run_names[3] = {"without correction", "stiffness correction", "stiffness and kinematic correction"};
 
   JointErrorWorkspace ws(robot);
+  result.dynamic = !spec.drives.empty();
+  std::unique_ptr<FlexibleJointPlant> plant;
+  if (result.dynamic) plant = std::make_unique<FlexibleJointPlant>(truth, spec.drives, spec.plant);
   for (int r = 0; r < 3; ++r) {
     SpiralRun& run = result.runs[r];
     run.name = run_names[r];
@@ -67,20 +72,34 @@ SpiralExperimentResult runSpiralExperiment(const JointErrorModel& nominal, const
       }
     }
     DeterministicRandom noise(spec.noise_seed * 1000003ULL + static_cast<std::uint64_t>(r));
-    JointContext ctx(robot.dof());
-    run.actual.resize(run.reference.size());
-    run.measured.resize(run.reference.size());
-    run.error.resize(run.reference.size());
-    for (std::size_t k = 0; k < run.reference.size(); ++k) {
-      ctx.command = run.reference[k];
-      ctx.velocity = result.planned.qd[k];
-      ctx.time = result.planned.time[k];
-      const FixedPointReport settled = settleStatically(truth, truth_mask, ws, ctx, spec.compensation);
-      if (!settled.converged) {
-        throw SolverError("the simulated robot did not settle at sample " + std::to_string(k));
+    const std::size_t count = run.reference.size();
+    run.actual.resize(count);
+    run.measured.resize(count);
+    run.error.resize(count);
+    const auto started = std::chrono::steady_clock::now();
+    if (result.dynamic) {
+      plant->reset(run.reference[0], result.planned.time[0]);
+      for (std::size_t k = 0; k < count; ++k) {
+        plant->setReference(run.reference[k], result.planned.qd[k]);
+        run.actual[k] = plant->linkPositions();
+        if (k + 1 < count) plant->advance(result.planned.time[k + 1]);
       }
-      run.actual[k] = ctx.q;
-      forwardKinematics(robot, ws.robot, ctx.q);
+    } else {
+      JointContext ctx(robot.dof());
+      for (std::size_t k = 0; k < count; ++k) {
+        ctx.command = run.reference[k];
+        ctx.velocity = result.planned.qd[k];
+        ctx.time = result.planned.time[k];
+        const FixedPointReport settled = settleStatically(truth, truth_mask, ws, ctx, spec.compensation);
+        if (!settled.converged) {
+          throw SolverError("the simulated robot did not settle at sample " + std::to_string(k));
+        }
+        run.actual[k] = ctx.q;
+      }
+    }
+    result.simulation_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+    for (std::size_t k = 0; k < count; ++k) {
+      forwardKinematics(robot, ws.robot, run.actual[k]);
       const Eigen::Vector3d position = ws.robot.tool_pose.translation();
       const double sigma =
           spec.noise.constant_m + spec.noise.per_metre * (position - spec.noise.tracker_position).norm();
@@ -90,6 +109,7 @@ SpiralExperimentResult runSpiralExperiment(const JointErrorModel& nominal, const
     }
     run.metrics = accuracyMetrics(run.error);
   }
+  if (plant) result.plant_statistics = plant->statistics();
   return result;
 }
 

@@ -15,6 +15,7 @@
 #include "model/compensation/metrics.hpp"
 #include "model/compensation/path.hpp"
 #include "model/effects/perturbation.hpp"
+#include "model/plant/flexible_joint_plant.hpp"
 
 namespace jointcomp {
 
@@ -34,6 +35,10 @@ struct SpiralExperimentSpec {
   JointVector seed_posture;          // IK seed; empty: a forward, elbow-up posture
   std::vector<int> compensated_joints;  // empty: all joints (the paper compensated joint 2 only)
   FixedPointOptions compensation;
+  // The simulated robot: the flexible-joint plant (drives not empty) or, with no drives, the
+  // quasi-static robot (kinematics, elastostatics and transmission error only).
+  std::vector<DriveParameters> drives;
+  PlantOptions plant;
 
   // The paper's spiral: a = 24 mm, b = 0.15, theta 0 to 4 pi, in the plane Z = 200 mm, centred at
   // X = 1.2 m in front of the robot where the arm reaches out and joint 2 carries most of the error.
@@ -52,6 +57,9 @@ struct SpiralRun {
 
 struct SpiralExperimentResult {
   JointTrajectory planned;
+  bool dynamic = false;            // the plant (true) or the quasi-static robot
+  PlantStatistics plant_statistics;  // summed over the three runs
+  double simulation_seconds = 0.0;   // wall-clock time spent simulating the robot
   std::array<SpiralRun, 3> runs;
 };
 

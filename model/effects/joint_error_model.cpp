@@ -57,9 +57,14 @@ JointErrorWorkspace::JointErrorWorkspace(const Robot& robot_model)
     : robot(robot_model), jacobian(6, robot_model.dof()), scratch(JointVector::Zero(robot_model.dof())) {}
 
 void computeLoadTorque(const JointErrorModel& model, EffectMask mask, JointErrorWorkspace& ws, JointContext& ctx) {
+  forwardKinematics(model.robot(), ws.robot, ctx.q);
+  gravityTorquesAtCurrentPose(model.robot(), ws.robot, ctx.load_torque);
+  addNonGravityLoadsAtCurrentPose(model, mask, ws, ctx);
+}
+
+void addNonGravityLoadsAtCurrentPose(const JointErrorModel& model, EffectMask mask, JointErrorWorkspace& ws,
+                                     JointContext& ctx) {
   const Robot& robot = model.robot();
-  forwardKinematics(robot, ws.robot, ctx.q);
-  gravityTorquesAtCurrentPose(robot, ws.robot, ctx.load_torque);
   if (ctx.payload_mass != 0.0) {
     const Eigen::Vector3d point = ws.robot.tool_pose * ctx.payload_com;
     pointJacobian(robot, ws.robot, point, ws.jacobian);

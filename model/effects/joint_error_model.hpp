@@ -61,6 +61,11 @@ struct JointErrorWorkspace {
 // Runs forward kinematics at ctx.q into ws.robot.
 void computeLoadTorque(const JointErrorModel& model, EffectMask mask, JointErrorWorkspace& ws, JointContext& ctx);
 
+// The same without gravity and without forward kinematics: adds payload, wrench and the selected load
+// effects to ctx.load_torque, at the pose of the last forward kinematics in ws.robot.
+void addNonGravityLoadsAtCurrentPose(const JointErrorModel& model, EffectMask mask, JointErrorWorkspace& ws,
+                                     JointContext& ctx);
+
 // Joint errors (link minus command) of the selected error effects, from ctx as it is (load_torque
 // already computed, motor angles already set).
 void addSelectedJointErrors(const JointErrorModel& model, EffectMask mask, const JointContext& ctx, JointVector& dq);

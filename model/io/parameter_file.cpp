@@ -29,6 +29,7 @@ JointErrorModel parseParameters(const std::string& json_text, const std::string&
     fields.fail("robot", "the file is for robot '" + robot_name + "' but the URDF describes '" + robot->name + "'");
   }
   const std::string notes = fields.textOr("notes", "");
+  if (fields.has("plant")) fields.object("plant");  // read by parseDriveParameters
   GearTrain gears = fields.has("gears") ? GearTrain::fromJson(fields.object("gears"), *robot, fields.pathOf("gears"))
                                         : GearTrain::direct(robot->dof());
   std::vector<std::unique_ptr<Effect>> effects;
@@ -52,7 +53,31 @@ JointErrorModel loadParameterFile(const std::string& path, std::shared_ptr<const
   return parseParameters(text, path, std::move(robot));
 }
 
-std::string parametersToJson(const JointErrorModel& model) {
+std::vector<DriveParameters> parseDriveParameters(const std::string& json_text, const std::string& source_name,
+                                                  const Robot& robot) {
+  nlohmann::json document;
+  try {
+    document = nlohmann::json::parse(json_text);
+  } catch (const nlohmann::json::parse_error& error) {
+    throw ParameterError(source_name + ": not valid JSON (byte " + std::to_string(error.byte) + "): " + error.what());
+  }
+  if (!document.is_object() || !document.contains("plant")) {
+    throw ParameterError(source_name + ": no \"plant\" object (drives and controller gains) for the plant");
+  }
+  return drivesFromJson(document.at("plant"), robot, source_name + ": plant");
+}
+
+std::vector<DriveParameters> loadDriveParameters(const std::string& path, const Robot& robot) {
+  std::string text;
+  try {
+    text = readTextFile(path, "parameter file");
+  } catch (const Error& error) {
+    throw ParameterError(error.what());
+  }
+  return parseDriveParameters(text, path, robot);
+}
+
+std::string parametersToJson(const JointErrorModel& model, const std::vector<DriveParameters>& drives) {
   nlohmann::ordered_json document;
   document["format"] = kFormat;
   document["robot"] = model.robot().name;
@@ -61,11 +86,13 @@ std::string parametersToJson(const JointErrorModel& model) {
   nlohmann::json effects = nlohmann::json::array();
   for (int i = 0; i < model.effectCount(); ++i) effects.push_back(model.effect(i).toJson());
   document["effects"] = effects;
+  if (!drives.empty()) document["plant"] = drivesToJson(drives, model.robot());
   return document.dump(2) + "\n";
 }
 
-void saveParameterFile(const JointErrorModel& model, const std::string& path) {
-  writeFileAtomically(path, parametersToJson(model));
+void saveParameterFile(const JointErrorModel& model, const std::string& path,
+                       const std::vector<DriveParameters>& drives) {
+  writeFileAtomically(path, parametersToJson(model, drives));
 }
 
 }  // namespace jointcomp

@@ -2,13 +2,15 @@
 // with its unit in the key name, estimates marked with an "estimate" note. Format:
 //   {"format": "jointcomp-parameters/1", "robot": "<URDF robot name>", "notes": "...",
 //    "gears": {"joints": [{"joint": "joint_1", "stage_ratios": [..]}, ..], "coupling": [..]},
-//    "effects": [{"type": "compliance", ..}, {"type": "spring_balancer", ..}, ..]}
+//    "effects": [{"type": "compliance", ..}, {"type": "spring_balancer", ..}, ..],
+//    "plant": {"joints": [{"joint": "joint_1", "motor_inertia_kgm2": .., ..}, ..]}}
 #pragma once
 
 #include <memory>
 #include <string>
 
 #include "model/effects/joint_error_model.hpp"
+#include "model/plant/drive_parameters.hpp"
 
 namespace jointcomp {
 
@@ -18,8 +20,16 @@ JointErrorModel loadParameterFile(const std::string& path, std::shared_ptr<const
 JointErrorModel parseParameters(const std::string& json_text, const std::string& source_name,
                                 std::shared_ptr<const Robot> robot);
 
-std::string parametersToJson(const JointErrorModel& model);
+// The "plant" object of a parameter file (drives and controller gains, see model/plant); throws
+// ParameterError naming the file when the file has none or it is invalid.
+std::vector<DriveParameters> loadDriveParameters(const std::string& path, const Robot& robot);
+std::vector<DriveParameters> parseDriveParameters(const std::string& json_text, const std::string& source_name,
+                                                  const Robot& robot);
+
+// The file's text; the "plant" object is written when `drives` is not empty.
+std::string parametersToJson(const JointErrorModel& model, const std::vector<DriveParameters>& drives = {});
 // Writes whole or not at all (temporary file, then rename).
-void saveParameterFile(const JointErrorModel& model, const std::string& path);
+void saveParameterFile(const JointErrorModel& model, const std::string& path,
+                       const std::vector<DriveParameters>& drives = {});
 
 }  // namespace jointcomp

@@ -1,0 +1,429 @@
+#include "model/plant/flexible_joint_plant.hpp"
+
+#include <cmath>
+#include <cstdio>
+
+#include <cvode/cvode.h>
+#include <nvector/nvector_serial.h>
+#include <sunlinsol/sunlinsol_dense.h>
+#include <sunmatrix/sunmatrix_dense.h>
+
+#include "model/common/errors.hpp"
+#include "model/effects/compliance.hpp"
+#include "model/effects/spring_balancer.hpp"
+#include "model/robot/dynamics.hpp"
+#include "model/robot/kinematics.hpp"
+
+namespace jointcomp {
+
+// Every SUNDIALS object of one plant, each with its owner here and freed in reverse order.
+struct FlexibleJointPlant::Solver {
+  SUNContext context = nullptr;
+  N_Vector y = nullptr;
+  N_Vector absolute_tolerances = nullptr;
+  SUNMatrix jacobian = nullptr;
+  SUNLinearSolver linear_solver = nullptr;
+  void* cvode = nullptr;
+  std::string last_error;     // CVODE's own message for the last failure
+  std::string rhs_error;      // why our right-hand side refused, if it did
+  PlantStatistics before_restart;  // counts of earlier integrator runs (a restart zeroes CVODE's)
+
+  ~Solver() {
+    if (cvode) CVodeFree(&cvode);
+    if (linear_solver) SUNLinSolFree(linear_solver);
+    if (jacobian) SUNMatDestroy(jacobian);
+    if (absolute_tolerances) N_VDestroy(absolute_tolerances);
+    if (y) N_VDestroy(y);
+    if (context) SUNContext_Free(&context);
+  }
+};
+
+namespace {
+
+int plantRightHandSide(realtype t, N_Vector y, N_Vector ydot, void* user_data);
+
+void captureCvodeError(int error_code, const char* module, const char* function, char* message, void* user_data) {
+  auto* solver = static_cast<std::string*>(user_data);
+  *solver = std::string(module ? module : "CVODE") + "/" + (function ? function : "?") + " (" +
+            CVodeGetReturnFlagName(error_code) + "): " + (message ? message : "");
+}
+
+void check(int flag, const char* call) {
+  if (flag < 0) throw SolverError(std::string("CVODE setup failed in ") + call + ": " + CVodeGetReturnFlagName(flag));
+}
+
+}  // namespace
+
+FlexibleJointPlant::FlexibleJointPlant(const JointErrorModel& truth, std::vector<DriveParameters> drives,
+                                       PlantOptions options)
+    : truth_(truth),
+      drives_(std::move(drives)),
+      options_(options),
+      n_(truth.robot().dof()),
+      ctx_(truth.robot().dof()),
+      ws_(truth.robot()),
+      solver_(std::make_unique<Solver>()) {
+  const Robot& robot = truth_.robot();
+  if (!robot.hasInertials()) {
+    throw InvalidArgument("plant: link '" + robot.link_without_inertial + "' has no inertial; the plant needs every mass");
+  }
+  if (static_cast<int>(drives_.size()) != n_) {
+    throw InvalidArgument("plant: " + std::to_string(drives_.size()) + " drives for " + std::to_string(n_) + " joints");
+  }
+  compliance_index_ = truth_.findEffect(ComplianceEffect::kType);
+  if (compliance_index_ < 0) throw InvalidArgument("plant: the joint-error model has no compliance effect (the joint springs)");
+  const auto& compliance = static_cast<const ComplianceEffect&>(truth_.effect(compliance_index_));
+  stiffness_.resize(n_);
+  for (int j = 0; j < n_; ++j) stiffness_[j] = compliance.stiffness(j);
+  load_mask_ = 0;
+  error_mask_ = 0;
+  for (int i = 0; i < truth_.effectCount(); ++i) {
+    if (truth_.effect(i).role() == EffectRole::Load) load_mask_ |= EffectMask(1) << i;
+    if (truth_.effect(i).role() == EffectRole::JointError && i != compliance_index_) error_mask_ |= EffectMask(1) << i;
+  }
+  if (!(options_.relative_tolerance > 0.0) || !(options_.absolute_tolerance > 0.0) ||
+      !(options_.velocity_tolerance_factor > 0.0) || options_.max_step < 0.0 ||
+      options_.max_steps_per_advance < 1) {
+    throw InvalidArgument("plant: tolerances must be positive, max_step non-negative, max_steps_per_advance >= 1");
+  }
+
+  Solver& s = *solver_;
+  check(SUNContext_Create(nullptr, &s.context), "SUNContext_Create");
+  s.y = N_VNew_Serial(stateSize(), s.context);
+  s.jacobian = SUNDenseMatrix(stateSize(), stateSize(), s.context);
+  if (!s.y || !s.jacobian) throw SolverError("plant: SUNDIALS could not allocate the state");
+  s.linear_solver = SUNLinSol_Dense(s.y, s.jacobian, s.context);
+  s.cvode = CVodeCreate(CV_BDF, s.context);
+  if (!s.linear_solver || !s.cvode) throw SolverError("plant: SUNDIALS could not create the solver");
+  check(CVodeSetErrHandlerFn(s.cvode, captureCvodeError, &s.last_error), "CVodeSetErrHandlerFn");
+  N_VConst(0.0, s.y);
+  check(CVodeInit(s.cvode, plantRightHandSide, 0.0, s.y), "CVodeInit");
+  check(CVodeSetUserData(s.cvode, this), "CVodeSetUserData");
+  s.absolute_tolerances = N_VNew_Serial(stateSize(), s.context);
+  if (!s.absolute_tolerances) throw SolverError("plant: SUNDIALS could not allocate the tolerances");
+  double* tolerances = N_VGetArrayPointer(s.absolute_tolerances);
+  for (int i = 0; i < stateSize(); ++i) {
+    const bool velocity = (i >= n_ && i < 2 * n_) || (i >= 3 * n_ && i < 4 * n_);
+    tolerances[i] = options_.absolute_tolerance * (velocity ? options_.velocity_tolerance_factor : 1.0);
+  }
+  check(CVodeSVtolerances(s.cvode, options_.relative_tolerance, s.absolute_tolerances), "CVodeSVtolerances");
+  check(CVodeSetLinearSolver(s.cvode, s.linear_solver, s.jacobian), "CVodeSetLinearSolver");
+  check(CVodeSetMaxNumSteps(s.cvode, options_.max_steps_per_advance), "CVodeSetMaxNumSteps");
+  if (options_.max_order < 1 || options_.max_order > 5) throw InvalidArgument("plant: max_order must be 1 to 5");
+  check(CVodeSetMaxOrd(s.cvode, options_.max_order), "CVodeSetMaxOrd");
+  if (options_.max_step > 0.0) check(CVodeSetMaxStep(s.cvode, options_.max_step), "CVodeSetMaxStep");
+  reference_ = JointVector::Zero(n_);
+  reference_velocity_ = JointVector::Zero(n_);
+  reference_acceleration_ = JointVector::Zero(n_);
+  feedforward_ = JointVector::Zero(n_);
+  feedforward_rate_ = JointVector::Zero(n_);
+  reset(JointVector::Zero(n_));
+}
+
+FlexibleJointPlant::~FlexibleJointPlant() = default;
+
+void FlexibleJointPlant::staticFeedforward(const JointVector& position, JointVector& torque) {
+  ctx_.q = position;
+  computeLoadTorque(truth_, load_mask_, ws_, ctx_);
+  torque = ctx_.load_torque;
+}
+
+void FlexibleJointPlant::reset(const JointVector& command, double start_time) {
+  checkJointVector(truth_.robot(), command, "command");
+  if (!std::isfinite(start_time)) throw InvalidArgument("plant: start time is not finite");
+  ctx_.command = command;
+  const FixedPointReport settled = settleStatically(truth_, truth_.allEffects(), ws_, ctx_);
+  if (!settled.converged) throw SolverError("plant: no static equilibrium found at the initial command");
+  const JointVector q = ctx_.q;
+  const JointVector spring_torque = ctx_.load_torque;  // at equilibrium the spring carries the load
+  time_ = start_time;
+  reference_ = command;
+  reference_velocity_.setZero(n_);
+  reference_acceleration_.setZero(n_);
+  reference_time_ = start_time;
+  staticFeedforward(command, feedforward_);
+  feedforward_rate_.setZero(n_);
+  double* y = N_VGetArrayPointer(solver_->y);
+  for (int j = 0; j < n_; ++j) {
+    y[j] = q[j];
+    y[n_ + j] = 0.0;
+    y[2 * n_ + j] = command[j];
+    y[3 * n_ + j] = 0.0;
+    const double ki = drives_[j].ki_nm_per_rad_s;
+    y[4 * n_ + j] = ki > 0.0 ? (spring_torque[j] - feedforward_[j]) / ki : 0.0;
+  }
+  restart_ = true;
+}
+
+void FlexibleJointPlant::setReference(const JointVector& position, const JointVector& velocity) {
+  checkJointVector(truth_.robot(), position, "reference position");
+  checkJointVector(truth_.robot(), velocity, "reference velocity");
+  // The interpolator extrapolates with the acceleration seen between the last two updates, and the
+  // static-load feed-forward with its rate along the motion, so that the controller's output is nearly
+  // continuous across updates and the integrator is not knocked back to small steps at each one.
+  const double since_last = time_ - reference_time_;
+  if (since_last > 0.0) {
+    reference_acceleration_ = (velocity - reference_velocity_) / since_last;
+  } else {
+    reference_acceleration_.setZero(n_);
+  }
+  reference_ = position;
+  reference_velocity_ = velocity;
+  reference_time_ = time_;
+  staticFeedforward(position, feedforward_);
+  constexpr double kRateStep = 1e-4;  // s
+  JointVector ahead;
+  staticFeedforward(position + velocity * kRateStep, ahead);
+  feedforward_rate_ = (ahead - feedforward_) / kRateStep;
+}
+
+void FlexibleJointPlant::setToolWrench(const Vector6& wrench) {
+  if (!wrench.allFinite()) throw InvalidArgument("plant: tool wrench is not finite");
+  ctx_.tool_wrench = wrench;
+  restart_ = true;  // a step in the load: start the integrator afresh
+}
+
+void FlexibleJointPlant::setPayload(double mass, const Eigen::Vector3d& com_in_tool) {
+  if (!std::isfinite(mass) || mass < 0.0 || !com_in_tool.allFinite()) {
+    throw InvalidArgument("plant: payload mass must be finite and non-negative, its centre finite");
+  }
+  ctx_.payload_mass = mass;
+  ctx_.payload_com = com_in_tool;
+  restart_ = true;
+}
+
+void FlexibleJointPlant::computeMotorTorques(double t, const JointVector& p, const JointVector& pd,
+                                             const JointVector& integral, JointVector& torque) const {
+  torque.resize(n_);
+  for (int j = 0; j < n_; ++j) {
+    if (!options_.control) {
+      torque[j] = 0.0;
+      continue;
+    }
+    const DriveParameters& d = drives_[j];
+    const double dt = t - reference_time_;
+    const double wanted = reference_[j] + reference_velocity_[j] * dt + 0.5 * reference_acceleration_[j] * dt * dt;
+    const double wanted_velocity = reference_velocity_[j] + reference_acceleration_[j] * dt;
+    // Feed-forward of the static load at the reference and of the friction at the reference velocity,
+    // as industrial drives do: the feedback then only corrects what the drive does not know.
+    const double friction = d.viscous_friction_nms_per_rad * wanted_velocity +
+                            d.coulomb_friction_nm * std::tanh(wanted_velocity / d.coulomb_velocity_scale_rad_per_s);
+    double value = d.kp_nm_per_rad * (wanted - p[j]) + d.kd_nms_per_rad * (wanted_velocity - pd[j]) +
+                   d.ki_nm_per_rad_s * integral[j] + feedforward_[j] + feedforward_rate_[j] * dt + friction;
+    const double limit = truth_.robot().joints[j].effort_limit;
+    if (limit > 0.0) value = std::max(-limit, std::min(limit, value));
+    torque[j] = value;
+  }
+}
+
+void FlexibleJointPlant::transmissionError(const JointVector& p, const JointVector& q, JointVector& error) {
+  ctx_.q = q;
+  ctx_.command = p;
+  updateMotorAngles(truth_, ctx_);
+  error.setZero(n_);
+  addSelectedJointErrors(truth_, error_mask_, ctx_, error);
+}
+
+void FlexibleJointPlant::derivative(double t, const double* y, double* ydot) {
+  const Robot& robot = truth_.robot();
+  const Eigen::Map<const Eigen::VectorXd> state(y, stateSize());
+  const JointVector q = state.segment(0, n_);
+  const JointVector qd = state.segment(n_, n_);
+  const JointVector p = state.segment(2 * n_, n_);
+  const JointVector pd = state.segment(3 * n_, n_);
+  const JointVector integral = state.segment(4 * n_, n_);
+
+  // Transmission error and its sensitivity to the motor positions (the motors feel the spring through
+  // d(p + e)/dp, which keeps the mechanics conservative).
+  JointVector error;
+  transmissionError(p, q, error);
+  JointVector spring_torque = stiffness_.cwiseProduct(p + error - q);
+  for (int j = 0; j < n_; ++j) spring_torque[j] += drives_[j].transmission_damping_nms_per_rad * (pd[j] - qd[j]);
+  JointVector motor_reaction = spring_torque;
+  if (error_mask_ != 0) {
+    JointVector shifted = p;
+    JointVector error_shifted;
+    for (int k = 0; k < n_; ++k) {
+      const double h = 1e-7;
+      shifted[k] = p[k] + h;
+      transmissionError(shifted, q, error_shifted);
+      shifted[k] = p[k];
+      motor_reaction[k] += spring_torque.dot((error_shifted - error) / h);
+    }
+  }
+
+  // Link side.
+  forwardKinematics(robot, ws_.robot, q);
+  ctx_.q = q;
+  ctx_.load_torque.setZero(n_);
+  addNonGravityLoadsAtCurrentPose(truth_, load_mask_, ws_, ctx_);
+  JointVector link_torque = spring_torque - ctx_.load_torque;
+  JointVector qdd;
+  forwardDynamics(robot, ws_.robot, q, qd, link_torque, qdd);
+
+  // Motor side and controller.
+  JointVector motor_torque;
+  computeMotorTorques(t, p, pd, integral, motor_torque);
+  for (int j = 0; j < n_; ++j) {
+    const DriveParameters& d = drives_[j];
+    const double friction = d.viscous_friction_nms_per_rad * pd[j] +
+                            d.coulomb_friction_nm * std::tanh(pd[j] / d.coulomb_velocity_scale_rad_per_s);
+    ydot[j] = qd[j];
+    ydot[n_ + j] = qdd[j];
+    if (options_.motors_locked) {
+      ydot[2 * n_ + j] = 0.0;
+      ydot[3 * n_ + j] = 0.0;
+    } else {
+      ydot[2 * n_ + j] = pd[j];
+      ydot[3 * n_ + j] = (motor_torque[j] - motor_reaction[j] - friction) / d.motor_inertia_kgm2;
+    }
+    const double dt = t - reference_time_;
+    const double wanted = reference_[j] + reference_velocity_[j] * dt + 0.5 * reference_acceleration_[j] * dt * dt;
+    ydot[4 * n_ + j] = options_.control ? wanted - p[j] : 0.0;
+  }
+}
+
+namespace {
+
+int plantRightHandSide(realtype t, N_Vector y, N_Vector ydot, void* user_data) {
+  auto* plant = static_cast<FlexibleJointPlant*>(user_data);
+  try {
+    plant->derivative(t, N_VGetArrayPointer(y), N_VGetArrayPointer(ydot));
+  } catch (const std::exception&) {
+    return 1;  // recoverable: CVODE retries with a smaller step, and reports if it cannot
+  }
+  const double* values = N_VGetArrayPointer(ydot);
+  for (int i = 0; i < plant->stateSize(); ++i) {
+    if (!std::isfinite(values[i])) return 1;
+  }
+  return 0;
+}
+
+}  // namespace
+
+void FlexibleJointPlant::advance(double end_time) {
+  if (!std::isfinite(end_time) || !(end_time > time_)) {
+    throw InvalidArgument("plant: advance to t = " + std::to_string(end_time) + " s, which is not after the current t = " +
+                          std::to_string(time_) + " s");
+  }
+  Solver& s = *solver_;
+  if (restart_) {
+    s.before_restart = statistics_;
+    check(CVodeReInit(s.cvode, time_, s.y), "CVodeReInit");
+    restart_ = false;
+  }
+  check(CVodeSetStopTime(s.cvode, end_time), "CVodeSetStopTime");
+  s.last_error.clear();
+  realtype reached = time_;
+  const int flag = CVode(s.cvode, end_time, s.y, &reached, CV_NORMAL);
+  long steps = 0, rhs = 0, jacobians = 0, error_failures = 0, convergence_failures = 0, rhs_for_jacobians = 0;
+  CVodeGetNumSteps(s.cvode, &steps);
+  CVodeGetNumRhsEvals(s.cvode, &rhs);
+  CVodeGetNumJacEvals(s.cvode, &jacobians);
+  CVodeGetNumLinRhsEvals(s.cvode, &rhs_for_jacobians);
+  CVodeGetNumErrTestFails(s.cvode, &error_failures);
+  CVodeGetNumNonlinSolvConvFails(s.cvode, &convergence_failures);
+  statistics_.steps = s.before_restart.steps + steps;
+  statistics_.rhs_evaluations = s.before_restart.rhs_evaluations + rhs + rhs_for_jacobians;
+  statistics_.jacobian_evaluations = s.before_restart.jacobian_evaluations + jacobians;
+  statistics_.error_test_failures = s.before_restart.error_test_failures + error_failures;
+  statistics_.nonlinear_convergence_failures = s.before_restart.nonlinear_convergence_failures + convergence_failures;
+  if (flag < 0) {
+    // Keep the last good state: CVODE leaves y at the last successful step.
+    time_ = reached;
+    restart_ = true;
+    throw SolverError("plant: CVODE failed between t = " + std::to_string(reached) + " s and " +
+                      std::to_string(end_time) + " s: " +
+                      (s.last_error.empty() ? std::string(CVodeGetReturnFlagName(flag)) : s.last_error));
+  }
+  time_ = end_time;
+}
+
+JointVector FlexibleJointPlant::linkPositions() const {
+  return Eigen::Map<const Eigen::VectorXd>(N_VGetArrayPointer(solver_->y), n_);
+}
+JointVector FlexibleJointPlant::linkVelocities() const {
+  return Eigen::Map<const Eigen::VectorXd>(N_VGetArrayPointer(solver_->y) + n_, n_);
+}
+JointVector FlexibleJointPlant::motorPositions() const {
+  return Eigen::Map<const Eigen::VectorXd>(N_VGetArrayPointer(solver_->y) + 2 * n_, n_);
+}
+JointVector FlexibleJointPlant::motorVelocities() const {
+  return Eigen::Map<const Eigen::VectorXd>(N_VGetArrayPointer(solver_->y) + 3 * n_, n_);
+}
+
+JointVector FlexibleJointPlant::motorTorques() {
+  const double* y = N_VGetArrayPointer(solver_->y);
+  const Eigen::Map<const Eigen::VectorXd> state(y, stateSize());
+  JointVector torque;
+  computeMotorTorques(time_, state.segment(2 * n_, n_), state.segment(3 * n_, n_), state.segment(4 * n_, n_), torque);
+  return torque;
+}
+
+double FlexibleJointPlant::mechanicalEnergy() {
+  const Robot& robot = truth_.robot();
+  const JointVector q = linkPositions();
+  const JointVector qd = linkVelocities();
+  const JointVector p = motorPositions();
+  const JointVector pd = motorVelocities();
+  double energy = kineticEnergy(robot, ws_.robot, q, qd) + potentialEnergy(robot, ws_.robot, q);
+  for (int j = 0; j < n_; ++j) energy += 0.5 * drives_[j].motor_inertia_kgm2 * pd[j] * pd[j];
+  JointVector error;
+  transmissionError(p, q, error);
+  const JointVector stretch = p + error - q;
+  energy += 0.5 * stretch.dot(stiffness_.cwiseProduct(stretch));
+  for (int i = 0; i < truth_.effectCount(); ++i) {
+    if (const auto* spring = dynamic_cast<const SpringBalancerEffect*>(&truth_.effect(i))) {
+      energy += spring->potentialEnergy(q[spring->joint()]);
+    }
+  }
+  if (ctx_.payload_mass != 0.0) {
+    forwardKinematics(robot, ws_.robot, q);
+    energy -= ctx_.payload_mass * robot.gravity.dot(ws_.robot.tool_pose * ctx_.payload_com);
+  }
+  return energy;
+}
+
+PlantState FlexibleJointPlant::saveState() {
+  PlantState state;
+  state.time = time_;
+  const double* y = N_VGetArrayPointer(solver_->y);
+  state.y.assign(y, y + stateSize());
+  state.reference = reference_;
+  state.reference_velocity = reference_velocity_;
+  state.reference_acceleration = reference_acceleration_;
+  state.feedforward = feedforward_;
+  state.feedforward_rate = feedforward_rate_;
+  state.reference_time = reference_time_;
+  state.tool_wrench = ctx_.tool_wrench;
+  state.payload_mass = ctx_.payload_mass;
+  state.payload_com = ctx_.payload_com;
+  restart_ = true;  // continuing from here must match continuing from a restored copy, bit for bit
+  return state;
+}
+
+void FlexibleJointPlant::restoreState(const PlantState& state) {
+  if (static_cast<int>(state.y.size()) != stateSize() || state.reference.size() != n_ ||
+      state.reference_velocity.size() != n_ || state.reference_acceleration.size() != n_ ||
+      state.feedforward.size() != n_ || state.feedforward_rate.size() != n_) {
+    throw InvalidArgument("plant: the saved state is for a plant of another size");
+  }
+  for (double v : state.y) {
+    if (!std::isfinite(v)) throw InvalidArgument("plant: the saved state holds a value that is not finite");
+  }
+  if (!std::isfinite(state.time)) throw InvalidArgument("plant: the saved state's time is not finite");
+  time_ = state.time;
+  std::copy(state.y.begin(), state.y.end(), N_VGetArrayPointer(solver_->y));
+  reference_ = state.reference;
+  reference_velocity_ = state.reference_velocity;
+  reference_acceleration_ = state.reference_acceleration;
+  feedforward_ = state.feedforward;
+  feedforward_rate_ = state.feedforward_rate;
+  reference_time_ = state.reference_time;
+  ctx_.tool_wrench = state.tool_wrench;
+  ctx_.payload_mass = state.payload_mass;
+  ctx_.payload_com = state.payload_com;
+  restart_ = true;
+}
+
+}  // namespace jointcomp

@@ -1,0 +1,127 @@
+// The flexible-joint plant: a simulated robot worth testing a compensation against.
+//
+// Per joint j, a motor (inertia B_j seen at the joint, viscous and smooth Coulomb friction) drives the
+// link through the gear train and a joint spring: the transmission carries
+//   tau_s = K (p + e(p) - q) + D (pd - qd),
+// with p the motor position in joint units (what the controller sees: motor angles scaled by the gear
+// ratios), e the transmission error of the gear-stage angles, q the link position and K the compliance
+// effect's stiffness. The link side is the rigid-body dynamics of the robot under gravity, the spring
+// balancer, the payload's weight and the tool wrench:  M(q) qdd = tau_s - h(q, qd) - tau_other_loads.
+// Motor side: B pdd = tau_m - tau_s - friction(pd).
+// Control: a continuous-time PID on the motor position with velocity, friction and static-load feed-forward,
+// following a reference extrapolated between updates with its velocity and the acceleration seen
+// between the last two updates, torques clamped to
+// the URDF effort limits. Continuous rather than sampled so that CVODE integrates a smooth system.
+// State y = [q, qd, p, pd, integral of the position error], 5 n values.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "model/effects/joint_error_model.hpp"
+#include "model/plant/drive_parameters.hpp"
+
+namespace jointcomp {
+
+struct PlantOptions {
+  double relative_tolerance = 1e-6;
+  double absolute_tolerance = 1e-8;   // rad on positions and on the integral state (0.02 um at 2 m);
+  double velocity_tolerance_factor = 100.0;  // velocities get absolute_tolerance * this, in rad/s: an error
+                                             // of 1e-6 rad/s moves a joint 4e-9 rad in a 4 ms period
+  double max_step = 0.0;              // s, 0: CVODE's default (unbounded)
+  long max_steps_per_advance = 200000;
+  // BDF order cap. The joint springs give lightly damped modes near the imaginary axis, where BDF of
+  // order 4 and 5 is unstable at large steps (A(alpha)-stability 73 and 51 degrees); order 3 is not.
+  int max_order = 3;
+  bool control = true;          // false: no motor torque at all (free response)
+  bool motors_locked = false;   // true: motor positions held where they are (static tests)
+};
+
+struct PlantStatistics {
+  long steps = 0;
+  long rhs_evaluations = 0;           // right-hand sides, those of the difference-quotient Jacobians included
+  long jacobian_evaluations = 0;
+  long error_test_failures = 0;
+  long nonlinear_convergence_failures = 0;
+};
+
+// Everything needed to continue a simulation exactly: restoring it and advancing gives the same
+// results, bit for bit, as advancing from the moment it was saved.
+struct PlantState {
+  double time = 0.0;
+  std::vector<double> y;
+  JointVector reference, reference_velocity, reference_acceleration, feedforward, feedforward_rate;
+  double reference_time = 0.0;
+  Vector6 tool_wrench = Vector6::Zero();
+  double payload_mass = 0.0;
+  Eigen::Vector3d payload_com = Eigen::Vector3d::Zero();
+};
+
+class FlexibleJointPlant {
+public:
+  // `truth` is the plant's own joint-error model (the robot as it really is); it must hold a compliance
+  // effect (the joint springs). Throws InvalidArgument naming what is missing or wrong.
+  FlexibleJointPlant(const JointErrorModel& truth, std::vector<DriveParameters> drives, PlantOptions options = {});
+  ~FlexibleJointPlant();
+  FlexibleJointPlant(const FlexibleJointPlant&) = delete;
+  FlexibleJointPlant& operator=(const FlexibleJointPlant&) = delete;
+
+  int dof() const { return n_; }
+  int stateSize() const { return 5 * n_; }
+  double time() const { return time_; }
+
+  // Starts at rest in static equilibrium with the motors at `command` (and the reference there).
+  void reset(const JointVector& command, double start_time = 0.0);
+  // The controller follows `position` from now on, extrapolated with `velocity` until the next update.
+  void setReference(const JointVector& position, const JointVector& velocity);
+  void setToolWrench(const Vector6& wrench);
+  void setPayload(double mass, const Eigen::Vector3d& com_in_tool);
+  // Integrates to `end_time` (> time()). Throws SolverError with CVODE's reason when it fails; the
+  // plant is then left at the last good time.
+  void advance(double end_time);
+
+  JointVector linkPositions() const;
+  JointVector linkVelocities() const;
+  JointVector motorPositions() const;
+  JointVector motorVelocities() const;
+  // Motor torques (joint units) the controller applies now.
+  JointVector motorTorques();
+  // Total mechanical energy (kinetic, gravity, spring balancer, payload, joint springs), for tests.
+  double mechanicalEnergy();
+
+  PlantState saveState();
+  void restoreState(const PlantState& state);
+  PlantStatistics statistics() const { return statistics_; }
+
+  // The right-hand side dy/dt at (t, y), both of stateSize(); exposed for linearisation and tests.
+  void derivative(double t, const double* y, double* ydot);
+
+  const JointErrorModel& model() const { return truth_; }
+
+private:
+  struct Solver;
+  void computeMotorTorques(double t, const JointVector& p, const JointVector& pd, const JointVector& integral,
+                           JointVector& torque) const;
+  void transmissionError(const JointVector& p, const JointVector& q, JointVector& error);
+  void staticFeedforward(const JointVector& position, JointVector& torque);
+
+  JointErrorModel truth_;
+  std::vector<DriveParameters> drives_;
+  PlantOptions options_;
+  int n_;
+  int compliance_index_;
+  EffectMask load_mask_;
+  EffectMask error_mask_;  // joint-error effects other than compliance: the transmission error
+  JointVector stiffness_;
+  double time_ = 0.0;
+  bool restart_ = true;  // the integrator restarts (fresh history) before the next step
+  JointVector reference_, reference_velocity_, reference_acceleration_, feedforward_, feedforward_rate_;
+  double reference_time_ = 0.0;
+  JointContext ctx_;
+  JointErrorWorkspace ws_;
+  PlantStatistics statistics_;
+  std::unique_ptr<Solver> solver_;
+};
+
+}  // namespace jointcomp
