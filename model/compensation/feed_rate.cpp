@@ -1,8 +1,9 @@
 #include "model/compensation/feed_rate.hpp"
 
 #include <algorithm>
+#include <array>
+#include <charconv>
 #include <cmath>
-#include <sstream>
 #include <string>
 
 #include "model/common/errors.hpp"
@@ -16,11 +17,11 @@ constexpr double kMaxSamples = 1e8;
 // T / period within this of a whole number counts as whole: no extra sample for a rounding error.
 constexpr double kPeriodCountTolerance = 1e-9;
 
+// Shortest text that reads back as the same double, independent of the locale.
 std::string formatNumber(double value) {
-  std::ostringstream out;
-  out.precision(17);
-  out << value;
-  return out.str();
+  std::array<char, 32> text{};
+  const auto result = std::to_chars(text.data(), text.data() + text.size(), value);
+  return std::string(text.data(), result.ptr);
 }
 
 void requirePositiveFinite(double value, const char* field) {

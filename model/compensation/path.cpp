@@ -6,7 +6,6 @@
 #include <charconv>
 #include <cmath>
 #include <fstream>
-#include <sstream>
 #include <string_view>
 #include <utility>
 
@@ -20,11 +19,11 @@ constexpr double kMillimetre = 1e-3;
 // Arc lengths this far (relative to the path length) outside [0, length] are rounding, not mistakes.
 constexpr double kArcLengthTolerance = 1e-9;
 
+// Shortest text that reads back as the same double, independent of the locale.
 std::string formatNumber(double value) {
-  std::ostringstream out;
-  out.precision(17);
-  out << value;
-  return out.str();
+  std::array<char, 32> text{};
+  const auto result = std::to_chars(text.data(), text.data() + text.size(), value);
+  return std::string(text.data(), result.ptr);
 }
 
 void requireFinite(double value, const char* field) {

@@ -44,13 +44,14 @@ std::vector<std::string> ComplianceEffect::parameterNames() const {
 
 void ComplianceEffect::setParameters(const std::vector<double>& values) {
   if (values.size() != joint_names_.size()) throw ParameterError("compliance: wrong number of parameters");
-  compliance_.resize(static_cast<int>(values.size()));
+  // Check everything before changing anything: a rejected update leaves the effect as it was.
   for (std::size_t i = 0; i < values.size(); ++i) {
     if (!std::isfinite(values[i]) || !(values[i] > 0.0)) {
       throw ParameterError("compliance: " + joint_names_[i] + ".stiffness_nm_per_rad must be positive and finite");
     }
-    compliance_[static_cast<int>(i)] = 1.0 / values[i];
   }
+  compliance_.resize(static_cast<int>(values.size()));
+  for (std::size_t i = 0; i < values.size(); ++i) compliance_[static_cast<int>(i)] = 1.0 / values[i];
   stiffness_ = values;
 }
 

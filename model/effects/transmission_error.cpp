@@ -61,7 +61,12 @@ std::unique_ptr<Effect> TransmissionErrorEffect::fromJson(const nlohmann::json& 
       entry.fail("of", "expected \"motor\", \"stage_K\" (input of stage K) or \"output\", found \"" + part + "\"");
     }
     h.cycles_per_revolution = entry.positiveNumber("cycles_per_revolution");
-    h.amplitude_rad = entry.nonNegativeNumber("amplitude_deg") * kDegree;
+    // People write degrees; programs write radians, which round-trip exactly. One of the two.
+    if (entry.has("amplitude_deg") == entry.has("amplitude_rad")) {
+      entry.fail("amplitude_deg", "give exactly one of amplitude_deg and amplitude_rad");
+    }
+    h.amplitude_rad = entry.has("amplitude_rad") ? entry.nonNegativeNumber("amplitude_rad")
+                                                 : entry.nonNegativeNumber("amplitude_deg") * kDegree;
     h.phase_rad = entry.number("phase_rad");
     entry.rejectUnknownKeys();
     harmonics.push_back(h);
@@ -107,6 +112,8 @@ void TransmissionErrorEffect::setParameters(const std::vector<double>& values) {
     if (!std::isfinite(values[2 * i]) || !std::isfinite(values[2 * i + 1])) {
       throw ParameterError("transmission_error: harmonic " + std::to_string(i) + " has a value that is not finite");
     }
+  }
+  for (std::size_t i = 0; i < harmonics_.size(); ++i) {
     harmonics_[i].amplitude_rad = values[2 * i];
     harmonics_[i].phase_rad = values[2 * i + 1];
   }
@@ -118,7 +125,7 @@ nlohmann::json TransmissionErrorEffect::toJson() const {
     list.push_back({{"joint", joint_names_[h.joint]},
                     {"of", partName(h.joint, h.stage)},
                     {"cycles_per_revolution", h.cycles_per_revolution},
-                    {"amplitude_deg", h.amplitude_rad / kDegree},
+                    {"amplitude_rad", h.amplitude_rad},
                     {"phase_rad", h.phase_rad}});
   }
   nlohmann::json json = {{"type", kType}, {"harmonics", list}};

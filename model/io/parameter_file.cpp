@@ -20,6 +20,8 @@ JointErrorModel parseParameters(const std::string& json_text, const std::string&
     document = nlohmann::json::parse(json_text);
   } catch (const nlohmann::json::parse_error& error) {
     throw ParameterError(source_name + ": not valid JSON (byte " + std::to_string(error.byte) + "): " + error.what());
+  } catch (const nlohmann::json::exception& error) {  // e.g. a number too large for a double
+    throw ParameterError(source_name + ": not valid JSON: " + error.what());
   }
   JsonFields fields(document, source_name + ": ");
   const std::string format = fields.text("format");
@@ -60,6 +62,8 @@ std::vector<DriveParameters> parseDriveParameters(const std::string& json_text, 
     document = nlohmann::json::parse(json_text);
   } catch (const nlohmann::json::parse_error& error) {
     throw ParameterError(source_name + ": not valid JSON (byte " + std::to_string(error.byte) + "): " + error.what());
+  } catch (const nlohmann::json::exception& error) {  // e.g. a number too large for a double
+    throw ParameterError(source_name + ": not valid JSON: " + error.what());
   }
   if (!document.is_object() || !document.contains("plant")) {
     throw ParameterError(source_name + ": no \"plant\" object (drives and controller gains) for the plant");

@@ -1,0 +1,284 @@
+// Offline compensation against its purpose: when the model is the truth and nothing is noisy, the
+// references it computes bring the quasi-static robot (settled with every effect) exactly onto the planned
+// joints and the planned tool path. Also: the fixed point is reached in a few iterations, compliance alone
+// needs one pass and equals the closed form Q_theo + load / K, an empty mask changes nothing, and bad
+// inputs are rejected.
+#include <algorithm>
+#include <cmath>
+#include <iostream>
+#include <limits>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "model/common/errors.hpp"
+#include "model/compensation/compensator.hpp"
+#include "model/compensation/feed_rate.hpp"
+#include "model/compensation/joint_trajectory.hpp"
+#include "model/compensation/path.hpp"
+#include "model/effects/compliance.hpp"
+#include "model/effects/spring_balancer.hpp"
+#include "model/io/parameter_file.hpp"
+#include "model/robot/dynamics.hpp"
+#include "model/robot/kinematics.hpp"
+#include "model/robot/load_urdf.hpp"
+
+namespace jointcomp {
+namespace {
+
+using ::testing::HasSubstr;
+
+constexpr double kDegree = 3.14159265358979323846 / 180.0;
+
+std::shared_ptr<const Robot> rx170() {
+  static const std::shared_ptr<const Robot> robot =
+      std::make_shared<const Robot>(loadRobotFromUrdfFile(std::string(JOINTCOMP_DATA_DIR) + "/robots/rx170.urdf"));
+  return robot;
+}
+
+JointErrorModel rx170Model() {
+  return loadParameterFile(std::string(JOINTCOMP_DATA_DIR) + "/params/rx170.json", rx170());
+}
+
+// A straight tool move in front of the robot at the height of the paper's test, tool pointing down,
+// planned at the paper's speed and acceleration: about 1500 points.
+const JointTrajectory& plannedLine() {
+  static const JointTrajectory trajectory = [] {
+    const Robot& robot = *rx170();
+    const Path line = straightLine(Eigen::Vector3d(1.10, -0.08, 0.20), Eigen::Vector3d(1.28, 0.06, 0.26));
+    const std::vector<FeedRateSample> samples = planFeedRate(line, FeedRateSpec{});
+    JointVector seed = JointVector::Zero(robot.dof());
+    seed[1] = 60 * kDegree;
+    seed[2] = 60 * kDegree;
+    seed[4] = 60 * kDegree;
+    return planJointTrajectory(robot, samples, toolPointingDown(), seed);
+  }();
+  return trajectory;
+}
+
+Eigen::Vector3d toolPosition(const Robot& robot, RobotWorkspace& ws, const JointVector& q) {
+  forwardKinematics(robot, ws, q);
+  return ws.tool_pose.translation();
+}
+
+struct Settled {
+  double max_joint_error = 0.0;  // rad, |q - planned|
+  double max_tool_error = 0.0;   // m, |tool - planned tool point|
+};
+
+// Where the truth puts the links for each reference, against the plan.
+Settled settleAll(const JointErrorModel& truth, EffectMask mask, const JointTrajectory& plan,
+                  const std::vector<JointVector>& references) {
+  const Robot& robot = truth.robot();
+  JointErrorWorkspace ws(robot);
+  RobotWorkspace fk(robot);
+  JointContext ctx(robot.dof());
+  Settled result;
+  for (std::size_t k = 0; k < references.size(); ++k) {
+    ctx.command = references[k];
+    ctx.velocity = plan.qd[k];
+    ctx.time = plan.time[k];
+    const FixedPointReport report = settleStatically(truth, mask, ws, ctx);
+    EXPECT_TRUE(report.converged) << "point " << k;
+    result.max_joint_error = std::max(result.max_joint_error, (ctx.q - plan.q[k]).cwiseAbs().maxCoeff());
+    result.max_tool_error =
+        std::max(result.max_tool_error, (toolPosition(robot, fk, ctx.q) - plan.tool_position[k]).norm());
+  }
+  return result;
+}
+
+TEST(Compensator, ThePlanIsLongEnoughToMean) {
+  ASSERT_GT(plannedLine().size(), 1000u);
+  // The plan itself reaches its tool points (so that the errors below are the compensation's).
+  const Robot& robot = *rx170();
+  RobotWorkspace fk(robot);
+  for (std::size_t k = 0; k < plannedLine().size(); k += 50) {
+    EXPECT_LT((toolPosition(robot, fk, plannedLine().q[k]) - plannedLine().tool_position[k]).norm(), 1e-9);
+  }
+}
+
+TEST(Compensator, WithTheTrueModelTheRobotFollowsThePlanExactly) {
+  const JointErrorModel nominal = rx170Model();
+  const JointErrorModel truth = nominal;  // no perturbation: the model is the truth
+  const JointTrajectory& plan = plannedLine();
+  std::vector<JointVector> references;
+  const TrajectoryCompensationReport report =
+      compensateTrajectory(nominal, nominal.allEffects(), plan.q, plan.qd, references);
+  ASSERT_EQ(references.size(), plan.size());
+  std::cout << "[ compensator ] all effects: at most " << report.max_iterations << " iterations, residual "
+            << report.max_residual << " rad, largest correction " << report.max_correction / kDegree << " deg\n";
+  RecordProperty("max_iterations_all_effects", report.max_iterations);
+  EXPECT_LE(report.max_residual, 1e-12);
+  EXPECT_LE(report.max_iterations, 6);
+  EXPECT_GT(report.max_correction, 0.005 * kDegree);  // the compensation does something
+
+  const Settled compensated = settleAll(truth, truth.allEffects(), plan, references);
+  std::cout << "[ compensator ] settled: joints within " << compensated.max_joint_error << " rad, tool within "
+            << compensated.max_tool_error * 1e6 << " um\n";
+  EXPECT_LT(compensated.max_joint_error, 1e-10);
+  EXPECT_LT(compensated.max_tool_error, 1e-6);
+
+  // Without compensation the same robot misses by far more: the test above can fail.
+  const Settled uncompensated = settleAll(truth, truth.allEffects(), plan, plan.q);
+  EXPECT_GT(uncompensated.max_joint_error, 1e-4);
+  EXPECT_GT(uncompensated.max_tool_error, 1e-4);
+}
+
+TEST(Compensator, ConvergesToTheToleranceInAFewIterations) {
+  const JointErrorModel model = rx170Model();
+  const EffectMask mask = model.allEffects();
+  Compensator compensator(model, mask);
+  const JointTrajectory& plan = plannedLine();
+  JointErrorWorkspace ws(model.robot());
+  std::map<int, int> histogram;
+  JointContext ctx(model.robot().dof());
+  JointVector reference;
+  for (std::size_t k = 0; k < plan.size(); ++k) {
+    ctx.q = plan.q[k];
+    ctx.velocity = plan.qd[k];
+    const FixedPointReport report = compensator.compensate(ctx, reference);
+    ASSERT_TRUE(report.converged) << "point " << k;
+    EXPECT_LE(report.residual, 1e-12) << "point " << k;
+    ++histogram[report.iterations];
+    // The fixed point itself: Q_ref = Q_theo - dQ(Q_theo, Q_ref), re-evaluated from scratch.
+    JointContext check(model.robot().dof());
+    check.q = plan.q[k];
+    check.velocity = plan.qd[k];
+    check.command = reference;
+    computeLoadTorque(model, mask, ws, check);
+    updateMotorAngles(model, check);
+    JointVector dq = JointVector::Zero(model.robot().dof());
+    addSelectedJointErrors(model, mask, check, dq);
+    EXPECT_LT((plan.q[k] - dq - reference).cwiseAbs().maxCoeff(), 1e-13) << "point " << k;
+    // ctx comes back with the result.
+    EXPECT_EQ(ctx.command, reference);
+  }
+  std::string counts;
+  for (const auto& [iterations, points] : histogram) {
+    counts += " " + std::to_string(iterations) + " iterations: " + std::to_string(points) + " points;";
+  }
+  std::cout << "[ compensator ]" << counts << "\n";
+  RecordProperty("iteration_histogram", counts);
+  EXPECT_LE(histogram.rbegin()->first, 6);
+  EXPECT_GT(histogram.begin()->first, 1);  // the transmission error does make it iterate
+}
+
+TEST(Compensator, ComplianceAloneNeedsOnePassAndIsTheClosedForm) {
+  const JointErrorModel model = rx170Model();
+  const Robot& robot = model.robot();
+  const EffectMask mask = model.loadsAnd({"compliance"});
+  const std::vector<double> k = model.effect(model.findEffect(ComplianceEffect::kType)).parameters();
+  const auto& spring = dynamic_cast<const SpringBalancerEffect&>(model.effect(model.findEffect("spring_balancer")));
+  Compensator compensator(model, mask);
+  const JointTrajectory& plan = plannedLine();
+  RobotWorkspace dyn(robot);
+  JointContext ctx(robot.dof());
+  JointVector reference;
+  for (std::size_t p = 0; p < plan.size(); p += 7) {
+    ctx.q = plan.q[p];
+    const FixedPointReport report = compensator.compensate(ctx, reference);
+    EXPECT_TRUE(report.converged);
+    EXPECT_EQ(report.iterations, 1) << "point " << p;
+    // Q_ref = Q_theo + load(Q_theo) / K with the load recomputed: gravity plus the balancer.
+    JointVector load;
+    gravityTorques(robot, dyn, plan.q[p], load);
+    load[spring.joint()] += spring.torque(plan.q[p][spring.joint()]);
+    for (int j = 0; j < robot.dof(); ++j) {
+      EXPECT_NEAR(reference[j], plan.q[p][j] + load[j] / k[j], 1e-14) << "point " << p << ", joint " << j;
+    }
+  }
+  std::vector<JointVector> references;
+  const TrajectoryCompensationReport trajectory = compensateTrajectory(model, mask, plan.q, plan.qd, references);
+  EXPECT_EQ(trajectory.max_iterations, 1);
+  // A robot with compliance and loads only then follows the plan.
+  const Settled settled = settleAll(model, mask, plan, references);
+  EXPECT_LT(settled.max_joint_error, 1e-10);
+  EXPECT_LT(settled.max_tool_error, 1e-6);
+}
+
+TEST(Compensator, EmptyMaskReturnsThePlan) {
+  const JointErrorModel model = rx170Model();
+  const JointTrajectory& plan = plannedLine();
+  std::vector<JointVector> references;
+  const TrajectoryCompensationReport report = compensateTrajectory(model, 0, plan.q, plan.qd, references);
+  ASSERT_EQ(references.size(), plan.size());
+  for (std::size_t k = 0; k < plan.size(); ++k) ASSERT_EQ(references[k], plan.q[k]) << "point " << k;
+  EXPECT_EQ(report.max_correction, 0.0);
+  EXPECT_EQ(report.max_iterations, 1);
+}
+
+TEST(Compensator, LoadsAloneCorrectNothing) {
+  // The spring balancer is a load: without an error effect to turn loads into joint errors, nothing moves.
+  const JointErrorModel model = rx170Model();
+  const JointTrajectory& plan = plannedLine();
+  std::vector<JointVector> references;
+  const EffectMask loads = model.loadsAnd({});
+  ASSERT_NE(loads, 0u);
+  compensateTrajectory(model, loads, plan.q, plan.qd, references);
+  for (std::size_t k = 0; k < plan.size(); k += 11) EXPECT_EQ(references[k], plan.q[k]);
+}
+
+TEST(Compensator, RejectsNanPlannedJoints) {
+  const JointErrorModel model = rx170Model();
+  Compensator compensator(model, model.allEffects());
+  JointContext ctx(model.robot().dof());
+  ctx.q = plannedLine().q[10];
+  ctx.q[3] = std::numeric_limits<double>::quiet_NaN();
+  JointVector reference;
+  EXPECT_THROW(compensator.compensate(ctx, reference), InvalidArgument);
+  ctx.q = plannedLine().q[10];
+  ctx.q[0] = std::numeric_limits<double>::infinity();
+  EXPECT_THROW(compensator.compensate(ctx, reference), InvalidArgument);
+
+  std::vector<JointVector> planned(plannedLine().q.begin(), plannedLine().q.begin() + 20);
+  planned[13][1] = std::numeric_limits<double>::quiet_NaN();
+  std::vector<JointVector> references;
+  EXPECT_THROW(compensateTrajectory(model, model.allEffects(), planned, {}, references), InvalidArgument);
+}
+
+TEST(Compensator, RejectsMismatchedSizes) {
+  const JointErrorModel model = rx170Model();
+  const JointTrajectory& plan = plannedLine();
+  const std::vector<JointVector> planned(plan.q.begin(), plan.q.begin() + 20);
+  const std::vector<JointVector> velocities(plan.qd.begin(), plan.qd.begin() + 19);
+  std::vector<JointVector> references;
+  try {
+    compensateTrajectory(model, model.allEffects(), planned, velocities, references);
+    FAIL() << "20 positions with 19 velocities were accepted";
+  } catch (const InvalidArgument& error) {
+    EXPECT_THAT(error.what(), HasSubstr("20"));
+    EXPECT_THAT(error.what(), HasSubstr("19"));
+  }
+  // A point with the wrong number of joints.
+  std::vector<JointVector> wrong_dof = planned;
+  wrong_dof[4] = JointVector::Zero(5);
+  EXPECT_THROW(compensateTrajectory(model, model.allEffects(), wrong_dof, {}, references), InvalidArgument);
+}
+
+TEST(Compensator, RejectsBadOptionsAndReportsNonConvergence) {
+  const JointErrorModel model = rx170Model();
+  FixedPointOptions zero_tolerance;
+  zero_tolerance.tolerance = 0.0;
+  EXPECT_THROW(Compensator(model, model.allEffects(), zero_tolerance), InvalidArgument);
+  FixedPointOptions no_iterations;
+  no_iterations.max_iterations = 0;
+  EXPECT_THROW(Compensator(model, model.allEffects(), no_iterations), InvalidArgument);
+  // One iteration cannot reach 1e-12 with the transmission error: the point is named.
+  FixedPointOptions one;
+  one.max_iterations = 1;
+  const std::vector<JointVector> planned(plannedLine().q.begin(), plannedLine().q.begin() + 3);
+  std::vector<JointVector> references;
+  try {
+    compensateTrajectory(model, model.allEffects(), planned, {}, references, one);
+    FAIL() << "one iteration reported convergence";
+  } catch (const SolverError& error) {
+    EXPECT_THAT(error.what(), HasSubstr("point 0"));
+  }
+}
+
+}  // namespace
+}  // namespace jointcomp
