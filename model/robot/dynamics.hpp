@@ -24,8 +24,9 @@ void massMatrix(const Robot& robot, RobotWorkspace& ws, const JointVector& q, Jo
 void forwardDynamics(const Robot& robot, RobotWorkspace& ws, const JointVector& q, const JointVector& qd,
                      const JointVector& tau, JointVector& qdd);
 
-// Joint torques that balance a wrench (force, then moment about the tool point; base frame) applied at
-// the tool: tau = J^T w, at the last forwardKinematics call.
+// tau = J^T w for a wrench w (force, then moment about the tool point; base frame): the joint torques
+// with which the tool exerts w on its surroundings, or equally those that hold the robot against a
+// wrench -w applied to the tool. At the last forwardKinematics call.
 void wrenchTorquesAtCurrentPose(const Robot& robot, const RobotWorkspace& ws, const Vector6& wrench,
                                 JointVector& tau);
 

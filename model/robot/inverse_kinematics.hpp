@@ -16,7 +16,9 @@ struct IkOptions {
   double position_tolerance = 1e-10;     // m
   double orientation_tolerance = 1e-10;  // rad
   int max_iterations = 200;              // damped least squares only
-  double damping = 1e-6;                 // damped least squares: lambda^2 added to J J^T
+  // Damped least squares: the smallest lambda^2 added to J J^T. Levenberg-Marquardt raises it when a step
+  // fails; it must stay far below sigma_min^2 near singularities or convergence slows to a crawl.
+  double damping = 1e-12;
   bool respect_limits = true;            // drop solutions outside the joint limits
 };
 

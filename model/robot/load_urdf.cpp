@@ -179,7 +179,8 @@ private:
       if (child->name == next_on_chain) continue;
       const bool on_path = std::any_of(path.begin(), path.end(), [&](const auto& j) { return j->name == child->name; });
       if (child->type != urdf::Joint::FIXED) {
-        if (on_path) continue;
+        // Moving joints below the last body lie beyond the tip: the chain ends there (as in KDL).
+        if (on_path || next_on_chain.empty()) continue;
         fail("joint '" + child->name + "' branches off the chain at link '" + link->name +
              "'; jointcomp models a single serial chain (choose another tip link or remove the branch)");
       }

@@ -1,0 +1,271 @@
+// Forward kinematics against an independent standard-DH chain written here from the DH tables the URDFs
+// were made from (T_i = Rz(theta_i) Tz(d_i) Tx(a_i) Rx(alpha_i)), plus hand-computed poses and argument checks.
+#include <array>
+#include <cmath>
+#include <limits>
+#include <random>
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "model/common/errors.hpp"
+#include "model/robot/kinematics.hpp"
+#include "robot_test_support.hpp"
+
+namespace jointcomp {
+namespace {
+
+using ::testing::HasSubstr;
+using testing_support::kPi;
+using testing_support::rotationDistance;
+
+struct DhRow {
+  double d, a, alpha, theta_offset;
+};
+using DhTable = std::array<DhRow, 6>;
+
+// Staubli RX170 BL (ARTE robots/STAUBLI/RX170BL/parameters.m).
+const DhTable kRx170Dh = {{{0.55, 0.15, -kPi / 2, 0.0},
+                           {0.0, 0.825, 0.0, -kPi / 2},
+                           {0.0, 0.0, kPi / 2, kPi / 2},
+                           {0.925, 0.0, -kPi / 2, 0.0},
+                           {0.0, 0.0, kPi / 2, 0.0},
+                           {0.11, 0.0, 0.0, 0.0}}};
+
+// Universal Robots UR10 (CB series), published DH.
+const DhTable kUr10Dh = {{{0.1273, 0.0, kPi / 2, 0.0},
+                          {0.0, -0.612, 0.0, 0.0},
+                          {0.0, -0.5723, 0.0, 0.0},
+                          {0.163941, 0.0, kPi / 2, 0.0},
+                          {0.1157, 0.0, -kPi / 2, 0.0},
+                          {0.0922, 0.0, 0.0, 0.0}}};
+
+Eigen::Matrix4d rotZ(double angle) {
+  Eigen::Matrix4d t = Eigen::Matrix4d::Identity();
+  t(0, 0) = std::cos(angle);
+  t(0, 1) = -std::sin(angle);
+  t(1, 0) = std::sin(angle);
+  t(1, 1) = std::cos(angle);
+  return t;
+}
+
+Eigen::Matrix4d rotX(double angle) {
+  Eigen::Matrix4d t = Eigen::Matrix4d::Identity();
+  t(1, 1) = std::cos(angle);
+  t(1, 2) = -std::sin(angle);
+  t(2, 1) = std::sin(angle);
+  t(2, 2) = std::cos(angle);
+  return t;
+}
+
+Eigen::Matrix4d translation(double x, double y, double z) {
+  Eigen::Matrix4d t = Eigen::Matrix4d::Identity();
+  t(0, 3) = x;
+  t(1, 3) = y;
+  t(2, 3) = z;
+  return t;
+}
+
+// frames[0] is the base, frames[i] the DH frame i; the flange is frames[6].
+std::array<Eigen::Matrix4d, 7> dhFrames(const DhTable& table, const JointVector& q) {
+  std::array<Eigen::Matrix4d, 7> frames;
+  frames[0].setIdentity();
+  for (int i = 0; i < 6; ++i) {
+    const DhRow& row = table[i];
+    frames[i + 1] = frames[i] * rotZ(q[i] + row.theta_offset) * translation(0, 0, row.d) *
+                    translation(row.a, 0, 0) * rotX(row.alpha);
+  }
+  return frames;
+}
+
+Eigen::Matrix4d dhFlange(const DhTable& table, const JointVector& q) { return dhFrames(table, q)[6]; }
+
+struct Comparison {
+  double position = 0.0;
+  double rotation = 0.0;
+};
+
+Comparison compare(const Eigen::Isometry3d& pose, const Eigen::Matrix4d& reference) {
+  Comparison result;
+  result.position = (pose.translation() - reference.block<3, 1>(0, 3)).cwiseAbs().maxCoeff();
+  result.rotation = rotationDistance(pose.linear(), reference.block<3, 3>(0, 0));
+  return result;
+}
+
+void expectToolMatchesDh(const Robot& robot, const DhTable& table, unsigned seed) {
+  RobotWorkspace ws(robot);
+  std::mt19937 rng(seed);
+  double worst_position = 0.0;
+  double worst_rotation = 0.0;
+  for (int sample = 0; sample < 1000; ++sample) {
+    const JointVector q = testing_support::randomConfiguration(robot, rng);
+    forwardKinematics(robot, ws, q);
+    const Comparison c = compare(ws.tool_pose, dhFlange(table, q));
+    worst_position = std::max(worst_position, c.position);
+    worst_rotation = std::max(worst_rotation, c.rotation);
+    // The rotation part must stay orthonormal.
+    ASSERT_LT((ws.tool_pose.linear().transpose() * ws.tool_pose.linear() - Eigen::Matrix3d::Identity())
+                  .cwiseAbs()
+                  .maxCoeff(),
+              1e-14);
+  }
+  EXPECT_LT(worst_position, 1e-12) << robot.name;
+  EXPECT_LT(worst_rotation, 1e-12) << robot.name;
+}
+
+// Joint i of jointcomp turns about the z axis of DH frame i-1 at that frame's origin: its frame at q is
+// DH frame i-1 rotated by theta_i about z.
+void expectJointFramesMatchDh(const Robot& robot, const DhTable& table, unsigned seed) {
+  RobotWorkspace ws(robot);
+  std::mt19937 rng(seed);
+  for (int sample = 0; sample < 200; ++sample) {
+    const JointVector q = testing_support::randomConfiguration(robot, rng);
+    forwardKinematics(robot, ws, q);
+    const auto frames = dhFrames(table, q);
+    for (int i = 0; i < 6; ++i) {
+      const Eigen::Matrix4d joint_frame = frames[i] * rotZ(q[i] + table[i].theta_offset);
+      const Comparison c = compare(ws.joint_pose[i], joint_frame);
+      ASSERT_LT(c.position, 1e-12) << robot.name << " joint " << i;
+      ASSERT_LT(c.rotation, 1e-12) << robot.name << " joint " << i;
+      ASSERT_LT((ws.origin[i] - frames[i].block<3, 1>(0, 3)).norm(), 1e-12) << robot.name << " joint " << i;
+      ASSERT_LT((ws.axis[i] - frames[i].block<3, 1>(0, 2)).norm(), 1e-12) << robot.name << " joint " << i;
+      // The centre of mass rides with the body: fixed in the joint frame.
+      const Eigen::Vector3d com_expected = joint_frame.block<3, 3>(0, 0) * robot.joints[i].body.com +
+                                           joint_frame.block<3, 1>(0, 3);
+      ASSERT_LT((ws.com[i] - com_expected).norm(), 1e-12) << robot.name << " joint " << i;
+    }
+  }
+}
+
+TEST(ForwardKinematics, Rx170ToolPoseMatchesStandardDhOver1000RandomConfigurations) {
+  ASSERT_EQ(testing_support::rx170().dof(), 6);
+  expectToolMatchesDh(testing_support::rx170(), kRx170Dh, 17u);
+}
+
+TEST(ForwardKinematics, Ur10ToolPoseMatchesStandardDhOver1000RandomConfigurations) {
+  ASSERT_EQ(testing_support::ur10().dof(), 6);
+  expectToolMatchesDh(testing_support::ur10(), kUr10Dh, 29u);
+}
+
+TEST(ForwardKinematics, Rx170JointFramesAxesAndCentresOfMassMatchDh) {
+  expectJointFramesMatchDh(testing_support::rx170(), kRx170Dh, 5u);
+}
+
+TEST(ForwardKinematics, Ur10JointFramesAxesAndCentresOfMassMatchDh) {
+  expectJointFramesMatchDh(testing_support::ur10(), kUr10Dh, 6u);
+}
+
+TEST(ForwardKinematics, Rx170StandsVerticalAtZero) {
+  const Robot& robot = testing_support::rx170();
+  RobotWorkspace ws(robot);
+  forwardKinematics(robot, ws, JointVector::Zero(6));
+  const Eigen::Vector3d flange = ws.tool_pose.translation();
+  EXPECT_NEAR(flange.x(), 0.15, 1e-12);
+  EXPECT_NEAR(flange.y(), 0.0, 1e-12);
+  EXPECT_NEAR(flange.z(), 0.55 + 0.825 + 0.925 + 0.11, 1e-12);
+  // The whole arm above the shoulder is one vertical line: joints 2..6 all sit at x = 0.15, y = 0.
+  for (int i = 1; i < 6; ++i) {
+    EXPECT_NEAR(ws.origin[i].x(), 0.15, 1e-12) << "joint " << i + 1;
+    EXPECT_NEAR(ws.origin[i].y(), 0.0, 1e-12) << "joint " << i + 1;
+  }
+  // The tool points straight up; axes 1, 4 and 6 are vertical.
+  EXPECT_LT((ws.tool_pose.linear().col(2) - Eigen::Vector3d::UnitZ()).norm(), 1e-12);
+  for (int i : {0, 3, 5}) EXPECT_NEAR(std::abs(ws.axis[i].z()), 1.0, 1e-12) << "axis " << i + 1;
+  for (int i : {1, 2, 4}) EXPECT_NEAR(ws.axis[i].z(), 0.0, 1e-12) << "axis " << i + 1;
+}
+
+TEST(ForwardKinematics, Ur10ZeroPoseIsTheTextbookOne) {
+  // At q = 0 the UR arm lies stretched along x: p = (a2 + a3, -(d4 + d6), d1 - d5).
+  const Robot& robot = testing_support::ur10();
+  RobotWorkspace ws(robot);
+  forwardKinematics(robot, ws, JointVector::Zero(6));
+  EXPECT_NEAR(ws.tool_pose.translation().x(), -0.612 - 0.5723, 1e-12);
+  EXPECT_NEAR(ws.tool_pose.translation().y(), -(0.163941 + 0.0922), 1e-12);
+  EXPECT_NEAR(ws.tool_pose.translation().z(), 0.1273 - 0.1157, 1e-12);
+}
+
+TEST(ForwardKinematics, Rx170ShoulderRotationTurnsTheWholeArmAboutZ) {
+  // Turning joint 1 by phi rotates the tool pose about the base z axis by phi, nothing else.
+  const Robot& robot = testing_support::rx170();
+  RobotWorkspace ws(robot);
+  std::mt19937 rng(3u);
+  for (int sample = 0; sample < 50; ++sample) {
+    JointVector q = testing_support::randomConfiguration(robot, rng, 0.5);
+    forwardKinematics(robot, ws, q);
+    const Eigen::Isometry3d before = ws.tool_pose;
+    const double phi = 0.4;
+    q[0] += phi;
+    forwardKinematics(robot, ws, q);
+    const Eigen::Isometry3d expected = Eigen::AngleAxisd(phi, Eigen::Vector3d::UnitZ()) * before;
+    EXPECT_LT((ws.tool_pose.matrix() - expected.matrix()).cwiseAbs().maxCoeff(), 1e-12);
+  }
+}
+
+TEST(ForwardKinematics, IsDeterministic) {
+  const Robot& robot = testing_support::rx170();
+  RobotWorkspace first(robot);
+  RobotWorkspace second(robot);
+  JointVector q(6);
+  q << 0.1, -0.7, 1.3, 2.2, -0.4, 3.0;
+  forwardKinematics(robot, first, q);
+  forwardKinematics(robot, second, q);
+  forwardKinematics(robot, second, q);
+  EXPECT_TRUE(first.tool_pose.matrix() == second.tool_pose.matrix());
+}
+
+TEST(ForwardKinematics, WrongSizeConfigurationThrowsInvalidArgument) {
+  const Robot& robot = testing_support::rx170();
+  RobotWorkspace ws(robot);
+  EXPECT_THROW(forwardKinematics(robot, ws, JointVector::Zero(5)), InvalidArgument);
+  EXPECT_THROW(forwardKinematics(robot, ws, JointVector::Zero(7)), InvalidArgument);
+  EXPECT_THROW(forwardKinematics(robot, ws, JointVector()), InvalidArgument);
+  try {
+    forwardKinematics(robot, ws, JointVector::Zero(5));
+    FAIL() << "no exception";
+  } catch (const InvalidArgument& error) {
+    EXPECT_THAT(error.what(), HasSubstr("q"));
+    EXPECT_THAT(error.what(), HasSubstr("5"));
+    EXPECT_THAT(error.what(), HasSubstr("6"));
+  }
+}
+
+TEST(ForwardKinematics, NonFiniteConfigurationThrowsInvalidArgumentNamingTheJoint) {
+  const Robot& robot = testing_support::ur10();
+  RobotWorkspace ws(robot);
+  JointVector q = JointVector::Zero(6);
+  q[2] = std::numeric_limits<double>::quiet_NaN();
+  try {
+    forwardKinematics(robot, ws, q);
+    FAIL() << "no exception for NaN";
+  } catch (const InvalidArgument& error) {
+    EXPECT_THAT(error.what(), HasSubstr("joint_3"));
+  }
+  q[2] = std::numeric_limits<double>::infinity();
+  EXPECT_THROW(forwardKinematics(robot, ws, q), InvalidArgument);
+  q[2] = -std::numeric_limits<double>::infinity();
+  EXPECT_THROW(forwardKinematics(robot, ws, q), InvalidArgument);
+}
+
+TEST(PoseError, IsThePositionDifferenceAndTheRotationVectorFromTo) {
+  std::mt19937 rng(11u);
+  std::uniform_real_distribution<double> uniform(-1.0, 1.0);
+  for (int sample = 0; sample < 100; ++sample) {
+    Eigen::Isometry3d from = Eigen::Isometry3d::Identity();
+    from.linear() = Eigen::Quaterniond(uniform(rng), uniform(rng), uniform(rng), uniform(rng)).normalized()
+                        .toRotationMatrix();
+    from.translation() = Eigen::Vector3d(uniform(rng), uniform(rng), uniform(rng));
+    const Eigen::Vector3d rotation_vector = 2.5 * Eigen::Vector3d(uniform(rng), uniform(rng), uniform(rng)) /
+                                            std::sqrt(3.0);  // angle below pi
+    const Eigen::Vector3d shift(uniform(rng), uniform(rng), uniform(rng));
+    Eigen::Isometry3d to = Eigen::Isometry3d::Identity();
+    to.linear() = Eigen::AngleAxisd(rotation_vector.norm(), rotation_vector.normalized()).toRotationMatrix() *
+                  from.linear();
+    to.translation() = from.translation() + shift;
+    const Vector6 error = poseError(from, to);
+    EXPECT_LT((error.head<3>() - shift).norm(), 1e-14);
+    EXPECT_LT((error.tail<3>() - rotation_vector).norm(), 1e-12);
+  }
+}
+
+}  // namespace
+}  // namespace jointcomp
