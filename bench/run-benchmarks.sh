@@ -1,7 +1,10 @@
 #!/usr/bin/env bash
 # Builds the benchmarks (Release, build/bench) and compares jointcomp's robot algorithms with KDL on the
 # RX170: per call, the median over 3 repetitions of the CPU time, ours / KDL, and the allocations per call.
-# Run from anywhere; arguments are passed on to the benchmark binary (e.g. --benchmark_filter=Gravity).
+# Then the flexible-joint plant (plant_bench): the real-time factor of the paper's spiral and the cost of
+# one right-hand side next to forward dynamics, ours and KDL's.
+# Run from anywhere; arguments are passed on to robot_bench (e.g. --benchmark_filter=Gravity), not to
+# plant_bench, which always runs whole.
 #   bench/run-benchmarks.sh
 set -euo pipefail
 
@@ -12,7 +15,7 @@ json="$build_dir/robot_bench.json"
 python=/usr/bin/python3  # Debian's interpreter: the python3 first on PATH may be another one
 
 cmake -S . -B "$build_dir" -DCMAKE_BUILD_TYPE=Release -DJOINTCOMP_BUILD_TESTS=OFF >/dev/null
-cmake --build "$build_dir" --target robot_bench -j"$(nproc)"
+cmake --build "$build_dir" --target robot_bench plant_bench -j"$(nproc)"
 
 # The binary cross-checks ours against KDL before timing anything (exit 2 if they disagree) and fails
 # (exit 3) if one of our calls allocated in its timed loop.
@@ -92,4 +95,59 @@ for call, limit in targets.items():
         verdict = "met" if ratios[call] <= limit else "NOT met"
         label = dict(calls)[call]
         print(f"  {label}: {ratios[call]:.3f} of KDL -> {verdict}")
+EOF
+
+# The plant: BM_Ours_PlantSpiral runs the whole experiment 3 times per repetition (a few seconds in all).
+plant_json="$build_dir/plant_bench.json"
+echo "running plant_bench (3 repetitions, medians; about ten seconds) ..." >&2
+status=0
+"$build_dir/bench/plant_bench" --benchmark_format=json --benchmark_repetitions=3 \
+  --benchmark_report_aggregates_only=true --benchmark_min_time=0.25 >"$plant_json" || status=$?
+if [ "$status" -ne 0 ]; then
+  echo "plant_bench failed (exit $status); see the message above. JSON so far: $plant_json" >&2
+  exit "$status"
+fi
+
+"$python" - "$plant_json" <<'EOF'
+import json
+import sys
+
+with open(sys.argv[1]) as f:
+    report = json.load(f)
+
+scale = {"ns": 1.0, "us": 1e3, "ms": 1e6, "s": 1e9}
+median = {}  # benchmark name (without /iterations:.. suffixes) -> its median aggregate
+for b in report["benchmarks"]:
+    if b.get("run_type") == "aggregate" and b.get("aggregate_name") != "median":
+        continue
+    median[b.get("run_name", b["name"]).split("/")[0]] = b
+
+def ns(name):
+    b = median[name]
+    return b["cpu_time"] * scale[b.get("time_unit", "ns")]
+
+print()
+spiral = median.get("BM_Ours_PlantSpiral")
+if spiral:
+    print("Plant: the paper's spiral on the flexible-joint RX170 (default tolerances), median of 3 repetitions")
+    print(f"  {spiral['real_time_factor']:.0f}x real time ({spiral['simulating_s']:.3f} s simulating "
+          f"{spiral['motion_s']:.1f} s of motion, 3 runs); per experiment CVODE took {spiral['steps']:.0f} steps, "
+          f"{spiral['rhs_evaluations']:.0f} right-hand sides, {spiral['jacobian_evaluations']:.0f} Jacobians")
+rows = []
+for name, label in (("BM_Ours_PlantRightHandSide", "plant right-hand side (ours)"),
+                    ("BM_Ours_ForwardDynamics", "forward dynamics (ours)"),
+                    ("BM_Kdl_ForwardDynamics", "forward dynamics (KDL)")):
+    if name in median:
+        rows.append((label, f"{ns(name):.0f}", f"{median[name].get('allocs_per_call', float('nan')):g}"))
+if rows:
+    header = ("call", "CPU ns", "allocs per call")
+    widths = [max(len(r[i]) for r in rows + [header]) for i in range(len(header))]
+    line = lambda r: "  ".join(c.ljust(w) if i == 0 else c.rjust(w) for i, (c, w) in enumerate(zip(r, widths)))
+    print(line(header))
+    print(line(tuple("-" * w for w in widths)))
+    for r in rows:
+        print(line(r))
+    if "BM_Ours_PlantRightHandSide" in median and "BM_Kdl_ForwardDynamics" in median:
+        print(f"one plant right-hand side costs {ns('BM_Ours_PlantRightHandSide') / ns('BM_Kdl_ForwardDynamics'):.2f} "
+              "of KDL's forward dynamics alone")
 EOF

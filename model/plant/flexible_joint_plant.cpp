@@ -70,6 +70,20 @@ FlexibleJointPlant::FlexibleJointPlant(const JointErrorModel& truth, std::vector
   if (static_cast<int>(drives_.size()) != n_) {
     throw InvalidArgument("plant: " + std::to_string(drives_.size()) + " drives for " + std::to_string(n_) + " joints");
   }
+  for (int j = 0; j < n_; ++j) {
+    const DriveParameters& d = drives_[j];
+    const std::string where = "plant: drive of " + robot.joints[j].name + ": ";
+    const double values[] = {d.motor_inertia_kgm2, d.viscous_friction_nms_per_rad, d.coulomb_friction_nm,
+                             d.coulomb_velocity_scale_rad_per_s, d.transmission_damping_nms_per_rad,
+                             d.kp_nm_per_rad, d.ki_nm_per_rad_s, d.kd_nms_per_rad};
+    for (double v : values) {
+      if (!std::isfinite(v) || v < 0.0) throw InvalidArgument(where + "every value must be finite and non-negative");
+    }
+    if (!(d.motor_inertia_kgm2 > 0.0)) throw InvalidArgument(where + "motor_inertia_kgm2 must be positive");
+    if (!(d.coulomb_velocity_scale_rad_per_s > 0.0)) {
+      throw InvalidArgument(where + "coulomb_velocity_scale_rad_per_s must be positive");
+    }
+  }
   compliance_index_ = truth_.findEffect(ComplianceEffect::kType);
   if (compliance_index_ < 0) throw InvalidArgument("plant: the joint-error model has no compliance effect (the joint springs)");
   const auto& compliance = static_cast<const ComplianceEffect&>(truth_.effect(compliance_index_));
@@ -135,7 +149,9 @@ void FlexibleJointPlant::reset(const JointVector& command, double start_time) {
   const FixedPointReport settled = settleStatically(truth_, truth_.allEffects(), ws_, ctx_);
   if (!settled.converged) throw SolverError("plant: no static equilibrium found at the initial command");
   const JointVector q = ctx_.q;
-  const JointVector spring_torque = ctx_.load_torque;  // at equilibrium the spring carries the load
+  const JointVector rest = JointVector::Zero(n_);
+  JointVector spring_torque, motor_reaction;
+  transmissionTorques(command, rest, q, rest, spring_torque, motor_reaction);
   time_ = start_time;
   reference_ = command;
   reference_velocity_.setZero(n_);
@@ -150,7 +166,8 @@ void FlexibleJointPlant::reset(const JointVector& command, double start_time) {
     y[2 * n_ + j] = command[j];
     y[3 * n_ + j] = 0.0;
     const double ki = drives_[j].ki_nm_per_rad_s;
-    y[4 * n_ + j] = ki > 0.0 ? (spring_torque[j] - feedforward_[j]) / ki : 0.0;
+    // The integral holds exactly what the motor must push against at rest, so the plant starts still.
+    y[4 * n_ + j] = ki > 0.0 ? (motor_reaction[j] - feedforward_[j]) / ki : 0.0;
   }
   restart_ = true;
 }
@@ -224,6 +241,34 @@ void FlexibleJointPlant::transmissionError(const JointVector& p, const JointVect
   addSelectedJointErrors(truth_, error_mask_, ctx_, error);
 }
 
+void FlexibleJointPlant::transmissionTorques(const JointVector& p, const JointVector& pd, const JointVector& q,
+                                             const JointVector& qd, JointVector& link_torque,
+                                             JointVector& motor_reaction) {
+  // The gear output turns by p + e(p): the spring stretches by p + e - q and the damper by its rate
+  // (I + E) pd - qd with E = de/dp. The motors feel (I + E)^T times the transmitted torque, which keeps
+  // the spring conservative and the damper dissipative. E by central differences of the effects.
+  JointVector error;
+  transmissionError(p, q, error);
+  JointMatrix slope = JointMatrix::Zero(n_, n_);
+  if (error_mask_ != 0) {
+    JointVector shifted = p;
+    JointVector ahead, behind;
+    constexpr double kStep = 1e-6;  // rad of joint-side motor angle
+    for (int k = 0; k < n_; ++k) {
+      shifted[k] = p[k] + kStep;
+      transmissionError(shifted, q, ahead);
+      shifted[k] = p[k] - kStep;
+      transmissionError(shifted, q, behind);
+      shifted[k] = p[k];
+      slope.col(k) = (ahead - behind) / (2.0 * kStep);
+    }
+  }
+  const JointVector output_rate = pd + slope * pd;
+  link_torque = stiffness_.cwiseProduct(p + error - q);
+  for (int j = 0; j < n_; ++j) link_torque[j] += drives_[j].transmission_damping_nms_per_rad * (output_rate[j] - qd[j]);
+  motor_reaction = link_torque + slope.transpose() * link_torque;
+}
+
 void FlexibleJointPlant::derivative(double t, const double* y, double* ydot) {
   const Robot& robot = truth_.robot();
   const Eigen::Map<const Eigen::VectorXd> state(y, stateSize());
@@ -233,24 +278,8 @@ void FlexibleJointPlant::derivative(double t, const double* y, double* ydot) {
   const JointVector pd = state.segment(3 * n_, n_);
   const JointVector integral = state.segment(4 * n_, n_);
 
-  // Transmission error and its sensitivity to the motor positions (the motors feel the spring through
-  // d(p + e)/dp, which keeps the mechanics conservative).
-  JointVector error;
-  transmissionError(p, q, error);
-  JointVector spring_torque = stiffness_.cwiseProduct(p + error - q);
-  for (int j = 0; j < n_; ++j) spring_torque[j] += drives_[j].transmission_damping_nms_per_rad * (pd[j] - qd[j]);
-  JointVector motor_reaction = spring_torque;
-  if (error_mask_ != 0) {
-    JointVector shifted = p;
-    JointVector error_shifted;
-    for (int k = 0; k < n_; ++k) {
-      const double h = 1e-7;
-      shifted[k] = p[k] + h;
-      transmissionError(shifted, q, error_shifted);
-      shifted[k] = p[k];
-      motor_reaction[k] += spring_torque.dot((error_shifted - error) / h);
-    }
-  }
+  JointVector spring_torque, motor_reaction;
+  transmissionTorques(p, pd, q, qd, spring_torque, motor_reaction);
 
   // Link side.
   forwardKinematics(robot, ws_.robot, q);

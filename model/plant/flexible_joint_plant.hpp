@@ -2,7 +2,7 @@
 //
 // Per joint j, a motor (inertia B_j seen at the joint, viscous and smooth Coulomb friction) drives the
 // link through the gear train and a joint spring: the transmission carries
-//   tau_s = K (p + e(p) - q) + D (pd - qd),
+//   tau_s = K (p + e(p) - q) + D ((I + de/dp) pd - qd),
 // with p the motor position in joint units (what the controller sees: motor angles scaled by the gear
 // ratios), e the transmission error of the gear-stage angles, q the link position and K the compliance
 // effect's stiffness. The link side is the rigid-body dynamics of the robot under gravity, the spring
@@ -104,6 +104,8 @@ private:
   void computeMotorTorques(double t, const JointVector& p, const JointVector& pd, const JointVector& integral,
                            JointVector& torque) const;
   void transmissionError(const JointVector& p, const JointVector& q, JointVector& error);
+  void transmissionTorques(const JointVector& p, const JointVector& pd, const JointVector& q, const JointVector& qd,
+                           JointVector& link_torque, JointVector& motor_reaction);
   void staticFeedforward(const JointVector& position, JointVector& torque);
 
   JointErrorModel truth_;

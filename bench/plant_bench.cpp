@@ -1,0 +1,291 @@
+// The flexible-joint plant: how fast it simulates the paper's spiral, and what one right-hand side costs
+// next to forward dynamics (ours and KDL's), on the RX170, in one binary and one run.
+//
+//   BM_Ours_PlantSpiral          the whole experiment (runSpiralExperiment with the drives of
+//                                model/params/rx170.json, default PlantOptions: 3 runs of the spiral on the
+//                                plant); counters: real_time_factor (motion seconds simulated per wall-clock
+//                                second spent simulating, planning and compensation excluded), and per
+//                                experiment CVODE's steps, rhs_evaluations (those of its difference-quotient
+//                                Jacobians included) and jacobian_evaluations.
+//   BM_Ours_PlantRightHandSide   one FlexibleJointPlant::derivative() (link forward dynamics, transmission
+//                                error and its sensitivity, loads, controller)
+//   BM_Ours_ForwardDynamics      jointcomp::forwardDynamics
+//   BM_Kdl_ForwardDynamics       KDL::ChainFdSolver_RNE::CartToJnt on the same URDF chain, base_link -> flange
+//
+// The per-call benchmarks cycle through 64 seeded states (joints inside their limits, rates up to the
+// velocity limits, springs stretched by up to 1 mrad); the torques for forward dynamics come from inverse
+// dynamics of seeded accelerations. Before timing, ours and KDL's forward dynamics are compared on every
+// state (exit 2 if they differ by more than 1e-9 relative). "allocs_per_call" counts heap allocations in
+// the timed loop (glibc's malloc family interposed below; libstdc++'s operator new goes through malloc).
+#include <algorithm>
+#include <atomic>
+#include <cerrno>
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <cstdlib>
+#include <iostream>
+#include <memory>
+#include <random>
+#include <string>
+#include <vector>
+
+#include <benchmark/benchmark.h>
+#include <kdl/chain.hpp>
+#include <kdl/chainfdsolver_recursive_newton_euler.hpp>
+#include <kdl/jntarray.hpp>
+#include <kdl/tree.hpp>
+#include <kdl_parser/kdl_parser.hpp>
+
+#include "model/compensation/spiral_experiment.hpp"
+#include "model/io/parameter_file.hpp"
+#include "model/plant/flexible_joint_plant.hpp"
+#include "model/robot/dynamics.hpp"
+#include "model/robot/load_urdf.hpp"
+
+// ---------------------------------------------------------------------------------------------------
+// Allocation counting.
+
+namespace {
+std::atomic<std::uint64_t> g_allocations{0};
+inline void countAllocation() { g_allocations.fetch_add(1, std::memory_order_relaxed); }
+}  // namespace
+
+extern "C" {
+void* __libc_malloc(std::size_t size);
+void* __libc_calloc(std::size_t count, std::size_t size);
+void* __libc_realloc(void* pointer, std::size_t size);
+void* __libc_memalign(std::size_t alignment, std::size_t size);
+void __libc_free(void* pointer);
+
+void* malloc(std::size_t size) {
+  countAllocation();
+  return __libc_malloc(size);
+}
+void* calloc(std::size_t count, std::size_t size) {
+  countAllocation();
+  return __libc_calloc(count, size);
+}
+void* realloc(void* pointer, std::size_t size) {
+  countAllocation();
+  return __libc_realloc(pointer, size);
+}
+void* memalign(std::size_t alignment, std::size_t size) {
+  countAllocation();
+  return __libc_memalign(alignment, size);
+}
+void* aligned_alloc(std::size_t alignment, std::size_t size) {
+  countAllocation();
+  return __libc_memalign(alignment, size);
+}
+int posix_memalign(void** result, std::size_t alignment, std::size_t size) {
+  if (alignment % sizeof(void*) != 0 || (alignment & (alignment - 1)) != 0) return EINVAL;
+  countAllocation();
+  void* pointer = __libc_memalign(alignment, size);
+  if (pointer == nullptr && size != 0) return ENOMEM;
+  *result = pointer;
+  return 0;
+}
+void free(void* pointer) { __libc_free(pointer); }
+}  // extern "C"
+
+namespace {
+
+using namespace jointcomp;
+
+constexpr int kStates = 64;  // a power of two: the loops cycle with a mask
+constexpr std::uint64_t kSeed = 20240611;
+const char* const kUrdf = JOINTCOMP_DATA_DIR "/robots/rx170.urdf";
+const char* const kParameters = JOINTCOMP_DATA_DIR "/params/rx170.json";
+
+struct AllocationCounter {
+  std::uint64_t start = g_allocations.load(std::memory_order_relaxed);
+  void report(benchmark::State& state) const {
+    const double count = static_cast<double>(g_allocations.load(std::memory_order_relaxed) - start);
+    state.counters["allocs_per_call"] = count / static_cast<double>(std::max<benchmark::IterationCount>(state.iterations(), 1));
+  }
+};
+
+struct Sample {
+  std::vector<double> y;           // plant state [q, qd, p, pd, integral]
+  JointVector q, qd, tau;          // forward-dynamics inputs
+  KDL::JntArray kq, kqd, ktau;
+};
+
+struct Fixture {
+  std::shared_ptr<const Robot> robot;
+  std::unique_ptr<JointErrorModel> model;
+  std::vector<DriveParameters> drives;
+  KDL::Tree tree;
+  KDL::Chain chain;  // KDL's solvers keep a reference: it lives here and never moves
+  std::unique_ptr<KDL::ChainFdSolver_RNE> fd;
+  KDL::Wrenches no_wrenches;
+  std::vector<Sample> samples;
+};
+
+[[noreturn]] void fail(const std::string& message) {
+  std::cerr << "plant_bench: " << message << std::endl;
+  std::exit(2);
+}
+
+KDL::JntArray toKdl(const JointVector& v) {
+  KDL::JntArray a(static_cast<unsigned int>(v.size()));
+  for (int i = 0; i < v.size(); ++i) a(i) = v[i];
+  return a;
+}
+
+std::unique_ptr<Fixture> buildFixture() {
+  auto f = std::make_unique<Fixture>();
+  try {
+    f->robot = std::make_shared<const Robot>(loadRobotFromUrdfFile(kUrdf));
+    f->model = std::make_unique<JointErrorModel>(loadParameterFile(kParameters, f->robot));
+    f->drives = loadDriveParameters(kParameters, *f->robot);
+  } catch (const std::exception& error) {
+    fail(std::string("cannot load the RX170: ") + error.what());
+  }
+  if (!kdl_parser::treeFromFile(kUrdf, f->tree) || !f->tree.getChain("base_link", "flange", f->chain)) {
+    fail(std::string("KDL cannot read the chain base_link -> flange of ") + kUrdf);
+  }
+  const Robot& robot = *f->robot;
+  const int n = robot.dof();
+  if (static_cast<int>(f->chain.getNrOfJoints()) != n) fail("KDL's chain and ours differ in joint count");
+  f->fd = std::make_unique<KDL::ChainFdSolver_RNE>(f->chain, KDL::Vector(robot.gravity.x(), robot.gravity.y(), robot.gravity.z()));
+  f->no_wrenches.assign(f->chain.getNrOfSegments(), KDL::Wrench::Zero());
+
+  std::mt19937_64 random(kSeed);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  RobotWorkspace ws(robot);
+  double largest_difference = 0.0;
+  for (int k = 0; k < kStates; ++k) {
+    Sample s;
+    s.q.resize(n);
+    s.qd.resize(n);
+    JointVector qdd(n);
+    s.y.assign(5 * n, 0.0);
+    for (int i = 0; i < n; ++i) {
+      const Joint& joint = robot.joints[i];
+      s.q[i] = 0.5 * (joint.lower + joint.upper) + 0.5 * (joint.upper - joint.lower) * unit(random);
+      s.qd[i] = joint.velocity_limit * unit(random);
+      qdd[i] = 5.0 * unit(random);
+      s.y[i] = s.q[i];
+      s.y[n + i] = s.qd[i];
+      s.y[2 * n + i] = s.q[i] + 1e-3 * unit(random);
+      s.y[3 * n + i] = s.qd[i] + 0.01 * unit(random);
+      s.y[4 * n + i] = 1e-5 * unit(random);
+    }
+    inverseDynamics(robot, ws, s.q, s.qd, qdd, s.tau);
+    s.kq = toKdl(s.q);
+    s.kqd = toKdl(s.qd);
+    s.ktau = toKdl(s.tau);
+    // Cross-check ours against KDL (outside timing).
+    JointVector ours(n);
+    forwardDynamics(robot, ws, s.q, s.qd, s.tau, ours);
+    KDL::JntArray theirs(static_cast<unsigned int>(n));
+    if (f->fd->CartToJnt(s.kq, s.kqd, s.ktau, f->no_wrenches, theirs) < 0) fail("KDL's forward dynamics failed");
+    for (int i = 0; i < n; ++i) {
+      largest_difference = std::max(largest_difference, std::abs(ours[i] - theirs(i)) / (1.0 + std::abs(theirs(i))));
+      if (std::abs(ours[i] - theirs(i)) > 1e-9 * (1.0 + std::abs(theirs(i)))) {
+        fail("forward dynamics differ at state " + std::to_string(k) + ", joint " + std::to_string(i + 1) + ": ours " +
+             std::to_string(ours[i]) + ", KDL " + std::to_string(theirs(i)));
+      }
+    }
+    f->samples.push_back(std::move(s));
+  }
+  std::cerr << "plant_bench: forward dynamics cross-check against KDL passed at " << kStates
+            << " states (largest relative difference " << largest_difference << ", tolerance 1e-9)" << std::endl;
+  return f;
+}
+
+Fixture& fixture() {
+  static const std::unique_ptr<Fixture> instance = buildFixture();
+  return *instance;
+}
+
+// ---------------------------------------------------------------------------------------------------
+// The spiral on the plant.
+
+void BM_Ours_PlantSpiral(benchmark::State& state) {
+  Fixture& f = fixture();
+  SpiralExperimentSpec spec;
+  spec.drives = f.drives;
+  double motion = 0.0, simulating = 0.0;
+  PlantStatistics total;
+  for (auto _ : state) {
+    const SpiralExperimentResult result = runSpiralExperiment(*f.model, spec);
+    motion += 3.0 * (result.planned.time.back() - result.planned.time.front());
+    simulating += result.simulation_seconds;
+    total.steps += result.plant_statistics.steps;
+    total.rhs_evaluations += result.plant_statistics.rhs_evaluations;
+    total.jacobian_evaluations += result.plant_statistics.jacobian_evaluations;
+    benchmark::DoNotOptimize(result.runs[2].metrics.ra);
+  }
+  const double experiments = static_cast<double>(state.iterations());
+  state.counters["real_time_factor"] = motion / simulating;
+  state.counters["motion_s"] = motion / experiments;
+  state.counters["simulating_s"] = simulating / experiments;
+  state.counters["steps"] = static_cast<double>(total.steps) / experiments;
+  state.counters["rhs_evaluations"] = static_cast<double>(total.rhs_evaluations) / experiments;
+  state.counters["jacobian_evaluations"] = static_cast<double>(total.jacobian_evaluations) / experiments;
+  state.counters["rhs_per_motion_s"] = static_cast<double>(total.rhs_evaluations) / motion;
+}
+BENCHMARK(BM_Ours_PlantSpiral)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(3);
+
+// ---------------------------------------------------------------------------------------------------
+// One right-hand side against forward dynamics.
+
+void BM_Ours_PlantRightHandSide(benchmark::State& state) {
+  Fixture& f = fixture();
+  FlexibleJointPlant plant(*f.model, f.drives);
+  plant.reset(f.samples[0].q);
+  std::vector<double> ydot(static_cast<std::size_t>(plant.stateSize()));
+  std::size_t k = 0;
+  const AllocationCounter allocations;
+  for (auto _ : state) {
+    plant.derivative(0.0, f.samples[k & (kStates - 1)].y.data(), ydot.data());
+    benchmark::DoNotOptimize(ydot.data());
+    benchmark::ClobberMemory();
+    ++k;
+  }
+  allocations.report(state);
+}
+BENCHMARK(BM_Ours_PlantRightHandSide);
+
+void BM_Ours_ForwardDynamics(benchmark::State& state) {
+  Fixture& f = fixture();
+  RobotWorkspace ws(*f.robot);
+  JointVector qdd(f.robot->dof());
+  std::size_t k = 0;
+  const AllocationCounter allocations;
+  for (auto _ : state) {
+    const Sample& s = f.samples[k++ & (kStates - 1)];
+    forwardDynamics(*f.robot, ws, s.q, s.qd, s.tau, qdd);
+    benchmark::DoNotOptimize(qdd);
+  }
+  allocations.report(state);
+}
+BENCHMARK(BM_Ours_ForwardDynamics);
+
+void BM_Kdl_ForwardDynamics(benchmark::State& state) {
+  Fixture& f = fixture();
+  KDL::JntArray qdd(static_cast<unsigned int>(f.robot->dof()));
+  std::size_t k = 0;
+  const AllocationCounter allocations;
+  for (auto _ : state) {
+    const Sample& s = f.samples[k++ & (kStates - 1)];
+    benchmark::DoNotOptimize(f.fd->CartToJnt(s.kq, s.kqd, s.ktau, f.no_wrenches, qdd));
+    benchmark::DoNotOptimize(qdd.data);
+  }
+  allocations.report(state);
+}
+BENCHMARK(BM_Kdl_ForwardDynamics);
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  fixture();  // load and cross-check before anything is timed
+  benchmark::Initialize(&argc, argv);
+  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  return 0;
+}
