@@ -15,7 +15,7 @@ json="$build_dir/robot_bench.json"
 python=/usr/bin/python3  # Debian's interpreter: the python3 first on PATH may be another one
 
 cmake -S . -B "$build_dir" -DCMAKE_BUILD_TYPE=Release -DJOINTCOMP_BUILD_TESTS=OFF >/dev/null
-cmake --build "$build_dir" --target robot_bench plant_bench -j"$(nproc)"
+cmake --build "$build_dir" --target robot_bench plant_bench compensation_bench -j"$(nproc)"
 
 # The binary cross-checks ours against KDL before timing anything (exit 2 if they disagree) and fails
 # (exit 3) if one of our calls allocated in its timed loop.
@@ -150,4 +150,24 @@ if rows:
     if "BM_Ours_PlantRightHandSide" in median and "BM_Kdl_ForwardDynamics" in median:
         print(f"one plant right-hand side costs {ns('BM_Ours_PlantRightHandSide') / ns('BM_Kdl_ForwardDynamics'):.2f} "
               "of KDL's forward dynamics alone")
+EOF
+
+# Compensation throughput: spiral points per second per core, ours against the same computation with
+# KDL's gravity solver.
+compensation_json="$build_dir/compensation_bench.json"
+echo "running compensation_bench (3 repetitions, medians; a few seconds) ..." >&2
+"$build_dir/bench/compensation_bench" --benchmark_format=json --benchmark_repetitions=3 \
+  --benchmark_report_aggregates_only=true --benchmark_min_time=0.25 >"$compensation_json"
+"$python" - "$compensation_json" <<'EOF'
+import json, sys
+runs = {b["run_name"]: b for b in json.load(open(sys.argv[1]))["benchmarks"] if b.get("aggregate_name") == "median"}
+ours = runs["BM_Ours_CompensateSpiralPoint"]
+kdl = runs["BM_Kdl_CompensateSpiralPoint"]
+print()
+print("Compensation of the spiral, all effects, iterated to 1e-12 rad (median of 3, CPU time)")
+print(f"  ours: {ours['items_per_second'] / 1e6:.2f} million points/s per core "
+      f"({ours['fixed_point_iterations']:.2f} fixed-point iterations per point)")
+print(f"  with KDL's gravity: {kdl['items_per_second'] / 1e6:.2f} million points/s per core")
+print(f"  ours / KDL-based throughput: {ours['items_per_second'] / kdl['items_per_second']:.2f}")
+print("target: at least 1 million points/s per core and at least 2x the KDL-based equivalent")
 EOF
