@@ -5,5 +5,6 @@ namespace jointcomp::cli {
 
 int runKinematics(int argc, char** argv);
 int runPaper(int argc, char** argv);
+int runImportIpa(int argc, char** argv);
 
 }  // namespace jointcomp::cli

@@ -16,6 +16,8 @@ void printUsage() {
       "        [--no-plot]\n"
       "                             the paper's spiral test on a simulated robot: Table II analogue\n"
       "  kinematics [--urdf FILE]   forward kinematics and gravity torques at a few poses\n"
+      "  import-ipa --in FILE --out FILE [--trafo FILE]\n"
+      "                             convert IPA UR10 laser-tracker files into a measurement campaign\n"
       "  help                       this text\n"
       "With no command, jointcomp runs `paper` on the built-in Staubli RX170.\n");
 }
@@ -30,6 +32,7 @@ int main(int argc, char** argv) {
       return 0;
     }
     if (command == "paper") return jointcomp::cli::runPaper(argc > 1 ? argc - 1 : 0, argv + 1);
+    if (command == "import-ipa") return jointcomp::cli::runImportIpa(argc - 1, argv + 1);
     if (command == "kinematics") return jointcomp::cli::runKinematics(argc - 1, argv + 1);
     std::fprintf(stderr, "jointcomp: unknown command '%s'\n", command.c_str());
     printUsage();

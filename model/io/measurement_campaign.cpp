@@ -1,0 +1,319 @@
+#include "model/io/measurement_campaign.hpp"
+
+#include <charconv>
+#include <cmath>
+#include <limits>
+#include <sstream>
+
+#include "model/common/errors.hpp"
+#include "model/io/atomic_file.hpp"
+
+namespace jointcomp {
+namespace {
+
+constexpr const char* kFormatLine = "jointcomp-measurements/1";
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kDegree = kPi / 180.0;
+constexpr double kNotMeasured = std::numeric_limits<double>::quiet_NaN();
+
+std::string trim(const std::string& text) {
+  const auto first = text.find_first_not_of(" \t\r\n");
+  if (first == std::string::npos) return "";
+  const auto last = text.find_last_not_of(" \t\r\n");
+  return text.substr(first, last - first + 1);
+}
+
+std::vector<std::string> splitCells(const std::string& line) {
+  std::vector<std::string> cells;
+  std::string cell;
+  std::istringstream stream(line);
+  while (std::getline(stream, cell, ',')) cells.push_back(trim(cell));
+  if (!line.empty() && line.back() == ',') cells.push_back("");
+  return cells;
+}
+
+class CampaignParser {
+public:
+  explicit CampaignParser(std::string source) : source_(std::move(source)) {}
+
+  [[noreturn]] void fail(int line, const std::string& what) const {
+    throw MeasurementError(source_ + ":" + std::to_string(line) + ": " + what);
+  }
+
+  // A cell as a number; empty cells give `empty_value`, or fail when the column is required.
+  double number(const std::string& cell, int line, const std::string& column, bool required, double empty_value) const {
+    if (cell.empty()) {
+      if (required) fail(line, "column '" + column + "': empty cell in a required column");
+      return empty_value;
+    }
+    double value = 0.0;
+    const char* begin = cell.data();
+    const char* end = cell.data() + cell.size();
+    if (*begin == '+') ++begin;
+    const auto result = std::from_chars(begin, end, value);
+    if (result.ec == std::errc::result_out_of_range) fail(line, "column '" + column + "': '" + cell + "' is not finite");
+    if (result.ec != std::errc() || result.ptr != end) {
+      fail(line, "column '" + column + "': '" + cell + "' is not a number");
+    }
+    if (!std::isfinite(value)) fail(line, "column '" + column + "': '" + cell + "' is not finite");
+    return value;
+  }
+
+  MeasurementCampaign parse(const std::string& text) {
+    MeasurementCampaign campaign;
+    campaign.source = source_;
+    std::istringstream stream(text);
+    std::string raw;
+    int line_number = 0;
+    bool header_seen = false;
+    std::vector<std::string> header;
+    std::map<std::string, int> column_of;
+    while (std::getline(stream, raw)) {
+      ++line_number;
+      if (line_number == 1 && raw.rfind("\xEF\xBB\xBF", 0) == 0) raw = raw.substr(3);  // UTF-8 byte-order mark
+      const std::string line = trim(raw);
+      if (!header_seen) {
+        if (line_number == 1) {
+          if (line.rfind("#", 0) != 0 || trim(line.substr(1)) != std::string("format: ") + kFormatLine) {
+            fail(1, std::string("the first line must be '# format: ") + kFormatLine + "'");
+          }
+        }
+        if (line.rfind("#", 0) == 0) {
+          const std::string entry = trim(line.substr(1));
+          const auto colon = entry.find(':');
+          if (colon == std::string::npos) fail(line_number, "metadata line is not '# key: value'");
+          campaign.metadata[trim(entry.substr(0, colon))] = trim(entry.substr(colon + 1));
+          continue;
+        }
+        if (line.empty()) continue;
+        header = splitCells(line);
+        for (std::size_t c = 0; c < header.size(); ++c) {
+          if (header[c].empty()) fail(line_number, "column " + std::to_string(c + 1) + " of the header has no name");
+          if (column_of.count(header[c])) fail(line_number, "column '" + header[c] + "' appears twice");
+          column_of[header[c]] = static_cast<int>(c);
+        }
+        header_seen = true;
+        interpretHeader(campaign, column_of, line_number);
+        continue;
+      }
+      if (line.empty()) continue;
+      const std::vector<std::string> cells = splitCells(line);
+      if (cells.size() != header.size()) {
+        fail(line_number, "row has " + std::to_string(cells.size()) + " cells, the header has " +
+                              std::to_string(header.size()));
+      }
+      addRow(campaign, cells, column_of, line_number);
+    }
+    if (line_number == 0) fail(1, "the file is empty (the first line must be '# format: jointcomp-measurements/1')");
+    if (!header_seen) fail(line_number, "no header row");
+    interpretMetadata(campaign);
+    return campaign;
+  }
+
+private:
+  void interpretHeader(MeasurementCampaign& campaign, const std::map<std::string, int>& column_of, int line) {
+    if (!column_of.count("t")) fail(line, "required column 't' is missing");
+    int dof = 0;
+    while (column_of.count("q" + std::to_string(dof + 1))) ++dof;
+    if (dof == 0) fail(line, "required columns q1 ... qN are missing");
+    if (dof > kMaxJoints) fail(line, "more than " + std::to_string(kMaxJoints) + " joint columns");
+    for (const auto& entry : column_of) {
+      const std::string& name = entry.first;
+      for (const char* prefix : {"q", "qm"}) {
+        const std::string p = prefix;
+        if (name.size() > p.size() && name.compare(0, p.size(), p) == 0 &&
+            name.find_first_not_of("0123456789", p.size()) == std::string::npos) {
+          const int index = std::stoi(name.substr(p.size()));
+          if (index < 1 || index > dof) {
+            fail(line, "column '" + name + "' but the joints are q1 ... q" + std::to_string(dof));
+          }
+        }
+      }
+    }
+    campaign.dof = dof;
+    const int xyz = static_cast<int>(column_of.count("x") + column_of.count("y") + column_of.count("z"));
+    if (xyz != 0 && xyz != 3) fail(line, "columns x, y and z go together");
+    campaign.has_position = xyz == 3;
+    for (int j = 1; j <= dof; ++j) campaign.has_measured_angles |= column_of.count("qm" + std::to_string(j)) > 0;
+    if (!campaign.has_position && !campaign.has_measured_angles) {
+      fail(line, "a campaign needs measured positions (x, y, z) or measured joint angles (qm1 ...)");
+    }
+  }
+
+  void addRow(MeasurementCampaign& campaign, const std::vector<std::string>& cells,
+              const std::map<std::string, int>& column_of, int line) {
+    auto cell = [&](const std::string& column) -> const std::string* {
+      const auto found = column_of.find(column);
+      return found == column_of.end() ? nullptr : &cells[found->second];
+    };
+    auto optional = [&](const std::string& column, double scale, double absent) {
+      const std::string* text = cell(column);
+      if (!text) return absent;
+      const double value = number(*text, line, column, false, kNotMeasured);
+      return std::isnan(value) ? absent : value * scale;
+    };
+    const double t = number(*cell("t"), line, "t", true, 0.0);
+    if (!campaign.time.empty() && t < campaign.time.back()) {
+      fail(line, "column 't': time decreases (" + cell("t")->substr(0, 32) + " after " +
+                     std::to_string(campaign.time.back()) + ")");
+    }
+    campaign.time.push_back(t);
+    JointVector command(campaign.dof);
+    for (int j = 0; j < campaign.dof; ++j) {
+      const std::string column = "q" + std::to_string(j + 1);
+      command[j] = number(*cell(column), line, column, true, 0.0) * kDegree;
+    }
+    campaign.command.push_back(command);
+    if (campaign.has_position) {
+      campaign.position.emplace_back(optional("x", 1e-3, kNotMeasured), optional("y", 1e-3, kNotMeasured),
+                                     optional("z", 1e-3, kNotMeasured));
+      const Eigen::Vector3d& p = campaign.position.back();
+      if (std::isnan(p.x()) != std::isnan(p.y()) || std::isnan(p.x()) != std::isnan(p.z())) {
+        fail(line, "columns x, y, z: measured in part only (all three or none)");
+      }
+    }
+    if (campaign.has_measured_angles) {
+      JointVector measured(campaign.dof);
+      for (int j = 0; j < campaign.dof; ++j) measured[j] = optional("qm" + std::to_string(j + 1), kDegree, kNotMeasured);
+      campaign.measured_angles.push_back(measured);
+    }
+    campaign.temperature.push_back(optional("temp", 1.0, kNotMeasured));
+    Vector6 wrench;
+    const char* names[6] = {"fx", "fy", "fz", "mx", "my", "mz"};
+    for (int k = 0; k < 6; ++k) wrench[k] = optional(names[k], 1.0, 0.0);
+    campaign.wrench.push_back(wrench);
+    const double payload = optional("payload", 1.0, 0.0);
+    if (payload < 0.0) fail(line, "column 'payload': negative mass");
+    campaign.payload.push_back(payload);
+  }
+
+  void interpretMetadata(MeasurementCampaign& campaign) const {
+    const auto& meta = campaign.metadata;
+    auto metaNumber = [&](const std::string& key, const std::string& text) {
+      const double value = number(trim(text), 1, "# " + key, true, 0.0);
+      return value;
+    };
+    if (meta.count("robot")) campaign.robot = meta.at("robot");
+    if (meta.count("frame")) {
+      const std::string frame = meta.at("frame");
+      if (frame == "base") {
+        campaign.frame = MeasurementFrame::Base;
+      } else if (frame == "instrument") {
+        campaign.frame = MeasurementFrame::Instrument;
+      } else {
+        throw MeasurementError(source_ + ": metadata 'frame' must be 'base' or 'instrument', is '" + frame + "'");
+      }
+    }
+    if (meta.count("target")) {
+      std::stringstream list(meta.at("target"));
+      std::string item;
+      std::vector<double> values;
+      while (std::getline(list, item, ',')) values.push_back(metaNumber("target", item) * 1e-3);
+      if (values.size() != 3) throw MeasurementError(source_ + ": metadata 'target' must be 'x,y,z' in mm");
+      campaign.has_target = true;
+      campaign.target_in_flange = Eigen::Vector3d(values[0], values[1], values[2]);
+    }
+    if (meta.count("noise_mm")) campaign.position_noise = metaNumber("noise_mm", meta.at("noise_mm")) * 1e-3;
+    if (meta.count("noise_deg")) campaign.angle_noise = metaNumber("noise_deg", meta.at("noise_deg")) * kDegree;
+    if (campaign.position_noise < 0.0 || campaign.angle_noise < 0.0) {
+      throw MeasurementError(source_ + ": metadata noise_mm and noise_deg must not be negative");
+    }
+  }
+
+  std::string source_;
+};
+
+std::string formatNumber(double value) {
+  char buffer[40];
+  const auto result = std::to_chars(buffer, buffer + sizeof buffer, value);
+  return std::string(buffer, result.ptr);
+}
+
+}  // namespace
+
+void MeasurementCampaign::validate() const {
+  const std::size_t n = time.size();
+  auto fail = [&](const std::string& what) { throw MeasurementError(source + ": " + what); };
+  if (command.size() != n || temperature.size() != n || wrench.size() != n || payload.size() != n ||
+      (has_position && position.size() != n) || (has_measured_angles && measured_angles.size() != n)) {
+    fail("columns of different lengths");
+  }
+  if (!has_position && !has_measured_angles) fail("neither positions nor joint angles were measured");
+  for (std::size_t k = 0; k < n; ++k) {
+    if (!std::isfinite(time[k]) || (k > 0 && time[k] < time[k - 1])) fail("time is not finite and non-decreasing at row " + std::to_string(k));
+    if (command[k].size() != dof || !command[k].allFinite()) fail("command of row " + std::to_string(k) + " is invalid");
+  }
+}
+
+MeasurementCampaign parseCampaign(const std::string& text, const std::string& source_name) {
+  return CampaignParser(source_name).parse(text);
+}
+
+MeasurementCampaign readCampaignFile(const std::string& path) {
+  std::string text;
+  try {
+    text = readTextFile(path, "measurement file");
+  } catch (const Error& error) {
+    throw MeasurementError(error.what());
+  }
+  return parseCampaign(text, path);
+}
+
+std::string campaignToText(const MeasurementCampaign& campaign) {
+  campaign.validate();
+  std::ostringstream out;
+  out << "# format: " << kFormatLine << "\n";
+  std::map<std::string, std::string> metadata = campaign.metadata;
+  metadata.erase("format");
+  if (!campaign.robot.empty()) metadata["robot"] = campaign.robot;
+  metadata["frame"] = campaign.frame == MeasurementFrame::Base ? "base" : "instrument";
+  if (campaign.has_target) {
+    metadata["target"] = formatNumber(campaign.target_in_flange.x() * 1e3) + "," +
+                         formatNumber(campaign.target_in_flange.y() * 1e3) + "," +
+                         formatNumber(campaign.target_in_flange.z() * 1e3);
+  }
+  if (campaign.position_noise > 0.0) metadata["noise_mm"] = formatNumber(campaign.position_noise * 1e3);
+  if (campaign.angle_noise > 0.0) metadata["noise_deg"] = formatNumber(campaign.angle_noise / kDegree);
+  for (const auto& entry : metadata) out << "# " << entry.first << ": " << entry.second << "\n";
+
+  bool any_temperature = false, any_wrench = false, any_payload = false;
+  for (std::size_t k = 0; k < campaign.size(); ++k) {
+    any_temperature |= !std::isnan(campaign.temperature[k]);
+    any_wrench |= !campaign.wrench[k].isZero(0.0);
+    any_payload |= campaign.payload[k] != 0.0;
+  }
+  out << "t";
+  for (int j = 1; j <= campaign.dof; ++j) out << ",q" << j;
+  if (campaign.has_position) out << ",x,y,z";
+  if (campaign.has_measured_angles) {
+    for (int j = 1; j <= campaign.dof; ++j) out << ",qm" << j;
+  }
+  if (any_temperature) out << ",temp";
+  if (any_wrench) out << ",fx,fy,fz,mx,my,mz";
+  if (any_payload) out << ",payload";
+  out << "\n";
+  auto cell = [](double value, double scale) { return std::isnan(value) ? std::string() : formatNumber(value * scale); };
+  for (std::size_t k = 0; k < campaign.size(); ++k) {
+    out << formatNumber(campaign.time[k]);
+    for (int j = 0; j < campaign.dof; ++j) out << ',' << formatNumber(campaign.command[k][j] / kDegree);
+    if (campaign.has_position) {
+      for (int a = 0; a < 3; ++a) out << ',' << cell(campaign.position[k][a], 1e3);
+    }
+    if (campaign.has_measured_angles) {
+      for (int j = 0; j < campaign.dof; ++j) out << ',' << cell(campaign.measured_angles[k][j], 1.0 / kDegree);
+    }
+    if (any_temperature) out << ',' << cell(campaign.temperature[k], 1.0);
+    if (any_wrench) {
+      for (int a = 0; a < 6; ++a) out << ',' << formatNumber(campaign.wrench[k][a]);
+    }
+    if (any_payload) out << ',' << formatNumber(campaign.payload[k]);
+    out << "\n";
+  }
+  return out.str();
+}
+
+void writeCampaignFile(const MeasurementCampaign& campaign, const std::string& path) {
+  writeFileAtomically(path, campaignToText(campaign));
+}
+
+}  // namespace jointcomp
