@@ -13,6 +13,8 @@
 
 #include <gtest/gtest.h>
 
+#include "tests/plant/plant_test_support.hpp"
+
 #include "model/effects/compliance.hpp"
 #include "model/effects/joint_error_model.hpp"
 #include "model/effects/spring_balancer.hpp"
@@ -25,29 +27,12 @@
 namespace jointcomp {
 namespace {
 
-constexpr double kDegree = 3.14159265358979323846 / 180.0;
-const std::string kUrdf = JOINTCOMP_DATA_DIR "/robots/rx170.urdf";
-const std::string kParameters = JOINTCOMP_DATA_DIR "/params/rx170.json";
+using namespace plant_testing;
 
-std::shared_ptr<const Robot> rx170() {
-  static const auto robot = std::make_shared<const Robot>(loadRobotFromUrdfFile(kUrdf));
-  return robot;
-}
 
-// Transmission error at motor positions p (joint units), from the harmonics and the gear ratios.
-JointVector transmissionErrorAt(const JointErrorModel& model, const JointVector& p) {
-  JointVector e = JointVector::Zero(p.size());
-  const int index = model.findEffect(TransmissionErrorEffect::kType);
-  if (index < 0) return e;
-  const auto& effect = dynamic_cast<const TransmissionErrorEffect&>(model.effect(index));
-  const JointVector motor = model.gears().motorFromJoint() * p;
-  for (const Harmonic& h : effect.harmonics()) {
-    double ratio_before = 1.0;
-    for (int s = 1; s < h.stage; ++s) ratio_before *= model.gears().stageRatios(h.joint)[s - 1];
-    e[h.joint] += h.amplitude_rad * std::sin(h.cycles_per_revolution * motor[h.joint] / ratio_before + h.phase_rad);
-  }
-  return e;
-}
+
+
+
 
 struct Energy {
   double kinetic = 0.0;    // links and motors

@@ -13,6 +13,8 @@
 #include <Eigen/Eigenvalues>
 #include <gtest/gtest.h>
 
+#include "tests/plant/plant_test_support.hpp"
+
 #include "model/effects/compliance.hpp"
 #include "model/effects/joint_error_model.hpp"
 #include "model/effects/spring_balancer.hpp"
@@ -24,27 +26,12 @@
 namespace jointcomp {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-constexpr double kDegree = kPi / 180.0;
-const std::string kUrdf = JOINTCOMP_DATA_DIR "/robots/rx170.urdf";
-const std::string kParameters = JOINTCOMP_DATA_DIR "/params/rx170.json";
+using namespace plant_testing;
 
-std::shared_ptr<const Robot> rx170() {
-  static const auto robot = std::make_shared<const Robot>(loadRobotFromUrdfFile(kUrdf));
-  return robot;
-}
 
-JointVector staticLoad(const JointErrorModel& model, const JointVector& q) {
-  RobotWorkspace ws(model.robot());
-  JointVector load;
-  gravityTorques(model.robot(), ws, q, load);
-  for (int i = 0; i < model.effectCount(); ++i) {
-    if (const auto* spring = dynamic_cast<const SpringBalancerEffect*>(&model.effect(i))) {
-      load[spring->joint()] += spring->torque(q[spring->joint()]);
-    }
-  }
-  return load;
-}
+
+
+
 
 struct Linearised {
   JointErrorModel model = loadParameterFile(kParameters, rx170());

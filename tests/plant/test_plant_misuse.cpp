@@ -9,6 +9,8 @@
 
 #include <gtest/gtest.h>
 
+#include "tests/plant/plant_test_support.hpp"
+
 #include "model/common/errors.hpp"
 #include "model/effects/compliance.hpp"
 #include "model/io/parameter_file.hpp"
@@ -18,15 +20,12 @@
 namespace jointcomp {
 namespace {
 
-constexpr double kDegree = 3.14159265358979323846 / 180.0;
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-const std::string kUrdf = JOINTCOMP_DATA_DIR "/robots/rx170.urdf";
-const std::string kParameters = JOINTCOMP_DATA_DIR "/params/rx170.json";
+using namespace plant_testing;
 
-std::shared_ptr<const Robot> rx170() {
-  static const auto robot = std::make_shared<const Robot>(loadRobotFromUrdfFile(kUrdf));
-  return robot;
-}
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+
+
 
 JointErrorModel rx170Model() { return loadParameterFile(kParameters, rx170()); }
 std::vector<DriveParameters> rx170Drives() { return loadDriveParameters(kParameters, *rx170()); }

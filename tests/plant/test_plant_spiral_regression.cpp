@@ -12,6 +12,8 @@
 
 #include <gtest/gtest.h>
 
+#include "tests/plant/plant_test_support.hpp"
+
 #include "model/compensation/spiral_experiment.hpp"
 #include "model/io/parameter_file.hpp"
 #include "model/robot/load_urdf.hpp"
@@ -19,8 +21,10 @@
 namespace jointcomp {
 namespace {
 
-const std::string kUrdf = JOINTCOMP_DATA_DIR "/robots/rx170.urdf";
-const std::string kParameters = JOINTCOMP_DATA_DIR "/params/rx170.json";
+using namespace plant_testing;
+
+
+
 
 struct Reference {
   double ra_mm, rz_mm, rms_mm, max_mm;

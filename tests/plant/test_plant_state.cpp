@@ -10,6 +10,8 @@
 
 #include <gtest/gtest.h>
 
+#include "tests/plant/plant_test_support.hpp"
+
 #include "model/io/parameter_file.hpp"
 #include "model/plant/flexible_joint_plant.hpp"
 #include "model/robot/load_urdf.hpp"
@@ -17,16 +19,12 @@
 namespace jointcomp {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-constexpr double kDegree = kPi / 180.0;
-constexpr double kPeriod = 0.004;  // s, reference updates
-const std::string kUrdf = JOINTCOMP_DATA_DIR "/robots/rx170.urdf";
-const std::string kParameters = JOINTCOMP_DATA_DIR "/params/rx170.json";
+using namespace plant_testing;
 
-std::shared_ptr<const Robot> rx170() {
-  static const auto robot = std::make_shared<const Robot>(loadRobotFromUrdfFile(kUrdf));
-  return robot;
-}
+constexpr double kPeriod = 0.004;  // s, reference updates
+
+
+
 
 JointVector home() {
   JointVector q(6);

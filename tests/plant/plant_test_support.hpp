@@ -1,0 +1,64 @@
+// What the plant tests share: the RX170 with its shipped parameters, and independent re-derivations of
+// the transmission error and of the static load, written out from the effects' definitions.
+#pragma once
+
+#include <cmath>
+#include <initializer_list>
+#include <memory>
+#include <string>
+
+#include "model/effects/joint_error_model.hpp"
+#include "model/effects/spring_balancer.hpp"
+#include "model/effects/transmission_error.hpp"
+#include "model/robot/dynamics.hpp"
+#include "model/robot/load_urdf.hpp"
+
+namespace jointcomp::plant_testing {
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kDegree = kPi / 180.0;
+inline const std::string kUrdf = JOINTCOMP_DATA_DIR "/robots/rx170.urdf";
+inline const std::string kParameters = JOINTCOMP_DATA_DIR "/params/rx170.json";
+
+inline std::shared_ptr<const Robot> rx170() {
+  static const auto robot = std::make_shared<const Robot>(loadRobotFromUrdfFile(kUrdf));
+  return robot;
+}
+
+inline JointVector joints(std::initializer_list<double> degrees) {
+  JointVector q(static_cast<int>(degrees.size()));
+  int i = 0;
+  for (double d : degrees) q[i++] = d * kDegree;
+  return q;
+}
+
+// Transmission error of the gears at motor positions p (joint units), written out from the harmonics:
+// the angle of stage s's input shaft is (G p)_j divided by the ratios of the stages before it.
+inline JointVector transmissionErrorAt(const JointErrorModel& model, const JointVector& p) {
+  JointVector e = JointVector::Zero(p.size());
+  const int index = model.findEffect(TransmissionErrorEffect::kType);
+  if (index < 0) return e;
+  const auto& effect = dynamic_cast<const TransmissionErrorEffect&>(model.effect(index));
+  const JointVector motor = model.gears().motorFromJoint() * p;
+  for (const Harmonic& h : effect.harmonics()) {
+    double ratio_before = 1.0;
+    for (int s = 1; s < h.stage; ++s) ratio_before *= model.gears().stageRatios(h.joint)[s - 1];
+    e[h.joint] += h.amplitude_rad * std::sin(h.cycles_per_revolution * motor[h.joint] / ratio_before + h.phase_rad);
+  }
+  return e;
+}
+
+// Torque the joints carry at rest at q: gravity plus the spring balancer(s).
+inline JointVector staticLoad(const JointErrorModel& model, const JointVector& q) {
+  RobotWorkspace ws(model.robot());
+  JointVector load;
+  gravityTorques(model.robot(), ws, q, load);
+  for (int i = 0; i < model.effectCount(); ++i) {
+    if (const auto* spring = dynamic_cast<const SpringBalancerEffect*>(&model.effect(i))) {
+      load[spring->joint()] += spring->torque(q[spring->joint()]);
+    }
+  }
+  return load;
+}
+
+}  // namespace jointcomp::plant_testing
