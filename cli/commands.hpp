@@ -6,5 +6,8 @@ namespace jointcomp::cli {
 int runKinematics(int argc, char** argv);
 int runPaper(int argc, char** argv);
 int runImportIpa(int argc, char** argv);
+int runCalibrate(int argc, char** argv);
+int runSimulate(int argc, char** argv);
+int runIdentify(int argc, char** argv);
 
 }  // namespace jointcomp::cli

@@ -18,6 +18,17 @@ void printUsage() {
       "  kinematics [--urdf FILE]   forward kinematics and gravity torques at a few poses\n"
       "  import-ipa --in FILE --out FILE [--trafo FILE]\n"
       "                             convert IPA UR10 laser-tracker files into a measurement campaign\n"
+      "  simulate --protocol stiffness|joint2-sweep|spiral|random|back-and-forth --truth PARAMS.json\n"
+      "        [--urdf FILE] [--seed N] [--out FILE] [--perturb SEED] [--plant] [--no-noise] [--target x,y,z]\n"
+      "        [--pose q1,..] [--joint N] [--from DEG] [--to DEG] [--step DEG] [--settle S] [--cycles N] [--count N]\n"
+      "                             a measurement campaign of a simulated robot with simulated instruments\n"
+      "  identify stiffness|transmission --campaign FILE --out DIR [--urdf FILE] [--params NOMINAL.json]\n"
+      "        [--joint 2] [--stage 2] [--orders 1,2,..] [--use local|global] [--truth PARAMS.json] [--no-plot]\n"
+      "                             joint stiffness or transmission-error harmonics from a campaign\n"
+      "  calibrate --campaign FILE --out DIR [--urdf FILE] [--params FILE] [--holdout FILE ...]\n"
+      "        [--loss huber|cauchy|none] [--loss-scale-mm X] [--pivot-threshold X] [--fix NAME,..] [--no-plot]\n"
+      "                             kinematic calibration (instrument frame, target, joint offsets, placements,\n"
+      "                             compliance) from measured positions; held-out campaigns re-fit their frame\n"
       "  help                       this text\n"
       "With no command, jointcomp runs `paper` on the built-in Staubli RX170.\n");
 }
@@ -33,7 +44,10 @@ int main(int argc, char** argv) {
     }
     if (command == "paper") return jointcomp::cli::runPaper(argc > 1 ? argc - 1 : 0, argv + 1);
     if (command == "import-ipa") return jointcomp::cli::runImportIpa(argc - 1, argv + 1);
+    if (command == "calibrate") return jointcomp::cli::runCalibrate(argc - 1, argv + 1);
     if (command == "kinematics") return jointcomp::cli::runKinematics(argc - 1, argv + 1);
+    if (command == "simulate") return jointcomp::cli::runSimulate(argc - 1, argv + 1);
+    if (command == "identify") return jointcomp::cli::runIdentify(argc - 1, argv + 1);
     std::fprintf(stderr, "jointcomp: unknown command '%s'\n", command.c_str());
     printUsage();
     return 2;

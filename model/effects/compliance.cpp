@@ -1,6 +1,7 @@
 #include "model/effects/compliance.hpp"
 
 #include <cmath>
+#include <limits>
 
 #include <nlohmann/json.hpp>
 
@@ -21,9 +22,24 @@ ComplianceEffect::ComplianceEffect(const Robot& robot, std::vector<double> stiff
 std::unique_ptr<Effect> ComplianceEffect::fromJson(const nlohmann::json& json, const Robot& robot, const std::string& path) {
   JsonFields fields(json, path);
   fields.text("type");
-  const std::vector<double> stiffness = fields.numbers("stiffness_nm_per_rad", robot.dof());
-  for (std::size_t i = 0; i < stiffness.size(); ++i) {
-    if (!(stiffness[i] > 0.0)) fields.fail("stiffness_nm_per_rad[" + std::to_string(i) + "]", "must be positive");
+  // null marks a joint taken as rigid (no compliance known or identifiable).
+  const nlohmann::json& list = fields.array("stiffness_nm_per_rad");
+  if (static_cast<int>(list.size()) != robot.dof()) {
+    fields.fail("stiffness_nm_per_rad", "expected " + std::to_string(robot.dof()) + " values, found " +
+                                            std::to_string(list.size()));
+  }
+  std::vector<double> stiffness;
+  for (std::size_t i = 0; i < list.size(); ++i) {
+    const std::string element = "stiffness_nm_per_rad[" + std::to_string(i) + "]";
+    if (list[i].is_null()) {
+      stiffness.push_back(std::numeric_limits<double>::infinity());
+      continue;
+    }
+    if (!list[i].is_number()) fields.fail(element, "expected a number or null (rigid)");
+    const double value = list[i].get<double>();
+    if (!std::isfinite(value)) fields.fail(element, "not finite");
+    if (!(value > 0.0)) fields.fail(element, "must be positive");
+    stiffness.push_back(value);
   }
   const std::string note = fields.textOr("estimate", "");
   fields.rejectUnknownKeys();
@@ -46,8 +62,9 @@ void ComplianceEffect::setParameters(const std::vector<double>& values) {
   if (values.size() != joint_names_.size()) throw ParameterError("compliance: wrong number of parameters");
   // Check everything before changing anything: a rejected update leaves the effect as it was.
   for (std::size_t i = 0; i < values.size(); ++i) {
-    if (!std::isfinite(values[i]) || !(values[i] > 0.0)) {
-      throw ParameterError("compliance: " + joint_names_[i] + ".stiffness_nm_per_rad must be positive and finite");
+    if (std::isnan(values[i]) || !(values[i] > 0.0)) {
+      throw ParameterError("compliance: " + joint_names_[i] +
+                           ".stiffness_nm_per_rad must be positive (+infinity for a rigid joint)");
     }
   }
   compliance_.resize(static_cast<int>(values.size()));
@@ -56,7 +73,9 @@ void ComplianceEffect::setParameters(const std::vector<double>& values) {
 }
 
 nlohmann::json ComplianceEffect::toJson() const {
-  nlohmann::json json = {{"type", kType}, {"stiffness_nm_per_rad", stiffness_}};
+  nlohmann::json stiffness = nlohmann::json::array();
+  for (double k : stiffness_) stiffness.push_back(std::isinf(k) ? nlohmann::json(nullptr) : nlohmann::json(k));
+  nlohmann::json json = {{"type", kType}, {"stiffness_nm_per_rad", stiffness}};
   if (!estimate_note.empty()) json["estimate"] = estimate_note;
   return json;
 }

@@ -1,6 +1,7 @@
 // Joint compliance: each joint's transmission twists under the torque it carries, dq = -tau / K
 // (the link lags the motor by the deflection of the joint spring). The default stiffnesses of the RX170
-// are the paper's Table I.
+// are the paper's Table I. A joint may be rigid (stiffness +infinity inside, null in the file) when its
+// compliance is not known or cannot be identified.
 #pragma once
 
 #include "model/effects/effect.hpp"

@@ -7,6 +7,7 @@
 
 #include "model/common/errors.hpp"
 #include "model/effects/compliance.hpp"
+#include "model/effects/joint_offset.hpp"
 #include "model/effects/spring_balancer.hpp"
 #include "model/effects/transmission_error.hpp"
 
@@ -27,6 +28,7 @@ const std::map<std::string, Factory>& factories() {
          return SpringBalancerEffect::fromJson(j, r, p);
        }},
       {TransmissionErrorEffect::kType, &TransmissionErrorEffect::fromJson},
+      {JointOffsetEffect::kType, &JointOffsetEffect::fromJson},
   };
   return table;
 }

@@ -123,7 +123,9 @@ private:
         const std::string p = prefix;
         if (name.size() > p.size() && name.compare(0, p.size(), p) == 0 &&
             name.find_first_not_of("0123456789", p.size()) == std::string::npos) {
-          const int index = std::stoi(name.substr(p.size()));
+          // More digits than any joint count: out of range (std::stoi would throw on a long one).
+          const std::string digits = name.substr(p.size());
+          const int index = digits.size() > 4 ? kMaxJoints + 1 : std::stoi(digits);
           if (index < 1 || index > dof) {
             fail(line, "column '" + name + "' but the joints are q1 ... q" + std::to_string(dof));
           }

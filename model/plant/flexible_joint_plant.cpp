@@ -88,7 +88,13 @@ FlexibleJointPlant::FlexibleJointPlant(const JointErrorModel& truth, std::vector
   if (compliance_index_ < 0) throw InvalidArgument("plant: the joint-error model has no compliance effect (the joint springs)");
   const auto& compliance = static_cast<const ComplianceEffect&>(truth_.effect(compliance_index_));
   stiffness_.resize(n_);
-  for (int j = 0; j < n_; ++j) stiffness_[j] = compliance.stiffness(j);
+  for (int j = 0; j < n_; ++j) {
+    stiffness_[j] = compliance.stiffness(j);
+    if (!std::isfinite(stiffness_[j])) {
+      throw InvalidArgument("plant: " + robot.joints[j].name + " is rigid in the compliance effect; the plant needs a "
+                            "finite joint stiffness for every joint");
+    }
+  }
   load_mask_ = 0;
   error_mask_ = 0;
   for (int i = 0; i < truth_.effectCount(); ++i) {

@@ -1,0 +1,93 @@
+// Time to calibrate the UR10 kinematics on all of Series A of the IPA laser-tracker data
+// (shared/data/ipa-ur10, 11,911 rows): the whole calibrateGeometry call (frame fit of the nominal robot,
+// identifiability analysis of 57 candidate parameters, least-squares and robust Levenberg-Marquardt fits,
+// covariance), the importer of the raw file, and the frame-only re-fit of held-out Series B.
+// The data are read from JOINTCOMP_SHARED_DIR; without them the benchmarks are skipped with a message.
+#include <cstdio>
+#include <fstream>
+#include <memory>
+#include <string>
+
+#include <benchmark/benchmark.h>
+
+#include "model/identify/geometric_calibration.hpp"
+#include "model/io/ipa_ur10_import.hpp"
+#include "model/robot/load_urdf.hpp"
+
+namespace {
+
+using namespace jointcomp;
+
+std::string ipa(const std::string& file) { return std::string(JOINTCOMP_SHARED_DIR) + "/data/ipa-ur10/" + file; }
+
+bool haveData() { return std::ifstream(ipa("Series_A/measurements_grid.csv")).good(); }
+
+const JointErrorModel& prior() {
+  static const JointErrorModel model(
+      std::make_shared<const Robot>(loadRobotFromUrdfFile(std::string(JOINTCOMP_DATA_DIR) + "/robots/ur10.urdf")),
+      GearTrain::direct(6), {});
+  return model;
+}
+
+const MeasurementCampaign& seriesA() {
+  static const MeasurementCampaign campaign =
+      importIpaUr10(ipa("Series_A/measurements_grid.csv"), ipa("Series_A/Trafo_TM_F_init.txt"));
+  return campaign;
+}
+
+const MeasurementCampaign& seriesB() {
+  static const MeasurementCampaign campaign =
+      importIpaUr10(ipa("Series_B/measurements_joint_configurations.csv"), ipa("Series_B/Trafo_TM_F_init.txt"));
+  return campaign;
+}
+
+void BM_CalibrateSeriesA(benchmark::State& state) {
+  if (!haveData()) {
+    state.SkipWithError("IPA UR10 data not found under JOINTCOMP_SHARED_DIR");
+    return;
+  }
+  const MeasurementCampaign& a = seriesA();
+  GeometricCalibrationResult result;
+  for (auto _ : state) {
+    result = calibrateGeometry(prior(), a);
+    benchmark::DoNotOptimize(result.error_after.data());
+  }
+  state.counters["rows"] = result.used_rows;
+  state.counters["parameters"] = static_cast<double>(result.free.size());
+  state.counters["lm_iterations"] = result.iterations;
+  state.counters["rms_before_mm"] = result.before.rms * 1e3;
+  state.counters["rms_after_mm"] = result.after.rms * 1e3;
+}
+BENCHMARK(BM_CalibrateSeriesA)->Unit(benchmark::kMillisecond)->MinTime(2.0);
+
+void BM_ImportSeriesA(benchmark::State& state) {
+  if (!haveData()) {
+    state.SkipWithError("IPA UR10 data not found under JOINTCOMP_SHARED_DIR");
+    return;
+  }
+  for (auto _ : state) {
+    MeasurementCampaign campaign = importIpaUr10(ipa("Series_A/measurements_grid.csv"), ipa("Series_A/Trafo_TM_F_init.txt"));
+    benchmark::DoNotOptimize(campaign.position.data());
+  }
+}
+BENCHMARK(BM_ImportSeriesA)->Unit(benchmark::kMillisecond);
+
+void BM_HoldoutFrameFitSeriesB(benchmark::State& state) {
+  if (!haveData()) {
+    state.SkipWithError("IPA UR10 data not found under JOINTCOMP_SHARED_DIR");
+    return;
+  }
+  const GeometricCalibrationResult calibration = calibrateGeometry(prior(), seriesA());
+  HoldoutEvaluation evaluation;
+  for (auto _ : state) {
+    evaluation = evaluateOnCampaign(prior(), calibration.estimate, seriesB(), true);
+    benchmark::DoNotOptimize(evaluation.error.data());
+  }
+  state.counters["rows"] = evaluation.statistics.rows;
+  state.counters["rms_after_mm"] = evaluation.statistics.rms * 1e3;
+}
+BENCHMARK(BM_HoldoutFrameFitSeriesB)->Unit(benchmark::kMillisecond);
+
+}  // namespace
+
+BENCHMARK_MAIN();

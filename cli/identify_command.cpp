@@ -1,0 +1,139 @@
+// `jointcomp identify stiffness|transmission`: joint stiffness or transmission-error harmonics from a
+// measurement campaign, written as an updated parameter file, a JSON report, a short summary and a plot.
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <sstream>
+#include <stdexcept>
+
+#include "cli/commands.hpp"
+#include "cli/options.hpp"
+#include "model/identify/identification_report.hpp"
+#include "model/io/atomic_file.hpp"
+#include "model/io/parameter_file.hpp"
+#include "model/robot/load_urdf.hpp"
+
+namespace jointcomp::cli {
+namespace {
+
+std::vector<double> orderList(const std::string& text) {
+  std::vector<double> values;
+  std::stringstream list(text);
+  std::string item;
+  while (std::getline(list, item, ',')) {
+    std::size_t used = 0;
+    double value = 0.0;
+    try {
+      value = std::stod(item, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (used == 0 || used != item.size()) throw std::invalid_argument("--orders: '" + item + "' is not a number");
+    values.push_back(value);
+  }
+  return values;
+}
+
+int integerOption(const Options& options, const std::string& name, int fallback) {
+  if (!options.has(name)) return fallback;
+  const std::string text = options.get(name, "");
+  std::size_t used = 0;
+  int value = 0;
+  try {
+    value = std::stoi(text, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used == 0 || used != text.size()) throw std::invalid_argument("--" + name + ": '" + text + "' is not an integer");
+  return value;
+}
+
+// The drives of the nominal file, kept in the updated file when it has them.
+std::vector<DriveParameters> drivesOf(const std::string& path, const Robot& robot) {
+  const nlohmann::json document = nlohmann::json::parse(readTextFile(path, "parameter file"), nullptr, false);
+  if (document.is_object() && document.contains("plant")) return loadDriveParameters(path, robot);
+  return {};
+}
+
+}  // namespace
+
+int runIdentify(int argc, char** argv) {
+  if (argc < 2 || std::string(argv[1]).rfind("--", 0) == 0) {
+    throw std::invalid_argument("identify needs a kind: jointcomp identify stiffness|transmission --campaign FILE --out DIR");
+  }
+  const std::string kind = argv[1];
+  if (kind != "stiffness" && kind != "transmission") {
+    throw std::invalid_argument("identify: unknown kind '" + kind + "' (stiffness or transmission)");
+  }
+  const Options options(argc - 1, argv + 1,
+                        {"campaign", "urdf", "params", "joint", "stage", "out", "truth", "use", "orders", "no-plot"},
+                        {"no-plot"});
+  if (!options.has("campaign") || !options.has("out")) {
+    throw std::invalid_argument("identify " + kind + " needs --campaign FILE and --out DIR");
+  }
+  const std::string campaign_path = options.get("campaign", "");
+  const std::string urdf = options.get("urdf", JOINTCOMP_DATA_DIR "/robots/rx170.urdf");
+  const std::string params = options.get("params", JOINTCOMP_DATA_DIR "/params/rx170.json");
+  const std::string out = options.get("out", "");
+  const std::string use = options.get("use", "local");
+  if (use != "local" && use != "global") throw std::invalid_argument("--use takes local or global");
+
+  auto robot = std::make_shared<const Robot>(loadRobotFromUrdfFile(urdf));
+  const JointErrorModel nominal = loadParameterFile(params, robot);
+  const std::vector<DriveParameters> drives = drivesOf(params, *robot);
+  const MeasurementCampaign campaign = readCampaignFile(campaign_path);
+  std::unique_ptr<JointErrorModel> truth;
+  if (options.has("truth")) truth = std::make_unique<JointErrorModel>(loadParameterFile(options.get("truth", ""), robot));
+
+  std::filesystem::create_directories(out);
+  ReportSources sources;
+  sources.campaign = campaign_path;
+  sources.parameters = params;
+  sources.robot = urdf;
+  sources.updated_parameters = out + "/params.json";
+  nlohmann::ordered_json report;
+  std::string summary;
+  std::string plot_name;
+  if (kind == "stiffness") {
+    if (options.has("joint") || options.has("stage") || options.has("orders")) {
+      throw std::invalid_argument("identify stiffness takes no --joint, --stage or --orders");
+    }
+    const StiffnessIdentificationResult result = identifyStiffness(nominal, campaign);
+    sources.method_used = use;
+    const JointErrorModel updated = withIdentifiedStiffness(nominal, result, use == "global", campaign_path);
+    saveParameterFile(updated, sources.updated_parameters, drives);
+    report = stiffnessReportJson(result, sources, truth.get());
+    summary = stiffnessSummary(result, sources, truth.get());
+    plot_name = "stiffness.png";
+  } else {
+    if (options.has("use")) throw std::invalid_argument("identify transmission takes no --use");
+    TransmissionIdentificationOptions o;
+    o.joint = integerOption(options, "joint", 2) - 1;
+    o.stage = integerOption(options, "stage", 2);
+    if (options.has("orders")) o.candidate_orders = orderList(options.get("orders", ""));
+    const TransmissionIdentificationResult result = identifyTransmissionError(nominal, campaign, o);
+    const JointErrorModel updated = withIdentifiedHarmonics(nominal, result, campaign_path);
+    saveParameterFile(updated, sources.updated_parameters, drives);
+    report = transmissionReportJson(result, sources, truth.get());
+    summary = transmissionSummary(result, sources, truth.get());
+    plot_name = "transmission_error.png";
+  }
+  writeFileAtomically(out + "/report.json", report.dump(2) + "\n");
+  writeFileAtomically(out + "/summary.txt", summary);
+  std::printf("%s\n", summary.c_str());
+  std::printf("wrote %s/params.json, %s/report.json, %s/summary.txt\n", out.c_str(), out.c_str(), out.c_str());
+  if (!options.has("no-plot")) {
+    const std::string command = "/usr/bin/python3 '" JOINTCOMP_SOURCE_DIR "/cli/plots/plot_identification.py' '" + out +
+                                "/report.json' '" + out + "/" + plot_name + "'";
+    if (std::system(command.c_str()) == 0) {
+      std::printf("wrote %s/%s\n", out.c_str(), plot_name.c_str());
+    } else {
+      std::printf("no plot: %s failed (needs Debian's python3-matplotlib)\n", command.c_str());
+    }
+  }
+  return 0;
+}
+
+}  // namespace jointcomp::cli

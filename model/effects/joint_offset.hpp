@@ -1,0 +1,36 @@
+// Joint offsets: each joint's zero is off by a constant, dq = offset (link angle minus commanded angle).
+// The kinematic calibration (model/identify) fits them together with the link geometry. Parameter file:
+//   {"type": "offset", "offset_rad": [n values]}
+#pragma once
+
+#include "model/effects/effect.hpp"
+#include "model/effects/gear_train.hpp"
+
+namespace jointcomp {
+
+class JointOffsetEffect : public Effect {
+public:
+  static constexpr const char* kType = "offset";
+  // Throws ParameterError for the wrong number of offsets or a value that is not finite.
+  JointOffsetEffect(const Robot& robot, std::vector<double> offsets_rad);
+  // The gear train is not used; the signature is the registry's.
+  static std::unique_ptr<Effect> fromJson(const nlohmann::json& json, const Robot& robot, const GearTrain& gears,
+                                          const std::string& path);
+
+  std::string type() const override { return kType; }
+  EffectRole role() const override { return EffectRole::JointError; }
+  void addJointError(const Robot& robot, const JointContext& ctx, JointVector& dq) const override;
+  std::vector<std::string> parameterNames() const override;  // "joint_i.offset_rad"
+  std::vector<double> parameters() const override { return offsets_; }
+  void setParameters(const std::vector<double>& values) override;
+  nlohmann::json toJson() const override;
+  std::unique_ptr<Effect> clone() const override { return std::make_unique<JointOffsetEffect>(*this); }
+
+  double offset(int joint) const { return offsets_[joint]; }
+
+private:
+  std::vector<std::string> joint_names_;
+  std::vector<double> offsets_;  // rad
+};
+
+}  // namespace jointcomp

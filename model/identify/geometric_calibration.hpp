@@ -1,0 +1,224 @@
+// Kinematic ("geometric") calibration from measured target positions: the instrument-to-base transform,
+// the target on the flange, the joint offsets, corrections of every joint placement and the joint
+// compliances under gravity, solved as one nonlinear least-squares problem over named free parameters
+// (in the manner of ROS robot_calibration), on the identifiable subset only.
+//
+// Measurement model of a row with commanded joints q_c (rad), load torque tau (the joint-error model's
+// load torque at q_c: gravity, payload, wrench and load effects) and the joint error e_c of the prior's
+// other joint-error effects (not "offset", not "compliance"):
+//   q      = q_c + offset - compliance .* tau + e_c                      (link-side joint angles)
+//   p_base = FK(q) * target,  joint i placed at  placement_i * Trans(d_i) * Exp(r_i)
+//   m      = Exp(frame_r) * p_base + frame_t                              (what the instrument sees)
+// with placement_i the nominal Joint::placement, (d_i, r_i) the six corrections of joint i, Exp the
+// rotation of a rotation vector. Residual = m - measured, per row 3 values (m).
+//
+// Parameters (SI, named like the parameter files):
+//   frame.tx_m frame.ty_m frame.tz_m frame.rx_rad frame.ry_rad frame.rz_rad   instrument-from-base
+//   target.x_m target.y_m target.z_m                                         target in the tool frame
+//   <joint>.offset_rad                                                       per joint
+//   <joint>.placement_{dx,dy,dz}_m, <joint>.placement_{rx,ry,rz}_rad         per joint
+//   <joint>.compliance_rad_per_nm                                            per joint
+//
+// Procedure of calibrateGeometry: rows without a measured position are skipped (and counted); the
+// frame starts from the closed-form rigid fit of the nominal points to the measured ones; the Jacobian
+// at that start point decides the identifiable subset (identifiability.hpp, priorities: frame, target,
+// offsets, placement translations, placement rotations, compliance); Levenberg-Marquardt fits the subset
+// by least squares, then again with the robust loss whose scale comes from the least-squares residuals;
+// a compliance fitted as not positive is fixed at its nominal value and the fit repeated; the covariance
+// is sigma^2 (J^T W J)^-1 with sigma^2 the weighted residual variance. "Before" is the nominal robot with
+// only its frame fitted (the same robust way), so that before and after differ by the robot alone.
+//
+// Units inside are SI; the robust loss acts on each row's 3-D error norm (Huber by default, scale 3 robust
+// sigma), and the result counts the rows it weighed down. Library code: never prints, throws the typed
+// errors of model/common/errors.hpp with the campaign's name in the message.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "model/effects/joint_error_model.hpp"
+#include "model/identify/identifiability.hpp"
+#include "model/identify/levenberg_marquardt.hpp"
+#include "model/io/measurement_campaign.hpp"
+
+namespace jointcomp {
+
+struct GeometricParameters {
+  Eigen::Vector3d frame_translation = Eigen::Vector3d::Zero();  // m, base origin in the instrument frame
+  Eigen::Vector3d frame_rotation = Eigen::Vector3d::Zero();     // rotation vector (rad), instrument from base
+  Eigen::Vector3d target = Eigen::Vector3d::Zero();             // m, tool frame
+  JointVector offset;                                           // rad
+  std::vector<Vector6> placement;                               // per joint: d (m), r (rad)
+  JointVector compliance;                                       // rad / (N m)
+
+  // Everything zero for a robot of `dof` joints.
+  static GeometricParameters zero(int dof);
+  int dof() const { return static_cast<int>(offset.size()); }
+  Eigen::Isometry3d instrumentFromBase() const;
+  void setInstrumentFromBase(const Eigen::Isometry3d& transform);
+
+  // The flat vector in the order of geometricParameterNames, and back.
+  Eigen::VectorXd toVector() const;
+  static GeometricParameters fromVector(const Eigen::VectorXd& values, int dof);
+};
+
+// Index of the first parameter of each group in the flat vector.
+struct GeometricParameterLayout {
+  explicit GeometricParameterLayout(int dof_) : dof(dof_) {}
+  int dof;
+  static constexpr int kFrame = 0;   // 6
+  static constexpr int kTarget = 6;  // 3
+  int offset(int joint) const { return 9 + joint; }
+  int placement(int joint, int k) const { return 9 + dof + 6 * joint + k; }  // k: dx dy dz rx ry rz
+  int compliance(int joint) const { return 9 + 7 * dof + joint; }
+  int size() const { return 9 + 8 * dof; }
+};
+
+std::vector<std::string> geometricParameterNames(const Robot& robot);
+// The unit in the name: "m", "rad" or "rad/(N m)".
+std::string geometricParameterUnit(const std::string& name);
+
+// The robot with its joint placements corrected: placement_i * Trans(d_i) * Exp(r_i). Offsets and
+// compliance are joint errors (the "offset" and "compliance" effects), not geometry.
+Robot correctedRobot(const Robot& nominal, const GeometricParameters& parameters);
+
+// The rows of a campaign in the form the measurement model needs.
+struct CalibrationData {
+  std::string source;
+  std::vector<int> row;                      // campaign row (0-based) of each used row
+  std::vector<JointVector> command;          // rad
+  std::vector<JointVector> load_torque;      // N m
+  std::vector<JointVector> other_error;      // rad, the prior's other joint-error effects
+  std::vector<Eigen::Vector3d> measured;     // m, in the campaign's frame
+  int skipped_rows = 0;                      // rows without a measured position (NaN / empty cells)
+  bool torque_known = true;                  // false when the robot has no inertials (no compliance then)
+  std::size_t size() const { return row.size(); }
+};
+
+// Throws MeasurementError when the campaign has no position columns or its joint count differs from the
+// robot's; never fails for a row with a NaN position (skipped and counted) or a NaN command (the same).
+CalibrationData prepareCalibrationData(const JointErrorModel& prior, const MeasurementCampaign& campaign);
+
+// The predicted instrument reading of a row and, when `jacobian` is not null, its derivative by every
+// parameter (3 x GeometricParameterLayout::size()).
+Eigen::Vector3d predictMeasurement(const Robot& nominal, const GeometricParameters& parameters,
+                                   const JointVector& command, const JointVector& load_torque,
+                                   const JointVector& other_error, Eigen::MatrixXd* jacobian = nullptr);
+
+// Mean, RMS and max of the 3-D error norms (m).
+struct ErrorStatistics {
+  int rows = 0;
+  double mean = 0.0;
+  double rms = 0.0;
+  double max = 0.0;
+};
+ErrorStatistics errorStatistics(const std::vector<double>& errors);
+
+struct GeometricCalibrationOptions {
+  // Which groups are free (the frame only when the campaign is in the instrument frame: a campaign in the
+  // base frame has none to fit).
+  bool fit_frame = true;
+  bool fit_target = true;
+  bool fit_offsets = true;
+  bool fit_placements = true;
+  bool fit_compliance = true;
+  std::vector<std::string> fixed;  // parameter names held at nominal whatever the data say
+  IdentifiabilityOptions identifiability;
+  RobustLoss loss = RobustLoss::Huber;
+  // Scale k of the robust loss (m); 0: loss_scale_sigmas times the robust per-axis sigma of the
+  // least-squares residuals (median of the 3-D error norms / 1.538, the median of a chi with 3 dof).
+  double loss_scale = 0.0;
+  double loss_scale_sigmas = 3.0;
+  int minimum_rows = 10;
+  LevenbergMarquardtOptions solver;  // loss and block size are set by the calibration
+};
+
+struct ParameterEstimate {
+  std::string name;
+  std::string unit;
+  double nominal = 0.0;
+  double value = 0.0;
+  double sigma = 0.0;        // 1 sigma; 0 for a fixed parameter
+  bool identified = false;   // free in the final fit
+  double pivot = 0.0;        // relative pivot of its column at the start point
+  std::string fixed_because; // empty when identified
+  std::vector<std::pair<std::string, double>> redundant_with;  // name, ratio (see Redundancy)
+};
+
+struct GeometricCalibrationResult {
+  std::vector<std::string> names;
+  GeometricParameters nominal;   // the start: prior offsets and compliance, campaign target, frame fitted
+  GeometricParameters estimate;
+  std::vector<ParameterEstimate> parameters;
+  std::vector<int> free;                    // indices into names of the parameters of the final fit
+  Eigen::MatrixXd covariance;               // of the free parameters, in the order of `free`
+  double condition_number_at_start = 0.0;   // kept columns, unit-scaled, at the start point
+  double condition_number = 0.0;            // the same at the solution, weighted
+  double residual_sigma = 0.0;              // m per axis, sqrt(sum w r^2 / (residuals - free))
+  RobustLoss loss = RobustLoss::None;
+  double loss_scale = 0.0;                  // m
+  int used_rows = 0;
+  int skipped_rows = 0;
+  int downweighted_rows = 0;                // weight below 0.999 in the final fit
+  int outlier_rows = 0;                     // weight below 0.5 (Huber: error above twice the scale)
+  std::vector<int> row;                     // campaign row of each used row
+  std::vector<double> error_before;         // m per used row: nominal robot, frame fitted
+  std::vector<double> error_after;          // m per used row: calibrated
+  std::vector<double> weight;               // final IRLS weight per used row
+  ErrorStatistics before, after;
+  GeometricParameters nominal_frame_fit;    // the nominal robot with its frame fitted ("before")
+  std::vector<std::string> compliance_left_out;  // "<joint>: reason" for the compliances not written
+  int iterations = 0;
+  std::string stop_reason;
+};
+
+// Throws InvalidArgument for too few rows (fewer than options.minimum_rows usable, or fewer residuals
+// than twice the identifiable parameters) or degenerate poses (all rows at one pose, collinear points,
+// an instrument frame the poses cannot determine), MeasurementError for a campaign without positions or
+// of another robot, SolverError when Levenberg-Marquardt does not converge. Messages name the campaign.
+GeometricCalibrationResult calibrateGeometry(const JointErrorModel& prior, const MeasurementCampaign& campaign,
+                                             const GeometricCalibrationOptions& options = {});
+
+// The nominal parameters a calibration starts from: offsets and compliance (1 / stiffness) of the prior's
+// "offset" and "compliance" effects (zero without them), the campaign's target (zero without one),
+// identity frame.
+GeometricParameters nominalParameters(const JointErrorModel& prior, const MeasurementCampaign& campaign);
+
+// The rigid transform minimising sum |R p_i + t - m_i|^2 (Kabsch / Horn, by SVD). Throws InvalidArgument
+// for fewer than 3 points or points on a line.
+Eigen::Isometry3d fitRigidTransform(const std::vector<Eigen::Vector3d>& from, const std::vector<Eigen::Vector3d>& to);
+
+// A held-out campaign checked with given robot parameters: only the six frame parameters are re-fitted
+// (each instrument set-up has its own), robustly as in the calibration; with refit_frame false the
+// frame of `parameters` is used as it is.
+struct HoldoutEvaluation {
+  std::string source;
+  GeometricParameters parameters;  // with the frame used
+  std::vector<int> row;
+  std::vector<double> error;       // m per used row
+  std::vector<double> weight;
+  ErrorStatistics statistics;
+  int skipped_rows = 0;
+  int downweighted_rows = 0;  // weight below 0.999
+  int outlier_rows = 0;       // weight below 0.5
+  double loss_scale = 0.0;
+};
+HoldoutEvaluation evaluateOnCampaign(const JointErrorModel& prior, const GeometricParameters& parameters,
+                                     const MeasurementCampaign& campaign, bool refit_frame,
+                                     const GeometricCalibrationOptions& options = {});
+
+// The calibrated joint-error model: the prior's effects with the "offset" effect (fitted offsets) in place
+// of any prior one and the "compliance" effect with stiffness 1 / compliance (fitted, or the prior's where
+// it was not fitted); a joint with neither a positive fitted compliance nor a prior is written as rigid
+// and `left_out` says why. The robot is `calibrated_robot`.
+JointErrorModel calibratedJointErrorModel(const JointErrorModel& prior, std::shared_ptr<const Robot> calibrated_robot,
+                                          const GeometricCalibrationResult& result, std::vector<std::string>& left_out);
+
+// Simulated measurements for tests and planning: the instrument reading of every command under the given
+// true parameters, plus normal noise of `noise` (m, per axis), seeded. frame = instrument, target = the
+// nominal target given (what the file would say), no temperature.
+MeasurementCampaign simulateGeometricCampaign(const JointErrorModel& prior, const GeometricParameters& truth,
+                                     const std::vector<JointVector>& commands, double noise, std::uint64_t seed,
+                                     const Eigen::Vector3d& nominal_target);
+
+}  // namespace jointcomp

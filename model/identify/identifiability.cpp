@@ -1,0 +1,142 @@
+#include "model/identify/identifiability.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include <Eigen/QR>
+#include <Eigen/SVD>
+
+#include "model/common/errors.hpp"
+
+namespace jointcomp {
+
+double scaledConditionNumber(const Eigen::MatrixXd& jacobian, const std::vector<int>& columns) {
+  if (columns.empty()) return 1.0;
+  Eigen::MatrixXd scaled(jacobian.rows(), static_cast<Eigen::Index>(columns.size()));
+  for (std::size_t k = 0; k < columns.size(); ++k) {
+    const double norm = jacobian.col(columns[k]).norm();
+    if (norm == 0.0) return std::numeric_limits<double>::infinity();
+    scaled.col(static_cast<Eigen::Index>(k)) = jacobian.col(columns[k]) / norm;
+  }
+  // cond(J) = cond(R) for J = Q R: the SVD of the small triangular factor.
+  const Eigen::HouseholderQR<Eigen::MatrixXd> qr(scaled);
+  const Eigen::Index k = scaled.cols();
+  const Eigen::MatrixXd r = qr.matrixQR().topLeftCorner(std::min(k, scaled.rows()), k).triangularView<Eigen::Upper>();
+  const Eigen::JacobiSVD<Eigen::MatrixXd> svd(r);
+  const Eigen::VectorXd sigma = svd.singularValues();
+  if (sigma.size() < k || sigma[sigma.size() - 1] <= 0.0) return std::numeric_limits<double>::infinity();
+  return sigma[0] / sigma[sigma.size() - 1];
+}
+
+IdentifiabilityResult analyseIdentifiability(const Eigen::MatrixXd& jacobian, const std::vector<int>& priority,
+                                             const std::vector<double>& typical_change,
+                                             const IdentifiabilityOptions& options) {
+  const Eigen::Index m = jacobian.rows();
+  const Eigen::Index n = jacobian.cols();
+  if (!priority.empty() && static_cast<Eigen::Index>(priority.size()) != n) {
+    throw InvalidArgument("analyseIdentifiability: " + std::to_string(priority.size()) + " priorities for " +
+                          std::to_string(n) + " columns");
+  }
+  if (!typical_change.empty() && static_cast<Eigen::Index>(typical_change.size()) != n) {
+    throw InvalidArgument("analyseIdentifiability: " + std::to_string(typical_change.size()) +
+                          " typical changes for " + std::to_string(n) + " columns");
+  }
+  if (!jacobian.allFinite()) throw InvalidArgument("analyseIdentifiability: the Jacobian is not finite");
+  if (!(options.relative_pivot_threshold > 0.0 && options.relative_pivot_threshold < 1.0)) {
+    throw InvalidArgument("analyseIdentifiability: the relative pivot threshold must lie in (0, 1)");
+  }
+
+  IdentifiabilityResult result;
+  result.pivot = Eigen::VectorXd::Zero(n);
+  result.column_norm.resize(n);
+  result.no_effect.assign(static_cast<std::size_t>(n), false);
+  result.redundant_with.resize(static_cast<std::size_t>(n));
+
+  // Unit-norm columns; those without effect take no part.
+  Eigen::MatrixXd work(m, n);
+  std::vector<int> remaining;
+  const double rows = static_cast<double>(std::max<Eigen::Index>(m, 1));
+  for (Eigen::Index j = 0; j < n; ++j) {
+    const double norm = jacobian.col(j).norm();
+    result.column_norm[j] = norm;
+    const double change = typical_change.empty() ? 1.0 : typical_change[static_cast<std::size_t>(j)];
+    if (norm * change / std::sqrt(rows) <= options.no_effect_tolerance || norm == 0.0) {
+      result.no_effect[static_cast<std::size_t>(j)] = true;
+      work.col(j).setZero();
+      continue;
+    }
+    work.col(j) = jacobian.col(j) / norm;
+    remaining.push_back(static_cast<int>(j));
+  }
+
+  // Column-pivoted Gram-Schmidt (twice orthogonalised), pivots restricted to the highest priority class.
+  Eigen::MatrixXd basis(m, n);
+  int rank = 0;
+  Eigen::VectorXd residual_norm = Eigen::VectorXd::Zero(n);
+  while (!remaining.empty()) {
+    int best = -1;
+    for (int j : remaining) {
+      residual_norm[j] = work.col(j).norm();
+      if (residual_norm[j] <= options.relative_pivot_threshold) continue;
+      if (best < 0) {
+        best = j;
+        continue;
+      }
+      const int pj = priority.empty() ? 0 : priority[static_cast<std::size_t>(j)];
+      const int pb = priority.empty() ? 0 : priority[static_cast<std::size_t>(best)];
+      // Exactly redundant columns have equal norms up to rounding: the earlier column wins such ties, so
+      // that the choice does not depend on rounding noise.
+      if (pj < pb || (pj == pb && residual_norm[j] > residual_norm[best] * (1.0 + 1e-8))) best = j;
+    }
+    if (best < 0) break;
+    result.pivot[best] = residual_norm[best];
+    Eigen::VectorXd q = work.col(best);
+    for (int pass = 0; pass < 2 && rank > 0; ++pass) q -= basis.leftCols(rank) * (basis.leftCols(rank).transpose() * q);
+    q.normalize();
+    basis.col(rank++) = q;
+    result.pivot_order.push_back(best);
+    remaining.erase(std::find(remaining.begin(), remaining.end(), best));
+    for (int j : remaining) work.col(j) -= q * q.dot(work.col(j));
+  }
+  for (int j : remaining) result.pivot[j] = residual_norm[j];
+
+  result.kept = result.pivot_order;
+  std::sort(result.kept.begin(), result.kept.end());
+  for (Eigen::Index j = 0; j < n; ++j) {
+    if (!std::binary_search(result.kept.begin(), result.kept.end(), static_cast<int>(j))) {
+      result.fixed.push_back(static_cast<int>(j));
+    }
+  }
+  result.condition_number = scaledConditionNumber(jacobian, result.kept);
+
+  // What each fixed column is redundant with: its least-squares fit by the kept columns.
+  if (!result.kept.empty()) {
+    Eigen::MatrixXd kept(m, static_cast<Eigen::Index>(result.kept.size()));
+    for (std::size_t k = 0; k < result.kept.size(); ++k) {
+      kept.col(static_cast<Eigen::Index>(k)) = jacobian.col(result.kept[k]) / result.column_norm[result.kept[k]];
+    }
+    const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(kept);
+    for (int j : result.fixed) {
+      if (result.no_effect[static_cast<std::size_t>(j)]) continue;
+      const Eigen::VectorXd c = qr.solve(Eigen::VectorXd(jacobian.col(j) / result.column_norm[j]));
+      const double largest = c.cwiseAbs().maxCoeff();
+      std::vector<Redundancy> list;
+      for (std::size_t k = 0; k < result.kept.size(); ++k) {
+        const double ck = c[static_cast<Eigen::Index>(k)];
+        if (std::abs(ck) >= 0.2 * largest && std::abs(ck) > 1e-6) {
+          const int column = result.kept[k];
+          list.push_back({column, ck * result.column_norm[j] / result.column_norm[column]});
+        }
+      }
+      std::sort(list.begin(), list.end(), [&](const Redundancy& a, const Redundancy& b) {
+        return std::abs(a.ratio * result.column_norm[a.column]) > std::abs(b.ratio * result.column_norm[b.column]);
+      });
+      if (list.size() > 4) list.resize(4);
+      result.redundant_with[static_cast<std::size_t>(j)] = list;
+    }
+  }
+  return result;
+}
+
+}  // namespace jointcomp

@@ -1,0 +1,25 @@
+// The Robot written back as URDF (the inverse of model/robot/load_urdf.hpp), e.g. after a kinematic
+// calibration changed the joint placements. One link per body (its merged inertial at the centre of mass,
+// axes of the joint frame), one joint per revolute joint with the placement as <origin>, and the tool as a
+// fixed joint to the tip link. Numbers carry 17 significant digits, so that loading the text gives back
+// the same Robot to within about 1e-15 (fixed joints and links that the loader folded stay folded).
+#pragma once
+
+#include <string>
+
+#include "model/robot/robot.hpp"
+
+namespace jointcomp {
+
+// `comment` (optional) goes into an XML comment at the top. Throws InvalidArgument for a robot the
+// format cannot hold: no joints, non-finite values, a tool offset without a tip link of its own.
+std::string robotToUrdf(const Robot& robot, const std::string& comment = "");
+
+// Writes whole or not at all (temporary file, then rename); throws Error naming the path.
+void saveRobotUrdf(const Robot& robot, const std::string& path, const std::string& comment = "");
+
+// The URDF roll-pitch-yaw angles of a rotation (R = Rz(yaw) Ry(pitch) Rx(roll)); they give back the
+// rotation to rounding error everywhere, at and near pitch = +-pi/2 too.
+Eigen::Vector3d rotationToRpy(const Eigen::Matrix3d& rotation);
+
+}  // namespace jointcomp

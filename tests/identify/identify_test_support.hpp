@@ -1,0 +1,54 @@
+// Shared helpers of the identification tests: the shipped RX170 and its parameter file, the true
+// stiffness of a model, and a temporary directory.
+#pragma once
+
+#include <filesystem>
+#include <memory>
+#include <string>
+
+#include "model/effects/compliance.hpp"
+#include "model/effects/joint_error_model.hpp"
+#include "model/io/parameter_file.hpp"
+#include "model/robot/load_urdf.hpp"
+
+namespace jointcomp {
+namespace identify_test {
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kDegree = kPi / 180.0;
+
+inline std::shared_ptr<const Robot> rx170() {
+  static const std::shared_ptr<const Robot> robot =
+      std::make_shared<const Robot>(loadRobotFromUrdfFile(std::string(JOINTCOMP_DATA_DIR) + "/robots/rx170.urdf"));
+  return robot;
+}
+
+inline JointErrorModel rx170Model() {
+  return loadParameterFile(std::string(JOINTCOMP_DATA_DIR) + "/params/rx170.json", rx170());
+}
+
+inline double stiffnessOf(const JointErrorModel& model, int joint) {
+  const int index = model.findEffect(ComplianceEffect::kType);
+  return static_cast<const ComplianceEffect&>(model.effect(index)).stiffness(joint);
+}
+
+// A fresh directory under the system's temporary directory, removed by the destructor.
+class TemporaryDirectory {
+public:
+  explicit TemporaryDirectory(const std::string& name)
+      : path_(std::filesystem::temp_directory_path() / ("jointcomp_identify_" + name)) {
+    std::filesystem::remove_all(path_);
+    std::filesystem::create_directories(path_);
+  }
+  ~TemporaryDirectory() {
+    std::error_code ignored;
+    std::filesystem::remove_all(path_, ignored);
+  }
+  std::string file(const std::string& name) const { return (path_ / name).string(); }
+
+private:
+  std::filesystem::path path_;
+};
+
+}  // namespace identify_test
+}  // namespace jointcomp
