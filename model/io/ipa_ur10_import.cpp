@@ -99,6 +99,15 @@ MeasurementCampaign importIpaUr10(const std::string& measurements_path, const st
   } catch (const Error& error) {
     throw MeasurementError(error.what());
   }
+  MeasurementCampaign campaign = parseIpaUr10(text, measurements_path);
+  if (!trafo_path.empty()) {
+    campaign.has_target = true;
+    campaign.target_in_flange = ipaTargetInFlange(trafo_path);
+  }
+  return campaign;
+}
+
+MeasurementCampaign parseIpaUr10(const std::string& text, const std::string& measurements_path) {
   auto fail = [&](int line, const std::string& what) {
     throw MeasurementError(measurements_path + ":" + std::to_string(line) + ": " + what);
   };
@@ -126,10 +135,6 @@ MeasurementCampaign importIpaUr10(const std::string& measurements_path, const st
   campaign.dof = 6;
   campaign.has_position = true;
   campaign.metadata["source"] = "IPA UR10 laser-tracker data (Landgraf et al., IEEE CASE 2021), MIT license";
-  if (!trafo_path.empty()) {
-    campaign.has_target = true;
-    campaign.target_in_flange = ipaTargetInFlange(trafo_path);
-  }
   std::vector<double> stamps;
   int line_number = 1;
   while (std::getline(stream, raw)) {

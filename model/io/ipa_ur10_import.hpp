@@ -15,6 +15,8 @@ namespace jointcomp {
 
 // Throws MeasurementError naming the file, the line and the column for anything unreadable.
 MeasurementCampaign importIpaUr10(const std::string& measurements_path, const std::string& trafo_path = "");
+// The same from the measurement file's text (no target); `source_name` stands in for the file in messages.
+MeasurementCampaign parseIpaUr10(const std::string& text, const std::string& source_name);
 
 // The T-Mac point in the flange frame (m) from a Trafo_TM_F_init file: the 4x4 transform (mm) from
 // flange to T-Mac, inverted. Throws MeasurementError for a malformed file.
