@@ -9,5 +9,6 @@ int runImportIpa(int argc, char** argv);
 int runCalibrate(int argc, char** argv);
 int runSimulate(int argc, char** argv);
 int runIdentify(int argc, char** argv);
+int runDiscover(int argc, char** argv);
 
 }  // namespace jointcomp::cli

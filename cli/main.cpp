@@ -29,6 +29,11 @@ void printUsage() {
       "        [--loss huber|cauchy|none] [--loss-scale-mm X] [--pivot-threshold X] [--fix NAME,..] [--no-plot]\n"
       "                             kinematic calibration (instrument frame, target, joint offsets, placements,\n"
       "                             compliance) from measured positions; held-out campaigns re-fit their frame\n"
+      "  discover --campaign FILE[,FILE] --out DIR [--urdf FILE] [--params FILE] [--holdout FILE ...]\n"
+      "        [--base frame|textbook] [--max-steps N] [--orders N] [--folds K] [--types offset,harmonic,..]\n"
+      "        [--noise-floor-mm X] [--min-cv-gain X] [--loss huber|cauchy|none] [--no-plot]\n"
+      "                             residual discovery: adds the candidate effects the data ask for, one at a\n"
+      "                             time (time-blocked CV + BIC), and writes the extended parameter file\n"
       "  help                       this text\n"
       "With no command, jointcomp runs `paper` on the built-in Staubli RX170.\n");
 }
@@ -48,6 +53,7 @@ int main(int argc, char** argv) {
     if (command == "kinematics") return jointcomp::cli::runKinematics(argc - 1, argv + 1);
     if (command == "simulate") return jointcomp::cli::runSimulate(argc - 1, argv + 1);
     if (command == "identify") return jointcomp::cli::runIdentify(argc - 1, argv + 1);
+    if (command == "discover") return jointcomp::cli::runDiscover(argc - 1, argv + 1);
     std::fprintf(stderr, "jointcomp: unknown command '%s'\n", command.c_str());
     printUsage();
     return 2;

@@ -6,9 +6,12 @@
 #include <nlohmann/json.hpp>
 
 #include "model/common/errors.hpp"
+#include "model/effects/backlash.hpp"
 #include "model/effects/compliance.hpp"
 #include "model/effects/joint_offset.hpp"
+#include "model/effects/nonlinear_compliance.hpp"
 #include "model/effects/spring_balancer.hpp"
+#include "model/effects/thermal_drift.hpp"
 #include "model/effects/transmission_error.hpp"
 
 namespace jointcomp {
@@ -29,6 +32,9 @@ const std::map<std::string, Factory>& factories() {
        }},
       {TransmissionErrorEffect::kType, &TransmissionErrorEffect::fromJson},
       {JointOffsetEffect::kType, &JointOffsetEffect::fromJson},
+      {BacklashEffect::kType, &BacklashEffect::fromJson},
+      {NonlinearComplianceEffect::kType, &NonlinearComplianceEffect::fromJson},
+      {ThermalDriftEffect::kType, &ThermalDriftEffect::fromJson},
   };
   return table;
 }

@@ -442,6 +442,7 @@ void simulateRandom(Simulator& sim, const CampaignSimulationSpec& spec, const st
   const JointVector rest = JointVector::Zero(robot.dof());
   double t = 0.0;
   int accepted = 0;
+  JointVector previous;
   for (long attempt = 0; accepted < r.count; ++attempt) {
     if (attempt > 1000L * r.count) {
       throw SolverError("random poses: found only " + std::to_string(accepted) + " poses meeting the height and conditioning limits");
@@ -453,7 +454,11 @@ void simulateRandom(Simulator& sim, const CampaignSimulationSpec& spec, const st
     pointJacobian(robot, commanded, target, jacobian);
     if (conditioning(jacobian) < r.min_conditioning) continue;
     ++accepted;
-    sim.addRow(t, q_pose, sim.settle(q_pose, rest, Vector6::Zero(), 0.0), Vector6::Zero(), 0.0);
+    // The robot arrives from the previous pose: its velocity (the mean of the move) gives each joint's
+    // direction of approach, which direction-dependent effects (backlash) need; the first pose: at rest.
+    const JointVector velocity = previous.size() == q_pose.size() ? JointVector((q_pose - previous) / r.row_period_s) : rest;
+    sim.addRow(t, q_pose, sim.settle(q_pose, velocity, Vector6::Zero(), 0.0), Vector6::Zero(), 0.0);
+    previous = q_pose;
     t += r.row_period_s;
   }
 }

@@ -334,7 +334,13 @@ CalibrationData prepareCalibrationData(const JointErrorModel& prior, const Measu
     }
     ctx.q = command;
     ctx.command = command;
+    // Direction of approach from the command sequence (the previous row's command, whether used or not):
+    // the mean velocity of the move into this row; the first row is at rest.
     ctx.velocity.setZero();
+    if (k > 0 && campaign.command[k - 1].size() == command.size() && campaign.command[k - 1].allFinite()) {
+      const double dt = k < campaign.time.size() && campaign.time[k] > campaign.time[k - 1] ? campaign.time[k] - campaign.time[k - 1] : 1.0;
+      ctx.velocity = (command - campaign.command[k - 1]) / dt;
+    }
     ctx.time = k < campaign.time.size() ? campaign.time[k] : 0.0;
     const double temperature = k < campaign.temperature.size() ? campaign.temperature[k] : kNaN;
     ctx.temperature = std::isfinite(temperature) ? temperature : 20.0;

@@ -1,0 +1,90 @@
+// Time of residual discovery (discoverEffects) on Series A of the IPA UR10 laser-tracker data
+// (shared/data/ipa-ur10, about 12,000 rows), one core: the whole call with the textbook base, every
+// candidate family (offset, compliance, geometric, nonlinear compliance, harmonics of orders 1..4,
+// backlash, thermal and time drift) and Series B held out; and how the time grows with the rows (the
+// first 1/4, 1/2 and all rows) and with the candidates (harmonic orders 1, 4 and 8).
+// Without the data the benchmarks are skipped with a message.
+#include <algorithm>
+#include <fstream>
+#include <memory>
+#include <string>
+
+#include <benchmark/benchmark.h>
+
+#include "model/identify/discovery.hpp"
+#include "model/io/ipa_ur10_import.hpp"
+#include "model/robot/load_urdf.hpp"
+
+namespace {
+
+using namespace jointcomp;
+
+std::string ipa(const std::string& file) { return std::string(JOINTCOMP_SHARED_DIR) + "/data/ipa-ur10/" + file; }
+
+bool haveData() { return std::ifstream(ipa("Series_A/measurements_grid.csv")).good(); }
+
+const JointErrorModel& prior() {
+  static const JointErrorModel model(
+      std::make_shared<const Robot>(loadRobotFromUrdfFile(std::string(JOINTCOMP_DATA_DIR) + "/robots/ur10.urdf")),
+      GearTrain::direct(6), {});
+  return model;
+}
+
+const MeasurementCampaign& seriesA() {
+  static const MeasurementCampaign campaign =
+      importIpaUr10(ipa("Series_A/measurements_grid.csv"), ipa("Series_A/Trafo_TM_F_init.txt"));
+  return campaign;
+}
+
+const MeasurementCampaign& seriesB() {
+  static const MeasurementCampaign campaign =
+      importIpaUr10(ipa("Series_B/measurements_joint_configurations.csv"), ipa("Series_B/Trafo_TM_F_init.txt"));
+  return campaign;
+}
+
+MeasurementCampaign firstRows(const MeasurementCampaign& c, std::size_t rows) {
+  MeasurementCampaign out = c;
+  rows = std::min(rows, c.size());
+  out.time.resize(rows);
+  out.command.resize(rows);
+  out.position.resize(rows);
+  out.temperature.resize(rows);
+  out.wrench.resize(rows);
+  out.payload.resize(rows);
+  if (out.has_measured_angles) out.measured_angles.resize(rows);
+  return out;
+}
+
+// range(0): rows in quarters of Series A (4 = all); range(1): maximum harmonic order.
+void BM_DiscoverSeriesA(benchmark::State& state) {
+  if (!haveData()) {
+    state.SkipWithError("IPA UR10 data not found under JOINTCOMP_SHARED_DIR");
+    return;
+  }
+  const MeasurementCampaign a = firstRows(seriesA(), seriesA().size() * static_cast<std::size_t>(state.range(0)) / 4);
+  DiscoveryOptions options;
+  options.base_geometry = true;
+  options.max_harmonic_order = static_cast<int>(state.range(1));
+  int steps = 0, candidates = 0;
+  for (auto _ : state) {
+    const DiscoveryResult result = discoverEffects(prior(), {a}, {seriesB()}, options);
+    steps = static_cast<int>(result.steps.size());
+    candidates = result.candidates;
+    benchmark::DoNotOptimize(result.final_state.fitted.rms);
+  }
+  state.counters["rows"] = static_cast<double>(a.size());
+  state.counters["candidates"] = candidates;
+  state.counters["steps"] = steps;
+}
+BENCHMARK(BM_DiscoverSeriesA)
+    ->Args({4, 4})
+    ->Args({1, 4})
+    ->Args({2, 4})
+    ->Args({4, 1})
+    ->Args({4, 8})
+    ->Unit(benchmark::kSecond)
+    ->Iterations(1);
+
+}  // namespace
+
+BENCHMARK_MAIN();

@@ -1,0 +1,35 @@
+"""Plot of `jointcomp discover`: RMS error after each accepted step (fitted, held-out, cross-validated).
+Usage: /usr/bin/python3 plot_discovery.py steps.csv out.png"""
+import csv
+import sys
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
+
+def main():
+    rows = list(csv.DictReader(open(sys.argv[1])))
+    steps = [int(r["step"]) for r in rows]
+    labels = [r["effect"] for r in rows]
+
+    def series(key):
+        return [float(r[key]) if r[key] not in ("-", "") else float("nan") for r in rows]
+
+    fig, ax = plt.subplots(figsize=(8, 4.5))
+    ax.plot(steps, series("fitted_rms_mm"), "o-", label="fitted RMS (3-D)")
+    ax.plot(steps, series("heldout_rms_mm"), "s-", label="held-out RMS (3-D)")
+    ax.plot(steps, series("cv_rms_mm"), "^--", label="CV RMS per axis")
+    ax.set_xticks(steps)
+    ax.set_xticklabels(labels, rotation=30, ha="right", fontsize=8)
+    ax.set_ylabel("error [mm]")
+    ax.set_title("jointcomp discover: error after each accepted effect")
+    ax.grid(True, alpha=0.3)
+    ax.legend()
+    fig.tight_layout()
+    fig.savefig(sys.argv[2], dpi=120)
+
+
+if __name__ == "__main__":
+    main()

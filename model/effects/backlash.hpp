@@ -1,0 +1,48 @@
+// Backlash (lost motion): the link lags the command by half the play in the direction it was approached,
+//   dq_j = -b_j / 2 * tanh(v_j / v_s)
+// with b_j the width of the play (rad), v_j the joint's velocity (JointContext::velocity, the direction
+// of approach: campaigns set it from the command sequence) and v_s a small velocity scale. The smooth
+// sign (tanh instead of sign) keeps the error continuous in the velocity, so that the plant, which puts
+// every non-compliance joint-error effect into its transmission, does not hand its integrator a jump
+// when a joint reverses; with v_s = 1e-3 rad/s it equals the sign for any real move. A joint at rest
+// (v = 0) gets no error: the side it rests on is not known from the context alone. Parameter file:
+//   {"type": "backlash", "width_rad": [n values], "velocity_scale_rad_per_s": 0.001}
+// A negative width (the link leads) is accepted: discovery fits the sign.
+#pragma once
+
+#include <cmath>
+
+#include "model/effects/effect.hpp"
+#include "model/effects/gear_train.hpp"
+
+namespace jointcomp {
+
+class BacklashEffect : public Effect {
+public:
+  static constexpr const char* kType = "backlash";
+  static constexpr double kDefaultVelocityScale = 1e-3;  // rad/s
+  // Throws ParameterError for the wrong number of widths, a width that is not finite or a scale <= 0.
+  BacklashEffect(const Robot& robot, std::vector<double> width_rad, double velocity_scale = kDefaultVelocityScale);
+  static std::unique_ptr<Effect> fromJson(const nlohmann::json& json, const Robot& robot, const GearTrain& gears,
+                                          const std::string& path);
+
+  std::string type() const override { return kType; }
+  EffectRole role() const override { return EffectRole::JointError; }
+  void addJointError(const Robot& robot, const JointContext& ctx, JointVector& dq) const override;
+  std::vector<std::string> parameterNames() const override;  // "<joint>.backlash_width_rad"
+  std::vector<double> parameters() const override { return width_; }
+  void setParameters(const std::vector<double>& values) override;
+  nlohmann::json toJson() const override;
+  std::unique_ptr<Effect> clone() const override { return std::make_unique<BacklashEffect>(*this); }
+
+  double velocityScale() const { return velocity_scale_; }
+  // The factor of b_j in dq_j: -tanh(v / v_s) / 2.
+  static double feature(double velocity, double velocity_scale) { return -0.5 * std::tanh(velocity / velocity_scale); }
+
+private:
+  std::vector<std::string> joint_names_;
+  std::vector<double> width_;  // rad
+  double velocity_scale_;      // rad/s
+};
+
+}  // namespace jointcomp

@@ -1,0 +1,36 @@
+// Nonlinear (stiffening or softening) compliance: the cubic term of the joint spring beyond the linear
+// "compliance" effect, dq_j = -c3_j * tau_j^3 with tau_j the joint's load torque (N m). c3 > 0 softens
+// the joint under load, c3 < 0 stiffens it. Parameter file:
+//   {"type": "nonlinear_compliance", "cubic_compliance_rad_per_nm3": [n values]}
+#pragma once
+
+#include "model/effects/effect.hpp"
+#include "model/effects/gear_train.hpp"
+
+namespace jointcomp {
+
+class NonlinearComplianceEffect : public Effect {
+public:
+  static constexpr const char* kType = "nonlinear_compliance";
+  // Throws ParameterError for the wrong number of coefficients or one that is not finite.
+  NonlinearComplianceEffect(const Robot& robot, std::vector<double> cubic_rad_per_nm3);
+  static std::unique_ptr<Effect> fromJson(const nlohmann::json& json, const Robot& robot, const GearTrain& gears,
+                                          const std::string& path);
+
+  std::string type() const override { return kType; }
+  EffectRole role() const override { return EffectRole::JointError; }
+  void addJointError(const Robot& robot, const JointContext& ctx, JointVector& dq) const override;
+  std::vector<std::string> parameterNames() const override;  // "<joint>.cubic_compliance_rad_per_nm3"
+  std::vector<double> parameters() const override { return cubic_; }
+  void setParameters(const std::vector<double>& values) override;
+  nlohmann::json toJson() const override;
+  std::unique_ptr<Effect> clone() const override { return std::make_unique<NonlinearComplianceEffect>(*this); }
+
+  static double feature(double torque) { return -torque * torque * torque; }
+
+private:
+  std::vector<std::string> joint_names_;
+  std::vector<double> cubic_;  // rad / (N m)^3
+};
+
+}  // namespace jointcomp

@@ -1,0 +1,43 @@
+// Thermal and time drift of the joint zeros: dq_j = a_j * (temperature - T0) + d_j * (time - t0), with
+// a_j in rad/degC and d_j in rad/s. A context without a measured temperature carries the default 20 degC
+// (JointContext), so a model whose T0 is not 20 degC should only be used with temperatures. Parameter file:
+//   {"type": "thermal", "coefficient_rad_per_degc": [n], "reference_temperature_degc": T0,
+//    "drift_rad_per_s": [n], "reference_time_s": t0}
+#pragma once
+
+#include "model/effects/effect.hpp"
+#include "model/effects/gear_train.hpp"
+
+namespace jointcomp {
+
+class ThermalDriftEffect : public Effect {
+public:
+  static constexpr const char* kType = "thermal";
+  // Throws ParameterError for wrong sizes or values that are not finite.
+  ThermalDriftEffect(const Robot& robot, std::vector<double> coefficient_rad_per_degc, double reference_temperature_degc,
+                     std::vector<double> drift_rad_per_s, double reference_time_s);
+  static std::unique_ptr<Effect> fromJson(const nlohmann::json& json, const Robot& robot, const GearTrain& gears,
+                                          const std::string& path);
+
+  std::string type() const override { return kType; }
+  EffectRole role() const override { return EffectRole::JointError; }
+  void addJointError(const Robot& robot, const JointContext& ctx, JointVector& dq) const override;
+  // "<joint>.thermal_rad_per_degc" for every joint, then "<joint>.drift_rad_per_s" for every joint.
+  std::vector<std::string> parameterNames() const override;
+  std::vector<double> parameters() const override;
+  void setParameters(const std::vector<double>& values) override;
+  nlohmann::json toJson() const override;
+  std::unique_ptr<Effect> clone() const override { return std::make_unique<ThermalDriftEffect>(*this); }
+
+  double referenceTemperature() const { return t0_degc_; }
+  double referenceTime() const { return t0_s_; }
+
+private:
+  std::vector<std::string> joint_names_;
+  std::vector<double> coefficient_;  // rad / degC
+  std::vector<double> drift_;        // rad / s
+  double t0_degc_;
+  double t0_s_;
+};
+
+}  // namespace jointcomp

@@ -1,0 +1,100 @@
+// Residual discovery: which effect does the nominal model miss? Starting from a base calibration
+// (calibrateGeometry: frame and target, optionally the textbook geometry), candidate effects of the
+// registry's vocabulary are fitted to the Cartesian residual, one at a time, each jointly with every
+// free parameter of the current model (linearised at the current fit: the columns are the derivatives of
+// the predicted measurement, joint effects entering through the joint Jacobian dm/dq_j times their
+// feature). The candidate that most lowers the time-blocked K-fold cross-validation error (blocks of
+// consecutive rows) is accepted when it also lowers an extended BIC,
+//   dBIC = N ln(RSS_c / RSS_0) + dk ln N + 2 ln(M)      (N residuals, dk added rank, M candidates tried),
+// then added to the model and every free parameter refitted together (Gauss-Newton steps on the effects'
+// parameters jointly with the geometry, alternated with calibrateGeometry); repeated until no candidate
+// passes or max_steps.
+//
+// Candidates, per joint j (names: the effect registry's vocabulary):
+//   offset                dq_j = c                              (the calibration's offset parameter)
+//   compliance            dq_j = -c tau_j                       (the calibration's compliance parameter)
+//   geometric             the six placement corrections of joint j (identifiable subset)
+//   nonlinear_compliance  dq_j = -c3 tau_j^3
+//   harmonic              dq_j = a sin(k x) + b cos(k x), x the angle of the motor, of each stage's input,
+//                         or of the output of joint j (distinct parts only), k = 1..max_harmonic_order;
+//                         written as a transmission_error harmonic (amplitude, phase)
+//   backlash              dq_j = -b/2 tanh(v_j / v_s), v_j from the command sequence (direction of approach)
+//   thermal               dq_j = a (T - T0) (when the campaign has temperatures) or d (t - t0) (time drift)
+// payload and hysteresis are not candidates yet.
+//
+// Library code: never prints; throws InvalidArgument for unusable inputs, with the campaign's name.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "model/identify/geometric_calibration.hpp"
+
+namespace jointcomp {
+
+struct DiscoveryOptions {
+  GeometricCalibrationOptions calibration;  // fit_* flags are set by discovery; loss and solver are used
+  // false: the base model frees only the frame and the target; offsets, compliance and joint placements are
+  // candidates ("offset", "compliance", "geometric"). true: the textbook base frees them all from the start.
+  bool base_geometry = false;
+  int folds = 5;
+  int max_steps = 8;
+  int max_harmonic_order = 4;
+  double min_cv_gain = 0.02;    // relative drop of the CV error a candidate must bring
+  double noise_floor = 0.0;     // m, 3-D RMS; 0: sqrt(3) times the campaigns' position_noise
+  int refit_iterations = 2;     // joint refits after each accepted step
+  double velocity_scale = 1e-3; // rad/s, backlash smooth sign
+  std::vector<std::string> types;  // candidate types to try; empty: all
+};
+
+// The fixed vocabulary of discovered effect types.
+const std::vector<std::string>& discoveryEffectTypes();
+
+struct DiscoveredParameter {
+  std::string name;  // e.g. "shoulder_lift_joint.backlash_width_rad"
+  double value = 0.0;
+  double sigma = 0.0;
+};
+
+struct DiscoveryState {
+  ErrorStatistics fitted;                  // on the fitted rows (calibration's "after")
+  std::vector<ErrorStatistics> heldout;    // one per held-out campaign, frame re-fitted
+  double cv_rms = 0.0;                     // m per axis, time-blocked CV of the linearised model
+};
+
+struct DiscoveryStep {
+  std::string type;
+  int joint = -1;
+  std::string joint_name;
+  int stage = 0;            // harmonic: 1 = motor ... stageCount + 1 = output
+  std::string part;         // harmonic: "motor", "stage_k", "output"; thermal: "temperature" or "time"
+  double cycles = 0.0;      // harmonic order (cycles per revolution of the part)
+  std::vector<DiscoveredParameter> parameters;
+  double cv_rms_before = 0.0, cv_rms_after = 0.0;  // m per axis
+  double delta_bic = 0.0;
+  int candidates_tried = 0;
+  std::string runner_up;    // best rejected / next candidate, for the evidence
+  DiscoveryState before, after;
+};
+
+struct DiscoveryResult {
+  JointErrorModel model;          // prior + discovered effects, offsets and compliance as fitted
+  GeometricCalibrationResult calibration;  // the final base fit (geometry, frame, target)
+  std::vector<DiscoveryStep> steps;
+  DiscoveryState initial, final_state;
+  std::vector<double> joint_residual_rms_initial, joint_residual_rms_final;  // rad, residual mapped to joints
+  double noise_floor = 0.0;       // m, 3-D RMS
+  std::string stop_reason;
+  int fitted_rows = 0;
+  int candidates = 0;
+  explicit DiscoveryResult(JointErrorModel m) : model(std::move(m)) {}
+};
+
+// Throws InvalidArgument for no fitted campaign, campaigns of another robot or in different frames.
+DiscoveryResult discoverEffects(const JointErrorModel& prior, const std::vector<MeasurementCampaign>& fitted,
+                                const std::vector<MeasurementCampaign>& heldout, const DiscoveryOptions& options = {});
+
+// The fitted campaigns as one (rows appended in order, times shifted to stay non-decreasing).
+MeasurementCampaign concatenateCampaigns(const std::vector<MeasurementCampaign>& campaigns);
+
+}  // namespace jointcomp
