@@ -1,0 +1,231 @@
+/*
+ * jointcomp C API: joint-error prediction, offline compensation and the flexible-joint plant of serial
+ * industrial robots, behind one prefix (jc_) and opaque handles.
+ *
+ * Conventions (every function follows them):
+ * - Units are SI: rad, m, N m, s (and rad/s, N, kg).
+ * - Every call that can fail returns a jc_status: JC_OK (0) or a negative JC_ERROR_* code. On failure the
+ *   outputs are left untouched and jc_last_error() says what was wrong, naming the function and argument.
+ *   Only the version, status-name and last-error queries return their value directly: they cannot fail.
+ * - Arrays are double (or int64_t) pointers followed by their length in elements. A length must be
+ *   exactly what the function's comment asks for ("n" is the robot's number of joints), except where
+ *   the comment says "at least". Matrices are row-major: element (r, c) of an R x C matrix is at
+ *   [r * C + c]. Poses are 4 x 4 homogeneous transforms (16 values, row-major).
+ * - Inputs must be finite: NaN and infinities are rejected with JC_ERROR_INVALID_ARGUMENT.
+ * - Outputs marked "optional" may be NULL with length 0 when not wanted.
+ * - Handles (jc_robot, jc_plant) are created by jc_*_load / jc_*_create and released by jc_*_free;
+ *   freeing NULL is a no-op. A handle of the wrong kind, or one already freed, is reported as
+ *   JC_ERROR_WRONG_HANDLE as long as its memory has not been reused; a freed handle whose memory was
+ *   reused cannot be detected, so never use a handle after freeing it.
+ * - Threads: every handle may be used from any thread. Calls on one handle are serialised by a lock
+ *   inside it; separate handles share nothing mutable, so calls on them run in parallel. The last-error
+ *   message is per thread.
+ */
+#ifndef JOINTCOMP_JOINTCOMP_H
+#define JOINTCOMP_JOINTCOMP_H
+
+#include <stdint.h>
+
+/* Only the library's own build marks the API for export; users see plain declarations (which keeps the
+   header readable by strict C parsers such as MATLAB's loadlibrary). */
+#if defined(JOINTCOMP_BUILDING_LIBRARY) && defined(__GNUC__)
+#define JOINTCOMP_API __attribute__((visibility("default")))
+#else
+#define JOINTCOMP_API
+#endif
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* Version of the binary interface: changes whenever a function's signature or meaning changes
+   incompatibly. It is also the shared library's SOVERSION (libjointcomp.so.<JC_ABI_VERSION>). */
+#define JC_ABI_VERSION 1
+
+/* Status codes. */
+typedef int32_t jc_status;
+#define JC_OK 0
+#define JC_ERROR_INVALID_ARGUMENT (-1) /* NULL pointer, wrong length, NaN or infinity, out of range */
+#define JC_ERROR_FILE (-2)             /* unreadable or malformed URDF or parameter file or text */
+#define JC_ERROR_UNREACHABLE (-3)      /* a pose outside the workspace or the joint limits */
+#define JC_ERROR_SOLVER (-4)           /* no convergence, integrator failure */
+#define JC_ERROR_WRONG_HANDLE (-5)     /* a handle of another kind, or one already freed */
+#define JC_ERROR_OUT_OF_MEMORY (-6)
+#define JC_ERROR_INTERNAL (-7)         /* a bug: please report it with the message */
+
+/* Opaque handles. */
+typedef struct jc_robot jc_robot; /* a robot, its joint-error model and (optionally) its drives */
+typedef struct jc_plant jc_plant; /* a simulated flexible-joint robot, integrated by CVODE */
+
+/* ---- Library ---------------------------------------------------------------------------------------- */
+
+/* The library's version, "major.minor.patch". */
+JOINTCOMP_API const char* jc_version(void);
+/* JC_ABI_VERSION of the library actually loaded (compare it with the header's). */
+JOINTCOMP_API int32_t jc_abi_version(void);
+/* Message of the last failed call on this thread ("" after a successful call). Valid until the next
+   jc_ call on this thread. */
+JOINTCOMP_API const char* jc_last_error(void);
+/* The name of a status code, e.g. "JC_ERROR_SOLVER" ("JC_UNKNOWN_STATUS" for other values). */
+JOINTCOMP_API const char* jc_status_name(jc_status status);
+
+/* ---- Robot ------------------------------------------------------------------------------------------ */
+
+/* Loads the robot from a URDF file and its joint-error parameters from a parameter file (JSON, see
+   model/io/parameter_file.hpp); parameter_path may be NULL for kinematics and dynamics only (no joint
+   errors). The drives and controller gains of the parameter file's "plant" object, when present, are
+   kept for jc_plant_create and jc_spiral_experiment. *robot receives the new handle. */
+JOINTCOMP_API jc_status jc_robot_load(const char* urdf_path, const char* parameter_path, jc_robot** robot);
+/* The same with the parameters given as JSON text instead of a file. */
+JOINTCOMP_API jc_status jc_robot_load_json(const char* urdf_path, const char* parameters_json, jc_robot** robot);
+JOINTCOMP_API jc_status jc_robot_free(jc_robot* robot);
+
+/* Number of joints n. */
+JOINTCOMP_API jc_status jc_robot_dof(jc_robot* robot, int32_t* dof);
+/* The URDF's robot name, NUL-terminated, into buffer (capacity bytes). *length receives the name's
+   length without the NUL. buffer may be NULL with capacity 0 to ask for the length only; a buffer too
+   small is an error. */
+JOINTCOMP_API jc_status jc_robot_name(jc_robot* robot, char* buffer, int32_t capacity, int32_t* length);
+/* Joint limits (n each); -inf and +inf for continuous joints. */
+JOINTCOMP_API jc_status jc_robot_joint_limits(jc_robot* robot, double* lower, int32_t lower_len, double* upper,
+                                              int32_t upper_len);
+/* *has_drives = 1 when the parameters have a "plant" object (needed for plants), else 0. */
+JOINTCOMP_API jc_status jc_robot_has_drives(jc_robot* robot, int32_t* has_drives);
+/* The joint-error parameters (and drives) as parameter-file JSON; buffer as for jc_robot_name. */
+JOINTCOMP_API jc_status jc_robot_parameters_json(jc_robot* robot, char* buffer, int32_t capacity, int32_t* length);
+
+/* Conditions of the robot handle, used by jc_predict_joint_errors and jc_compensate_* (not by the spiral):
+   a payload of `mass` kg whose centre of mass is com (3, m, tool frame), and a wrench (6: force in N,
+   then moment in N m about the tool point, base frame) that the environment applies at the tool.
+   Both are zero after loading. */
+JOINTCOMP_API jc_status jc_robot_set_payload(jc_robot* robot, double mass, const double* com, int32_t com_len);
+JOINTCOMP_API jc_status jc_robot_set_tool_wrench(jc_robot* robot, const double* wrench, int32_t wrench_len);
+
+/* ---- Kinematics and dynamics --------------------------------------------------------------------------- */
+
+/* Pose of the tool frame in the base frame at joint positions q (n): pose (16). */
+JOINTCOMP_API jc_status jc_forward_kinematics(jc_robot* robot, const double* q, int32_t q_len, double* pose,
+                                              int32_t pose_len);
+/* The joint positions q (n) that put the tool at pose (16, a rigid transform), closest to seed (n).
+   *singular (optional, may be NULL) receives 1 at a singularity, where a redundant joint kept its seed
+   value. JC_ERROR_UNREACHABLE when no solution lies within the joint limits. */
+JOINTCOMP_API jc_status jc_inverse_kinematics(jc_robot* robot, const double* pose, int32_t pose_len, const double* seed,
+                                              int32_t seed_len, double* q, int32_t q_len, int32_t* singular);
+/* Every closed-form solution (up to 8) within the limits, each as close to seed as the limits allow:
+   solutions (at least 8 n) receives *count rows of n. JC_ERROR_INVALID_ARGUMENT for arms without a
+   closed form (see model/robot/inverse_kinematics.hpp). */
+JOINTCOMP_API jc_status jc_inverse_kinematics_all(jc_robot* robot, const double* pose, int32_t pose_len,
+                                                  const double* seed, int32_t seed_len, double* solutions,
+                                                  int32_t solutions_len, int32_t* count);
+/* Geometric Jacobian of the tool frame at q (n): jacobian (6 x n, row-major), rows 0-2 the tool point's
+   linear velocity, rows 3-5 the angular velocity, base frame. */
+JOINTCOMP_API jc_status jc_jacobian(jc_robot* robot, const double* q, int32_t q_len, double* jacobian,
+                                    int32_t jacobian_len);
+/* Joint torques (n) that hold the robot still against gravity at q (n). */
+JOINTCOMP_API jc_status jc_gravity_torques(jc_robot* robot, const double* q, int32_t q_len, double* torques,
+                                           int32_t torques_len);
+
+/* ---- Joint errors and compensation --------------------------------------------------------------------
+   `effects` selects the joint-error effects taking part: NULL for every effect of the parameters, or a
+   comma-separated list of effect types ("compliance,transmission_error"; "" for none). Load effects
+   (spring balancer, payload, wrench) always take part, since the errors depend on the load. The paper's
+   three runs are "" (no correction), "compliance" and "compliance,transmission_error". */
+
+/* Joint errors (n, link minus command) of the quasi-static robot commanded to `command` (n) moving at
+   `velocity` (optional, n; NULL for at rest): the links settle where the selected effects put them.
+   JC_ERROR_SOLVER when they do not settle. */
+JOINTCOMP_API jc_status jc_predict_joint_errors(jc_robot* robot, const char* effects, const double* command,
+                                                int32_t command_len, const double* velocity, int32_t velocity_len,
+                                                double* errors, int32_t errors_len);
+/* The joint reference (n) that brings the links to `planned` (n) moving at `velocity` (optional, n):
+   reference = planned - errors(planned, reference). *iterations (optional) receives the fixed-point
+   iterations used. JC_ERROR_SOLVER when the iteration does not converge. */
+JOINTCOMP_API jc_status jc_compensate_point(jc_robot* robot, const char* effects, const double* planned,
+                                            int32_t planned_len, const double* velocity, int32_t velocity_len,
+                                            double* reference, int32_t reference_len, int32_t* iterations);
+/* The same for a whole trajectory of m points: planned (m x n), velocities (optional, m x n), references
+   (m x n); m is planned_len / n. *max_iterations and *max_correction (optional) receive the largest
+   iteration count and the largest |planned - reference| (rad). */
+JOINTCOMP_API jc_status jc_compensate_trajectory(jc_robot* robot, const char* effects, const double* planned,
+                                                 int32_t planned_len, const double* velocities,
+                                                 int32_t velocities_len, double* references,
+                                                 int32_t references_len, int32_t* max_iterations,
+                                                 double* max_correction);
+
+/* ---- The paper's spiral (Olabi et al., IEEE ICIT 2012) --------------------------------------------------
+   The logarithmic spiral R = a exp(b theta), a = 24 mm, b = 0.15, theta 0 to 4 pi, in the plane Z = 200 mm
+   centred 1.2 m in front of the robot, the tool pointing down, at 30 mm/s with a jerk-limited feed rate
+   sampled every 4 ms (the defaults of model/compensation/spiral_experiment.hpp). */
+
+/* Number of samples m of the planned spiral. */
+JOINTCOMP_API jc_status jc_spiral_sample_count(jc_robot* robot, int32_t* count);
+/* The planned spiral: time (m, s), tool_positions (m x 3), joint positions q (m x n) and velocities qd
+   (m x n). Each output is optional. JC_ERROR_UNREACHABLE when the robot cannot reach the spiral. */
+JOINTCOMP_API jc_status jc_spiral_plan(jc_robot* robot, double* time, int32_t time_len, double* tool_positions,
+                                       int32_t tool_positions_len, double* q, int32_t q_len, double* qd,
+                                       int32_t qd_len);
+/* The paper's experiment: a simulated robot whose true joint errors differ from the nominal parameters
+   follows the spiral three times (0: without correction, 1: stiffness correction, 2: stiffness and
+   kinematic correction), measured by a simulated laser tracker. The simulated robot is the flexible-joint
+   plant when use_plant is 1 (needs drives, see jc_robot_has_drives), the quasi-static robot when 0.
+   metrics (3 x 5) receives per run Ra, Rz (of the Z deviation), RMS, max and mean of the 3-D error norm,
+   all in m; errors (optional, 3 x m x 3) the measured-minus-planned tool positions of each run. */
+JOINTCOMP_API jc_status jc_spiral_experiment(jc_robot* robot, int32_t use_plant, double* metrics, int32_t metrics_len,
+                                             double* errors, int32_t errors_len);
+
+/* ---- Plant ------------------------------------------------------------------------------------------------
+   The robot as the flexible-joint plant of model/plant/flexible_joint_plant.hpp: per joint a motor under
+   a PID position controller drives the link through the gear train and the joint spring; the links follow
+   the rigid-body dynamics. The plant's own copy of the parameters is used, so the robot handle may be
+   freed afterwards. State y = [q, qd, p, pd, integral of the position error] (5 n). */
+
+JOINTCOMP_API jc_status jc_plant_create(jc_robot* robot, jc_plant** plant);
+JOINTCOMP_API jc_status jc_plant_free(jc_plant* plant);
+JOINTCOMP_API jc_status jc_plant_dof(jc_plant* plant, int32_t* dof);
+/* Starts at rest in static equilibrium with the motors at `command` (n), at start_time (s). */
+JOINTCOMP_API jc_status jc_plant_reset(jc_plant* plant, const double* command, int32_t command_len, double start_time);
+/* The controller follows `position` (n) from now on, extrapolated with `velocity` (n). */
+JOINTCOMP_API jc_status jc_plant_set_reference(jc_plant* plant, const double* position, int32_t position_len,
+                                               const double* velocity, int32_t velocity_len);
+/* Wrench (6) applied by the environment at the tool, as for jc_robot_set_tool_wrench. */
+JOINTCOMP_API jc_status jc_plant_set_tool_wrench(jc_plant* plant, const double* wrench, int32_t wrench_len);
+/* Payload of `mass` kg (>= 0) with its centre of mass com (3, m, tool frame). */
+JOINTCOMP_API jc_status jc_plant_set_payload(jc_plant* plant, double mass, const double* com, int32_t com_len);
+/* Integrates to end_time (s), which must be after the plant's time. JC_ERROR_SOLVER when CVODE fails; the
+   plant is then left at the last good time. */
+JOINTCOMP_API jc_status jc_plant_advance(jc_plant* plant, double end_time);
+JOINTCOMP_API jc_status jc_plant_time(jc_plant* plant, double* time);
+/* Outputs, n values each: link positions q and velocities qd, motor positions p and velocities pd (joint
+   units: motor angles divided by the gear ratios), and the motor torques the controller applies now. */
+JOINTCOMP_API jc_status jc_plant_link_positions(jc_plant* plant, double* values, int32_t values_len);
+JOINTCOMP_API jc_status jc_plant_link_velocities(jc_plant* plant, double* values, int32_t values_len);
+JOINTCOMP_API jc_status jc_plant_motor_positions(jc_plant* plant, double* values, int32_t values_len);
+JOINTCOMP_API jc_status jc_plant_motor_velocities(jc_plant* plant, double* values, int32_t values_len);
+JOINTCOMP_API jc_status jc_plant_motor_torques(jc_plant* plant, double* values, int32_t values_len);
+/* The integrator's state y (5 n). Like jc_plant_save, reading it restarts the integrator's step-size
+   history at the current time: what follows equals, bit for bit, what follows a save and restore there. */
+JOINTCOMP_API jc_status jc_plant_state(jc_plant* plant, double* state, int32_t state_len);
+/* Integrator counts (5): steps, right-hand sides, Jacobians, error-test failures, convergence failures. */
+JOINTCOMP_API jc_status jc_plant_statistics(jc_plant* plant, int64_t* counts, int32_t counts_len);
+/* Saving and restoring: a snapshot is everything needed to continue exactly (restoring it and advancing
+   gives the same results, bit for bit, as advancing from the moment it was saved). It is an array of
+   *size doubles, to be restored only into a plant of the same robot. */
+JOINTCOMP_API jc_status jc_plant_snapshot_size(jc_plant* plant, int32_t* size);
+JOINTCOMP_API jc_status jc_plant_save(jc_plant* plant, double* snapshot, int32_t snapshot_len);
+JOINTCOMP_API jc_status jc_plant_restore(jc_plant* plant, const double* snapshot, int32_t snapshot_len);
+
+/* ---- Accuracy metrics (as scored in the paper) ----------------------------------------------------------- */
+
+/* Metrics of m error vectors (m x 3, m >= 1, measured minus nominal, m): metrics (5) receives Ra (mean
+   |z|), Rz (max z - min z) of the Z components, and RMS, max and mean of the norms. */
+JOINTCOMP_API jc_status jc_accuracy_metrics(const double* errors, int32_t errors_len, double* metrics,
+                                            int32_t metrics_len);
+/* Ra = mean |z_k| and Rz = max z_k - min z_k of Z deviations z (at least 1). */
+JOINTCOMP_API jc_status jc_average_absolute_deviation(const double* z, int32_t z_len, double* ra);
+JOINTCOMP_API jc_status jc_peak_to_peak_deviation(const double* z, int32_t z_len, double* rz);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* JOINTCOMP_JOINTCOMP_H */

@@ -1,0 +1,56 @@
+"""jointcomp: joint-error prediction, offline compensation and the flexible-joint plant of industrial robots.
+
+Python bindings (ctypes and numpy) of the jointcomp C API (libjointcomp.so, header jointcomp/jointcomp.h).
+Arrays go in and come out as numpy float64 arrays; units are SI (rad, m, N m, s); a failed call raises a
+:class:`JointcompError` subclass carrying the library's message.
+
+Example::
+
+    import jointcomp
+    with jointcomp.Robot("rx170.urdf", "rx170.json") as robot:
+        result = robot.spiral_experiment()
+        for name, metrics in zip(jointcomp.RUN_NAMES, result.metrics):
+            print(name, metrics.ra * 1e3, metrics.rz * 1e3)
+
+The library is found as described in :mod:`jointcomp._native` (first of all: the JOINTCOMP_LIBRARY
+environment variable).
+"""
+
+from . import _native
+from .errors import (FileError, InternalError, InvalidArgumentError, JointcompError, OutOfMemoryError, SolverError,
+                     UnreachableError, WrongHandleError)
+from .metrics import Metrics, accuracy_metrics, average_absolute_deviation, peak_to_peak_deviation
+from .plant import Plant, PlantStatistics
+from .robot import RUN_NAMES, Robot, SpiralExperiment, SpiralPlan, TrajectoryCompensation
+
+ABI_VERSION = _native.ABI_VERSION
+library_path = _native.library_path
+
+
+def version():
+    """The library's version, "major.minor.patch"."""
+    return _native.lib.jc_version().decode("ascii")
+
+
+def abi_version():
+    """The binary interface version of the library loaded (equal to ABI_VERSION)."""
+    return _native.lib.jc_abi_version()
+
+
+def status_name(status):
+    """The name of a C status code, e.g. "JC_ERROR_SOLVER"."""
+    return _native.lib.jc_status_name(status).decode("ascii")
+
+
+def last_error():
+    """The library's message for the last failed call on this thread ("" after a success)."""
+    return _native.lib.jc_last_error().decode("utf-8", "replace")
+
+
+__all__ = [
+    "ABI_VERSION", "FileError", "InternalError", "InvalidArgumentError", "JointcompError", "Metrics",
+    "OutOfMemoryError", "Plant", "PlantStatistics", "RUN_NAMES", "Robot", "SolverError", "SpiralExperiment",
+    "SpiralPlan", "TrajectoryCompensation", "UnreachableError", "WrongHandleError", "abi_version",
+    "accuracy_metrics", "average_absolute_deviation", "last_error", "library_path", "peak_to_peak_deviation",
+    "status_name", "version",
+]

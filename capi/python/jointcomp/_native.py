@@ -1,0 +1,150 @@
+"""Loading libjointcomp and declaring its C functions for ctypes.
+
+The library is looked for, in this order:
+
+1. the path in the environment variable ``JOINTCOMP_LIBRARY``;
+2. an installed tree: ``<prefix>/lib[/<multiarch>]/libjointcomp.so.<ABI>`` when this package lives in
+   ``<prefix>/share/jointcomp/python``;
+3. the system's loader (``LD_LIBRARY_PATH``, ``ldconfig``) by its soname ``libjointcomp.so.<ABI>``;
+4. the build trees of a source checkout, ``<checkout>/build/*/capi/libjointcomp.so.<ABI>``, newest first.
+"""
+
+import ctypes
+import glob
+import os
+import pathlib
+
+from . import errors
+
+# The binary interface these bindings are written for: JC_ABI_VERSION of jointcomp.h.
+ABI_VERSION = 1
+SONAME = "libjointcomp.so.%d" % ABI_VERSION
+
+_double_p = ctypes.POINTER(ctypes.c_double)
+_int32_p = ctypes.POINTER(ctypes.c_int32)
+_int64_p = ctypes.POINTER(ctypes.c_int64)
+_handle_p = ctypes.POINTER(ctypes.c_void_p)
+_i32 = ctypes.c_int32
+_f64 = ctypes.c_double
+_text = ctypes.c_char_p
+_handle = ctypes.c_void_p
+
+# Every function of jointcomp.h: name -> (result type, argument types). test_bindings.py checks this table
+# against the header.
+PROTOTYPES = {
+    "jc_version": (ctypes.c_char_p, []),
+    "jc_abi_version": (_i32, []),
+    "jc_last_error": (ctypes.c_char_p, []),
+    "jc_status_name": (ctypes.c_char_p, [_i32]),
+    "jc_robot_load": (_i32, [_text, _text, _handle_p]),
+    "jc_robot_load_json": (_i32, [_text, _text, _handle_p]),
+    "jc_robot_free": (_i32, [_handle]),
+    "jc_robot_dof": (_i32, [_handle, _int32_p]),
+    "jc_robot_name": (_i32, [_handle, ctypes.c_char_p, _i32, _int32_p]),
+    "jc_robot_joint_limits": (_i32, [_handle, _double_p, _i32, _double_p, _i32]),
+    "jc_robot_has_drives": (_i32, [_handle, _int32_p]),
+    "jc_robot_parameters_json": (_i32, [_handle, ctypes.c_char_p, _i32, _int32_p]),
+    "jc_robot_set_payload": (_i32, [_handle, _f64, _double_p, _i32]),
+    "jc_robot_set_tool_wrench": (_i32, [_handle, _double_p, _i32]),
+    "jc_forward_kinematics": (_i32, [_handle, _double_p, _i32, _double_p, _i32]),
+    "jc_inverse_kinematics": (_i32, [_handle, _double_p, _i32, _double_p, _i32, _double_p, _i32, _int32_p]),
+    "jc_inverse_kinematics_all": (_i32, [_handle, _double_p, _i32, _double_p, _i32, _double_p, _i32, _int32_p]),
+    "jc_jacobian": (_i32, [_handle, _double_p, _i32, _double_p, _i32]),
+    "jc_gravity_torques": (_i32, [_handle, _double_p, _i32, _double_p, _i32]),
+    "jc_predict_joint_errors": (_i32, [_handle, _text, _double_p, _i32, _double_p, _i32, _double_p, _i32]),
+    "jc_compensate_point": (_i32, [_handle, _text, _double_p, _i32, _double_p, _i32, _double_p, _i32, _int32_p]),
+    "jc_compensate_trajectory": (
+        _i32, [_handle, _text, _double_p, _i32, _double_p, _i32, _double_p, _i32, _int32_p, _double_p]),
+    "jc_spiral_sample_count": (_i32, [_handle, _int32_p]),
+    "jc_spiral_plan": (_i32, [_handle, _double_p, _i32, _double_p, _i32, _double_p, _i32, _double_p, _i32]),
+    "jc_spiral_experiment": (_i32, [_handle, _i32, _double_p, _i32, _double_p, _i32]),
+    "jc_plant_create": (_i32, [_handle, _handle_p]),
+    "jc_plant_free": (_i32, [_handle]),
+    "jc_plant_dof": (_i32, [_handle, _int32_p]),
+    "jc_plant_reset": (_i32, [_handle, _double_p, _i32, _f64]),
+    "jc_plant_set_reference": (_i32, [_handle, _double_p, _i32, _double_p, _i32]),
+    "jc_plant_set_tool_wrench": (_i32, [_handle, _double_p, _i32]),
+    "jc_plant_set_payload": (_i32, [_handle, _f64, _double_p, _i32]),
+    "jc_plant_advance": (_i32, [_handle, _f64]),
+    "jc_plant_time": (_i32, [_handle, _double_p]),
+    "jc_plant_link_positions": (_i32, [_handle, _double_p, _i32]),
+    "jc_plant_link_velocities": (_i32, [_handle, _double_p, _i32]),
+    "jc_plant_motor_positions": (_i32, [_handle, _double_p, _i32]),
+    "jc_plant_motor_velocities": (_i32, [_handle, _double_p, _i32]),
+    "jc_plant_motor_torques": (_i32, [_handle, _double_p, _i32]),
+    "jc_plant_state": (_i32, [_handle, _double_p, _i32]),
+    "jc_plant_statistics": (_i32, [_handle, _int64_p, _i32]),
+    "jc_plant_snapshot_size": (_i32, [_handle, _int32_p]),
+    "jc_plant_save": (_i32, [_handle, _double_p, _i32]),
+    "jc_plant_restore": (_i32, [_handle, _double_p, _i32]),
+    "jc_accuracy_metrics": (_i32, [_double_p, _i32, _double_p, _i32]),
+    "jc_average_absolute_deviation": (_i32, [_double_p, _i32, _double_p]),
+    "jc_peak_to_peak_deviation": (_i32, [_double_p, _i32, _double_p]),
+}
+
+
+def _candidates():
+    """Paths (or sonames) to try, in order, and where each comes from."""
+    explicit = os.environ.get("JOINTCOMP_LIBRARY")
+    if explicit:
+        return [(explicit, "JOINTCOMP_LIBRARY")]
+    found = []
+    here = pathlib.Path(__file__).resolve().parent
+    if len(here.parents) > 3 and here.parents[1].name == "jointcomp" and here.parents[2].name == "share":
+        prefix = here.parents[3]
+        for path in sorted(glob.glob(str(prefix / "lib" / SONAME)) + glob.glob(str(prefix / "lib" / "*" / SONAME))):
+            found.append((path, "the installed tree"))
+    found.append((SONAME, "the system's library path"))
+    checkout = here.parents[2] if len(here.parents) > 2 else here
+    builds = glob.glob(str(checkout / "build" / "*" / "capi" / SONAME))
+    for path in sorted(builds, key=os.path.getmtime, reverse=True):
+        found.append((path, "a build tree"))
+    return found
+
+
+def _load():
+    tried = []
+    for path, origin in _candidates():
+        try:
+            library = ctypes.CDLL(path)
+        except OSError as error:
+            tried.append("%s (%s): %s" % (path, origin, error))
+            if origin == "JOINTCOMP_LIBRARY":
+                break
+            continue
+        for name, (result, arguments) in PROTOTYPES.items():
+            function = getattr(library, name)
+            function.restype = result
+            function.argtypes = arguments
+        if library.jc_abi_version() != ABI_VERSION:
+            raise ImportError("%s has ABI version %d, these bindings need %d"
+                              % (path, library.jc_abi_version(), ABI_VERSION))
+        return library, path
+    raise ImportError("libjointcomp not found; set JOINTCOMP_LIBRARY to its path. Tried:\n  " + "\n  ".join(tried))
+
+
+lib, library_path = _load()
+
+
+def check(status):
+    """Raises the exception of a failed call's status, with the library's message."""
+    if status != 0:
+        raise errors.error_for(status, lib.jc_last_error().decode("utf-8", "replace"))
+
+
+def text(value, name):
+    """A str or path as the C string the library expects."""
+    if value is None:
+        return None
+    if isinstance(value, bytes):
+        return value
+    if isinstance(value, (str, os.PathLike)):
+        return os.fsencode(value)
+    raise TypeError("%s must be a str or a path, not %s" % (name, type(value).__name__))
+
+
+def pointer(array):
+    """The data pointer of a contiguous float64 numpy array (None for None)."""
+    if array is None:
+        return None
+    return array.ctypes.data_as(_double_p)

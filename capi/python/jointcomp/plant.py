@@ -1,0 +1,150 @@
+"""The flexible-joint plant: a simulated robot integrated by CVODE."""
+
+import collections
+import ctypes
+
+import numpy as np
+
+from . import _native
+from .errors import InvalidArgumentError
+
+PlantStatistics = collections.namedtuple(
+    "PlantStatistics", "steps rhs_evaluations jacobian_evaluations error_test_failures convergence_failures")
+PlantStatistics.__doc__ = """CVODE's counts since the plant was created."""
+
+
+def _array(values):
+    return np.ascontiguousarray(values, dtype=np.float64).reshape(-1)
+
+
+class Plant:
+    """The robot as a flexible-joint plant: per joint a motor under a PID position controller drives the
+    link through the gear train and the joint spring; the links follow the rigid-body dynamics.
+
+    ``Plant(robot)`` needs parameters that describe the drives (``robot.has_drives``); the plant keeps its
+    own copy of them. Start it with :meth:`reset`, feed references with :meth:`set_reference`, integrate
+    with :meth:`advance`, read the outputs. SI units throughout.
+    """
+
+    def __init__(self, robot):
+        self._handle = None
+        handle = ctypes.c_void_p()
+        _native.check(_native.lib.jc_plant_create(robot.handle, ctypes.byref(handle)))
+        self._handle = handle
+        dof = ctypes.c_int32()
+        _native.check(_native.lib.jc_plant_dof(self._handle, ctypes.byref(dof)))
+        self._dof = dof.value
+
+    def close(self):
+        """Releases the library's handle; the Plant cannot be used afterwards."""
+        if self._handle is not None:
+            handle, self._handle = self._handle, None
+            _native.check(_native.lib.jc_plant_free(handle))
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exception):
+        self.close()
+
+    def __del__(self):
+        if getattr(self, "_handle", None) is not None and _native is not None and _native.lib is not None:
+            _native.lib.jc_plant_free(self._handle)
+            self._handle = None
+
+    @property
+    def handle(self):
+        """The C handle (a jc_plant*)."""
+        if self._handle is None:
+            raise InvalidArgumentError("this Plant was closed")
+        return self._handle
+
+    @property
+    def dof(self):
+        return self._dof
+
+    @property
+    def time(self):
+        """The plant's time, s."""
+        time = ctypes.c_double()
+        _native.check(_native.lib.jc_plant_time(self.handle, ctypes.byref(time)))
+        return time.value
+
+    def reset(self, command, start_time=0.0):
+        """Starts at rest in static equilibrium with the motors at ``command`` (n), at ``start_time``."""
+        command = _array(command)
+        _native.check(_native.lib.jc_plant_reset(self.handle, _native.pointer(command), command.size,
+                                                 float(start_time)))
+
+    def set_reference(self, position, velocity):
+        """The controller follows ``position`` (n) from now on, extrapolated with ``velocity`` (n)."""
+        position, velocity = _array(position), _array(velocity)
+        _native.check(_native.lib.jc_plant_set_reference(self.handle, _native.pointer(position), position.size,
+                                                         _native.pointer(velocity), velocity.size))
+
+    def set_tool_wrench(self, wrench):
+        """Wrench (6: force in N, moment in N m about the tool point, base frame) applied at the tool."""
+        wrench = _array(wrench)
+        _native.check(_native.lib.jc_plant_set_tool_wrench(self.handle, _native.pointer(wrench), wrench.size))
+
+    def set_payload(self, mass, com):
+        """Payload of ``mass`` kg with its centre of mass ``com`` (3, m, tool frame)."""
+        com = _array(com)
+        _native.check(_native.lib.jc_plant_set_payload(self.handle, float(mass), _native.pointer(com), com.size))
+
+    def advance(self, end_time):
+        """Integrates to ``end_time`` (s, after the current time). Raises SolverError when CVODE fails."""
+        _native.check(_native.lib.jc_plant_advance(self.handle, float(end_time)))
+
+    def _read(self, function, size):
+        values = np.empty(size)
+        _native.check(function(self.handle, _native.pointer(values), values.size))
+        return values
+
+    def link_positions(self):
+        """Link positions q (n, rad)."""
+        return self._read(_native.lib.jc_plant_link_positions, self._dof)
+
+    def link_velocities(self):
+        """Link velocities qd (n, rad/s)."""
+        return self._read(_native.lib.jc_plant_link_velocities, self._dof)
+
+    def motor_positions(self):
+        """Motor positions p in joint units (n, rad)."""
+        return self._read(_native.lib.jc_plant_motor_positions, self._dof)
+
+    def motor_velocities(self):
+        """Motor velocities pd in joint units (n, rad/s)."""
+        return self._read(_native.lib.jc_plant_motor_velocities, self._dof)
+
+    def motor_torques(self):
+        """Motor torques the controller applies now (n, N m, joint units)."""
+        return self._read(_native.lib.jc_plant_motor_torques, self._dof)
+
+    def state(self):
+        """The integrator's state y = [q, qd, p, pd, integral of the position error] (5 n). Like save(),
+        reading it restarts the integrator's step-size history."""
+        return self._read(_native.lib.jc_plant_state, 5 * self._dof)
+
+    def statistics(self):
+        """CVODE's counts, as PlantStatistics."""
+        counts = np.empty(5, dtype=np.int64)
+        _native.check(_native.lib.jc_plant_statistics(self.handle, counts.ctypes.data_as(ctypes.POINTER(ctypes.c_int64)),
+                                                      counts.size))
+        return PlantStatistics(*(int(c) for c in counts))
+
+    @property
+    def snapshot_size(self):
+        """Number of doubles in a snapshot."""
+        size = ctypes.c_int32()
+        _native.check(_native.lib.jc_plant_snapshot_size(self.handle, ctypes.byref(size)))
+        return size.value
+
+    def save(self):
+        """A snapshot of everything needed to continue exactly from now (a float64 array)."""
+        return self._read(_native.lib.jc_plant_save, self.snapshot_size)
+
+    def restore(self, snapshot):
+        """Continues from a snapshot taken by save() of a plant of the same robot."""
+        snapshot = _array(snapshot)
+        _native.check(_native.lib.jc_plant_restore(self.handle, _native.pointer(snapshot), snapshot.size))

@@ -1,0 +1,293 @@
+"""The robot: kinematics, gravity, joint errors, compensation and the paper's spiral experiment."""
+
+import collections
+import ctypes
+
+import numpy as np
+
+from . import _native
+from .errors import InvalidArgumentError
+from .metrics import Metrics
+
+RUN_NAMES = ("without correction", "stiffness correction", "stiffness and kinematic correction")
+
+SpiralPlan = collections.namedtuple("SpiralPlan", "time tool_positions q qd")
+SpiralPlan.__doc__ = """The planned spiral: time (m,) in s, tool_positions (m, 3) in m, q and qd (m, n) in rad, rad/s."""
+
+SpiralExperiment = collections.namedtuple("SpiralExperiment", "metrics errors use_plant")
+SpiralExperiment.__doc__ = """The paper's three runs: metrics, one Metrics per run (see RUN_NAMES); errors,
+measured minus planned tool positions (3, m, 3) in m, or None when not asked for; use_plant, whether the
+simulated robot was the flexible-joint plant."""
+
+TrajectoryCompensation = collections.namedtuple("TrajectoryCompensation", "references max_iterations max_correction")
+TrajectoryCompensation.__doc__ = """Compensated joint references (m, n) in rad, the largest fixed-point
+iteration count, and the largest |planned - reference| in rad."""
+
+
+def _array(values):
+    """Values as a contiguous float64 array, flattened row by row (the C API's row-major order)."""
+    return np.ascontiguousarray(values, dtype=np.float64).reshape(-1)
+
+
+def _optional_array(values):
+    return None if values is None else _array(values)
+
+
+def _length(array):
+    return 0 if array is None else array.size
+
+
+def _effects(effects):
+    """None (every effect), a comma-separated str, or a sequence of effect type names."""
+    if effects is None:
+        return None
+    if isinstance(effects, str):
+        return effects.encode("utf-8")
+    return ",".join(effects).encode("utf-8")
+
+
+class Robot:
+    """A robot loaded from a URDF file with its joint-error parameters.
+
+    ``Robot(urdf_path, parameters_path)`` reads the parameters from a file (see model/io/parameter_file.hpp),
+    ``Robot(urdf_path, parameters_json=text)`` from JSON text, and ``Robot(urdf_path)`` loads the robot
+    without joint errors (kinematics and dynamics only). Units are SI: rad, m, N m, s. Every method raises
+    a :class:`jointcomp.JointcompError` subclass when the library reports an error.
+
+    The handle is released by :meth:`close` (or a ``with`` block, or garbage collection). A Robot may be
+    used from several threads; its calls are serialised.
+    """
+
+    def __init__(self, urdf_path, parameters_path=None, *, parameters_json=None):
+        self._handle = None
+        handle = ctypes.c_void_p()
+        if parameters_json is not None:
+            if parameters_path is not None:
+                raise ValueError("give parameters_path or parameters_json, not both")
+            _native.check(_native.lib.jc_robot_load_json(
+                _native.text(urdf_path, "urdf_path"), _native.text(parameters_json, "parameters_json"),
+                ctypes.byref(handle)))
+        else:
+            _native.check(_native.lib.jc_robot_load(
+                _native.text(urdf_path, "urdf_path"), _native.text(parameters_path, "parameters_path"),
+                ctypes.byref(handle)))
+        self._handle = handle
+        self._dof = self._int32(_native.lib.jc_robot_dof)
+
+    @classmethod
+    def from_json(cls, urdf_path, parameters_json):
+        """The robot with its parameters given as JSON text."""
+        return cls(urdf_path, parameters_json=parameters_json)
+
+    def close(self):
+        """Releases the library's handle; the Robot cannot be used afterwards."""
+        if self._handle is not None:
+            handle, self._handle = self._handle, None
+            _native.check(_native.lib.jc_robot_free(handle))
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exception):
+        self.close()
+
+    def __del__(self):
+        if getattr(self, "_handle", None) is not None and _native is not None and _native.lib is not None:
+            _native.lib.jc_robot_free(self._handle)
+            self._handle = None
+
+    def __repr__(self):
+        if self._handle is None:
+            return "<jointcomp.Robot (closed)>"
+        return "<jointcomp.Robot %r, %d joints>" % (self.name, self.dof)
+
+    @property
+    def handle(self):
+        """The C handle (a jc_robot*), for calls not wrapped here."""
+        if self._handle is None:
+            raise InvalidArgumentError("this Robot was closed")
+        return self._handle
+
+    def _int32(self, function):
+        value = ctypes.c_int32()
+        _native.check(function(self.handle, ctypes.byref(value)))
+        return value.value
+
+    def _text(self, function):
+        length = ctypes.c_int32()
+        _native.check(function(self.handle, None, 0, ctypes.byref(length)))
+        buffer = ctypes.create_string_buffer(length.value + 1)
+        _native.check(function(self.handle, buffer, len(buffer), ctypes.byref(length)))
+        return buffer.value.decode("utf-8")
+
+    def _joints_out(self, function, q):
+        q = _array(q)
+        out = np.empty(self._dof)
+        _native.check(function(self.handle, _native.pointer(q), q.size, _native.pointer(out), out.size))
+        return out
+
+    # ---- queries ----
+
+    @property
+    def dof(self):
+        """Number of joints n."""
+        return self._dof
+
+    @property
+    def name(self):
+        """The URDF's robot name."""
+        return self._text(_native.lib.jc_robot_name)
+
+    def joint_limits(self):
+        """(lower, upper) joint limits in rad, -inf and +inf for continuous joints."""
+        lower, upper = np.empty(self._dof), np.empty(self._dof)
+        _native.check(_native.lib.jc_robot_joint_limits(self.handle, _native.pointer(lower), lower.size,
+                                                        _native.pointer(upper), upper.size))
+        return lower, upper
+
+    @property
+    def has_drives(self):
+        """True when the parameters describe the drives (a "plant" object), as plants need."""
+        return self._int32(_native.lib.jc_robot_has_drives) == 1
+
+    def parameters_json(self):
+        """The joint-error parameters (and drives) as parameter-file JSON text."""
+        return self._text(_native.lib.jc_robot_parameters_json)
+
+    # ---- conditions ----
+
+    def set_payload(self, mass, com):
+        """A payload of ``mass`` kg with its centre of mass ``com`` (3, m, tool frame), used by
+        predict_joint_errors and the compensation."""
+        com = _array(com)
+        _native.check(_native.lib.jc_robot_set_payload(self.handle, float(mass), _native.pointer(com), com.size))
+
+    def set_tool_wrench(self, wrench):
+        """The wrench (6: force in N, then moment in N m about the tool point, base frame) that the
+        environment applies at the tool, used by predict_joint_errors and the compensation."""
+        wrench = _array(wrench)
+        _native.check(_native.lib.jc_robot_set_tool_wrench(self.handle, _native.pointer(wrench), wrench.size))
+
+    # ---- kinematics and dynamics ----
+
+    def forward_kinematics(self, q):
+        """Tool pose (4 x 4 homogeneous transform, base frame) at joint positions q (n)."""
+        q = _array(q)
+        pose = np.empty((4, 4))
+        _native.check(_native.lib.jc_forward_kinematics(self.handle, _native.pointer(q), q.size,
+                                                        _native.pointer(pose), pose.size))
+        return pose
+
+    def inverse_kinematics(self, pose, seed):
+        """(q, singular): the joint positions reaching ``pose`` (4 x 4) closest to ``seed`` (n), and whether
+        they sit at a singularity. Raises UnreachableError when no solution lies within the limits."""
+        pose, seed = _array(pose), _array(seed)
+        q = np.empty(self._dof)
+        singular = ctypes.c_int32()
+        _native.check(_native.lib.jc_inverse_kinematics(self.handle, _native.pointer(pose), pose.size,
+                                                        _native.pointer(seed), seed.size, _native.pointer(q), q.size,
+                                                        ctypes.byref(singular)))
+        return q, singular.value == 1
+
+    def inverse_kinematics_all(self, pose, seed):
+        """Every closed-form solution within the limits, (k, n) with k <= 8, each close to ``seed``."""
+        pose, seed = _array(pose), _array(seed)
+        solutions = np.empty((8, self._dof))
+        count = ctypes.c_int32()
+        _native.check(_native.lib.jc_inverse_kinematics_all(self.handle, _native.pointer(pose), pose.size,
+                                                            _native.pointer(seed), seed.size,
+                                                            _native.pointer(solutions), solutions.size,
+                                                            ctypes.byref(count)))
+        return solutions[:count.value].copy()
+
+    def jacobian(self, q):
+        """Geometric Jacobian of the tool (6 x n): linear velocity rows first, then angular, base frame."""
+        q = _array(q)
+        jacobian = np.empty((6, self._dof))
+        _native.check(_native.lib.jc_jacobian(self.handle, _native.pointer(q), q.size, _native.pointer(jacobian),
+                                              jacobian.size))
+        return jacobian
+
+    def gravity_torques(self, q):
+        """Joint torques (n, N m) holding the robot still against gravity at q."""
+        return self._joints_out(_native.lib.jc_gravity_torques, q)
+
+    # ---- joint errors and compensation ----
+
+    def predict_joint_errors(self, command, velocity=None, effects=None):
+        """Joint errors (n, rad, link minus command) of the quasi-static robot commanded to ``command``.
+
+        ``effects``: None for every effect of the parameters, or the error effect types taking part
+        ("compliance", "transmission_error", as a comma-separated str or a sequence); load effects always do.
+        """
+        command, velocity = _array(command), _optional_array(velocity)
+        errors = np.empty(self._dof)
+        _native.check(_native.lib.jc_predict_joint_errors(
+            self.handle, _effects(effects), _native.pointer(command), command.size, _native.pointer(velocity),
+            _length(velocity), _native.pointer(errors), errors.size))
+        return errors
+
+    def compensate(self, planned, velocity=None, effects=None):
+        """(reference, iterations): the joint reference that brings the links to ``planned`` (n), and the
+        fixed-point iterations it took. ``effects`` as for predict_joint_errors."""
+        planned, velocity = _array(planned), _optional_array(velocity)
+        reference = np.empty(self._dof)
+        iterations = ctypes.c_int32()
+        _native.check(_native.lib.jc_compensate_point(
+            self.handle, _effects(effects), _native.pointer(planned), planned.size, _native.pointer(velocity),
+            _length(velocity), _native.pointer(reference), reference.size, ctypes.byref(iterations)))
+        return reference, iterations.value
+
+    def compensate_trajectory(self, planned, velocities=None, effects=None):
+        """Compensates a whole trajectory, ``planned`` (m, n) with optional ``velocities`` (m, n), in one
+        call. Returns a TrajectoryCompensation."""
+        planned = np.ascontiguousarray(planned, dtype=np.float64)
+        shape = planned.shape
+        planned, velocities = planned.reshape(-1), _optional_array(velocities)
+        references = np.empty(planned.size)
+        max_iterations = ctypes.c_int32()
+        max_correction = ctypes.c_double()
+        _native.check(_native.lib.jc_compensate_trajectory(
+            self.handle, _effects(effects), _native.pointer(planned), planned.size, _native.pointer(velocities),
+            _length(velocities), _native.pointer(references), references.size, ctypes.byref(max_iterations),
+            ctypes.byref(max_correction)))
+        if len(shape) != 2:
+            shape = (-1, self._dof)
+        return TrajectoryCompensation(references.reshape(shape), max_iterations.value, max_correction.value)
+
+    # ---- the paper's spiral ----
+
+    def spiral_sample_count(self):
+        """Number of samples m of the paper's planned spiral."""
+        return self._int32(_native.lib.jc_spiral_sample_count)
+
+    def spiral_plan(self):
+        """The paper's spiral planned for this robot, as a SpiralPlan."""
+        m = self.spiral_sample_count()
+        time, positions = np.empty(m), np.empty((m, 3))
+        q, qd = np.empty((m, self._dof)), np.empty((m, self._dof))
+        _native.check(_native.lib.jc_spiral_plan(self.handle, _native.pointer(time), time.size,
+                                                 _native.pointer(positions), positions.size, _native.pointer(q),
+                                                 q.size, _native.pointer(qd), qd.size))
+        return SpiralPlan(time, positions, q, qd)
+
+    def spiral_experiment(self, use_plant=None, errors=False):
+        """The paper's experiment (three runs, see RUN_NAMES) as a SpiralExperiment.
+
+        ``use_plant``: simulate the robot as the flexible-joint plant (True) or quasi-statically (False);
+        None picks the plant when the parameters describe the drives. ``errors``: also return the
+        measured-minus-planned tool positions of every run.
+        """
+        if use_plant is None:
+            use_plant = self.has_drives
+        metrics = np.empty((3, 5))
+        error_array = np.empty((3, self.spiral_sample_count(), 3)) if errors else None
+        _native.check(_native.lib.jc_spiral_experiment(self.handle, 1 if use_plant else 0, _native.pointer(metrics),
+                                                       metrics.size, _native.pointer(error_array),
+                                                       _length(error_array)))
+        return SpiralExperiment([Metrics(*row) for row in metrics.tolist()], error_array, bool(use_plant))
+
+    def plant(self):
+        """A new flexible-joint plant of this robot (see jointcomp.Plant)."""
+        from .plant import Plant
+        return Plant(self)

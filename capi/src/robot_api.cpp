@@ -1,0 +1,207 @@
+// Robot handles: loading, queries, conditions, kinematics and gravity.
+#include <nlohmann/json.hpp>
+
+#include "api_support.hpp"
+#include "model/io/atomic_file.hpp"
+#include "model/io/parameter_file.hpp"
+#include "model/robot/dynamics.hpp"
+#include "model/robot/kinematics.hpp"
+#include "model/robot/load_urdf.hpp"
+
+using namespace jointcomp;
+using namespace jointcomp::capi;
+
+namespace {
+
+jc_robot* robotFromParameters(const std::shared_ptr<const Robot>& robot, const std::string& json_text,
+                              const std::string& source_name) {
+  JointErrorModel model = parseParameters(json_text, source_name, robot);
+  // The "plant" object is optional in a parameter file; present, it must be valid.
+  std::vector<DriveParameters> drives;
+  const nlohmann::json document = nlohmann::json::parse(json_text, nullptr, false);
+  if (document.is_object() && document.contains("plant")) drives = parseDriveParameters(json_text, source_name, *robot);
+  return new jc_robot(robot, std::move(model), std::move(drives));
+}
+
+std::shared_ptr<const Robot> loadUrdf(const char* urdf_path) {
+  return std::make_shared<const Robot>(loadRobotFromUrdfFile(requireText(urdf_path, "urdf_path")));
+}
+
+}  // namespace
+
+extern "C" {
+
+jc_status jc_robot_load(const char* urdf_path, const char* parameter_path, jc_robot** robot) {
+  return CAPI_ENTRY({
+    requirePointer(robot, "robot");
+    const std::shared_ptr<const Robot> loaded = loadUrdf(urdf_path);
+    if (!parameter_path) {
+      *robot = new jc_robot(loaded, JointErrorModel(loaded, GearTrain::direct(loaded->dof()), {}), {});
+      return;
+    }
+    std::string text;
+    try {
+      text = readTextFile(parameter_path, "parameter file");
+    } catch (const ParameterError&) {
+      throw;
+    } catch (const Error& error) {
+      throw ParameterError(error.what());  // as loadParameterFile reports it
+    }
+    *robot = robotFromParameters(loaded, text, parameter_path);
+  });
+}
+
+jc_status jc_robot_load_json(const char* urdf_path, const char* parameters_json, jc_robot** robot) {
+  return CAPI_ENTRY({
+    requirePointer(robot, "robot");
+    requireText(parameters_json, "parameters_json");
+    const std::shared_ptr<const Robot> loaded = loadUrdf(urdf_path);
+    *robot = robotFromParameters(loaded, parameters_json, "parameters_json");
+  });
+}
+
+jc_status jc_robot_free(jc_robot* robot) {
+  return CAPI_ENTRY({
+    if (!robot) return;
+    jc_robot& handle = robotHandle(robot);
+    // Volatile, so that the compiler keeps a store into an object about to be destroyed.
+    *static_cast<volatile std::uint64_t*>(&handle.magic) = kFreedMagic;
+    delete &handle;
+  });
+}
+
+jc_status jc_robot_dof(jc_robot* robot, int32_t* dof) {
+  return CAPI_ENTRY({
+    const jc_robot& handle = robotHandle(robot);
+    requirePointer(dof, "dof");
+    *dof = handle.robot->dof();
+  });
+}
+
+jc_status jc_robot_name(jc_robot* robot, char* buffer, int32_t capacity, int32_t* length) {
+  return CAPI_ENTRY({ copyText(robotHandle(robot).robot->name, buffer, capacity, length); });
+}
+
+jc_status jc_robot_joint_limits(jc_robot* robot, double* lower, int32_t lower_len, double* upper, int32_t upper_len) {
+  return CAPI_ENTRY({
+    const jc_robot& handle = robotHandle(robot);
+    const int n = handle.robot->dof();
+    requireOutput(lower, lower_len, n, "lower", "the robot's number of joints");
+    requireOutput(upper, upper_len, n, "upper", "the robot's number of joints");
+    copyJoints(handle.robot->lowerLimits(), lower);
+    copyJoints(handle.robot->upperLimits(), upper);
+  });
+}
+
+jc_status jc_robot_has_drives(jc_robot* robot, int32_t* has_drives) {
+  return CAPI_ENTRY({
+    const jc_robot& handle = robotHandle(robot);
+    requirePointer(has_drives, "has_drives");
+    *has_drives = handle.drives.empty() ? 0 : 1;
+  });
+}
+
+jc_status jc_robot_parameters_json(jc_robot* robot, char* buffer, int32_t capacity, int32_t* length) {
+  return CAPI_ENTRY({
+    const jc_robot& handle = robotHandle(robot);
+    copyText(parametersToJson(handle.model, handle.drives), buffer, capacity, length);
+  });
+}
+
+jc_status jc_robot_set_payload(jc_robot* robot, double mass, const double* com, int32_t com_len) {
+  return CAPI_ENTRY({
+    jc_robot& handle = robotHandle(robot);
+    if (!(finiteScalar(mass, "mass") >= 0.0)) invalid("mass is negative");
+    const Eigen::Vector3d centre = vector3Input(com, com_len, "com");
+    const std::lock_guard<std::mutex> lock(handle.mutex);
+    handle.payload_mass = mass;
+    handle.payload_com = centre;
+  });
+}
+
+jc_status jc_robot_set_tool_wrench(jc_robot* robot, const double* wrench, int32_t wrench_len) {
+  return CAPI_ENTRY({
+    jc_robot& handle = robotHandle(robot);
+    const Vector6 value = vector6Input(wrench, wrench_len, "wrench");
+    const std::lock_guard<std::mutex> lock(handle.mutex);
+    handle.tool_wrench = value;
+  });
+}
+
+jc_status jc_forward_kinematics(jc_robot* robot, const double* q, int32_t q_len, double* pose, int32_t pose_len) {
+  return CAPI_ENTRY({
+    jc_robot& handle = robotHandle(robot);
+    const JointVector joints = jointInput(q, q_len, handle.robot->dof(), "q");
+    requireOutput(pose, pose_len, 16, "pose", "a 4 x 4 transform, row-major");
+    const std::lock_guard<std::mutex> lock(handle.mutex);
+    forwardKinematics(*handle.robot, handle.workspace.robot, joints);
+    copyPose(handle.workspace.robot.tool_pose, pose);
+  });
+}
+
+jc_status jc_inverse_kinematics(jc_robot* robot, const double* pose, int32_t pose_len, const double* seed,
+                                int32_t seed_len, double* q, int32_t q_len, int32_t* singular) {
+  return CAPI_ENTRY({
+    jc_robot& handle = robotHandle(robot);
+    const int n = handle.robot->dof();
+    const Eigen::Isometry3d target = poseInput(pose, pose_len, "pose");
+    const JointVector start = jointInput(seed, seed_len, n, "seed");
+    requireOutput(q, q_len, n, "q", "the robot's number of joints");
+    const std::lock_guard<std::mutex> lock(handle.mutex);
+    const IkSolution solution = handle.inverse_kinematics.solve(target, start);
+    copyJoints(solution.q, q);
+    if (singular) *singular = solution.singular ? 1 : 0;
+  });
+}
+
+jc_status jc_inverse_kinematics_all(jc_robot* robot, const double* pose, int32_t pose_len, const double* seed,
+                                    int32_t seed_len, double* solutions, int32_t solutions_len, int32_t* count) {
+  return CAPI_ENTRY({
+    jc_robot& handle = robotHandle(robot);
+    const int n = handle.robot->dof();
+    const Eigen::Isometry3d target = poseInput(pose, pose_len, "pose");
+    const JointVector start = jointInput(seed, seed_len, n, "seed");
+    requirePointer(solutions, "solutions");
+    if (solutions_len < 8 * n) {
+      invalid("solutions_len is " + std::to_string(solutions_len) + ", must be at least " + std::to_string(8 * n) +
+              " (8 solutions of the robot's number of joints)");
+    }
+    requirePointer(count, "count");
+    const std::lock_guard<std::mutex> lock(handle.mutex);
+    std::array<IkSolution, 8> found;
+    const int how_many = handle.inverse_kinematics.allSolutions(target, start, found);
+    for (int k = 0; k < how_many; ++k) copyJoints(found[k].q, solutions + k * n);
+    *count = how_many;
+  });
+}
+
+jc_status jc_jacobian(jc_robot* robot, const double* q, int32_t q_len, double* jacobian, int32_t jacobian_len) {
+  return CAPI_ENTRY({
+    jc_robot& handle = robotHandle(robot);
+    const int n = handle.robot->dof();
+    const JointVector joints = jointInput(q, q_len, n, "q");
+    requireOutput(jacobian, jacobian_len, 6 * n, "jacobian", "6 x the robot's number of joints");
+    const std::lock_guard<std::mutex> lock(handle.mutex);
+    forwardKinematics(*handle.robot, handle.workspace.robot, joints);
+    Jacobian& result = handle.workspace.jacobian;
+    toolJacobian(*handle.robot, handle.workspace.robot, result);
+    for (int r = 0; r < 6; ++r) {
+      for (int c = 0; c < n; ++c) jacobian[r * n + c] = result(r, c);
+    }
+  });
+}
+
+jc_status jc_gravity_torques(jc_robot* robot, const double* q, int32_t q_len, double* torques, int32_t torques_len) {
+  return CAPI_ENTRY({
+    jc_robot& handle = robotHandle(robot);
+    const int n = handle.robot->dof();
+    const JointVector joints = jointInput(q, q_len, n, "q");
+    requireOutput(torques, torques_len, n, "torques", "the robot's number of joints");
+    const std::lock_guard<std::mutex> lock(handle.mutex);
+    JointVector tau;
+    gravityTorques(*handle.robot, handle.workspace.robot, joints, tau);
+    copyJoints(tau, torques);
+  });
+}
+
+}  // extern "C"

@@ -1,0 +1,189 @@
+/* Two handles in two threads give the same results, bit for bit, as one after the other; and one handle
+ * shared by two threads stays consistent (its lock serialises the calls). Built with
+ * -DJOINTCOMP_SANITIZE=thread, ThreadSanitizer checks that nothing is shared without synchronisation. */
+#define _POSIX_C_SOURCE 200809L
+
+#include <jointcomp/jointcomp.h>
+
+#include <pthread.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define POSTURES 4
+#define PLANT_PERIODS 50
+#define DEG (3.14159265358979323846 / 180.0)
+
+typedef struct {
+  double pose[POSTURES][16];
+  double jacobian[POSTURES][36];
+  double gravity[POSTURES][6];
+  double ik[POSTURES][6];
+  double errors[POSTURES][6];
+  double reference[POSTURES][6];
+  double metrics[15];
+  double plant_q[6];
+  double plant_state[30];
+  double* trajectory_references; /* 6 m */
+  int failed;                    /* a call returned an error */
+} Results;
+
+typedef struct {
+  jc_robot* robot;
+  int with_experiment; /* the spiral experiment and a plant of its own */
+  Results results;
+} Work;
+
+static int32_t sample_count = 0;
+static double* spiral_q = NULL;
+static double* spiral_qd = NULL;
+
+static void posture(int k, double q[6]) {
+  const double degrees[6] = {-20.0 + 10 * k, 40.0 + 7 * k, 50.0 + 9 * k, 15.0 - 8 * k, 30.0 + 5 * k, -40.0 + 20 * k};
+  int j;
+  for (j = 0; j < 6; ++j) q[j] = degrees[j] * DEG;
+}
+
+#define CALL(results, call)                                                       \
+  do {                                                                            \
+    if ((call) != JC_OK) {                                                        \
+      fprintf(stderr, "%s failed: %s\n", #call, jc_last_error());                 \
+      (results)->failed = 1;                                                      \
+    }                                                                             \
+  } while (0)
+
+static void* work(void* argument) {
+  Work* work_item = (Work*)argument;
+  Results* out = &work_item->results;
+  jc_robot* robot = work_item->robot;
+  int k;
+  for (k = 0; k < POSTURES; ++k) {
+    double q[6], seed[6];
+    int j;
+    posture(k, q);
+    for (j = 0; j < 6; ++j) seed[j] = q[j] + 0.05;
+    CALL(out, jc_forward_kinematics(robot, q, 6, out->pose[k], 16));
+    CALL(out, jc_jacobian(robot, q, 6, out->jacobian[k], 36));
+    CALL(out, jc_gravity_torques(robot, q, 6, out->gravity[k], 6));
+    CALL(out, jc_inverse_kinematics(robot, out->pose[k], 16, seed, 6, out->ik[k], 6, NULL));
+    CALL(out, jc_predict_joint_errors(robot, NULL, q, 6, NULL, 0, out->errors[k], 6));
+    CALL(out, jc_compensate_point(robot, NULL, q, 6, NULL, 0, out->reference[k], 6, NULL));
+  }
+  out->trajectory_references = (double*)malloc(sizeof(double) * 6 * (size_t)sample_count);
+  CALL(out, jc_compensate_trajectory(robot, NULL, spiral_q, 6 * sample_count, spiral_qd, 6 * sample_count,
+                                     out->trajectory_references, 6 * sample_count, NULL, NULL));
+  if (work_item->with_experiment) {
+    jc_plant* plant = NULL;
+    double start[6], velocity[6] = {0.05, -0.03, 0.04, 0.1, -0.1, 0.2};
+    CALL(out, jc_spiral_experiment(robot, 0, out->metrics, 15, NULL, 0));
+    CALL(out, jc_plant_create(robot, &plant));
+    posture(1, start);
+    CALL(out, jc_plant_reset(plant, start, 6, 0.0));
+    for (k = 1; k <= PLANT_PERIODS && !out->failed; ++k) {
+      double reference[6];
+      int j;
+      for (j = 0; j < 6; ++j) reference[j] = start[j] + velocity[j] * 0.004 * k;
+      CALL(out, jc_plant_set_reference(plant, reference, 6, velocity, 6));
+      CALL(out, jc_plant_advance(plant, 0.004 * k));
+    }
+    CALL(out, jc_plant_link_positions(plant, out->plant_q, 6));
+    CALL(out, jc_plant_state(plant, out->plant_state, 30));
+    CALL(out, jc_plant_free(plant));
+  }
+  return NULL;
+}
+
+static int same_results(const Results* a, const Results* b, int with_experiment) {
+  /* Field by field: the struct holds a pointer, and its padding is not part of the results. */
+  if (a->failed || b->failed) return 0;
+  if (memcmp(a->pose, b->pose, sizeof a->pose) || memcmp(a->jacobian, b->jacobian, sizeof a->jacobian) ||
+      memcmp(a->gravity, b->gravity, sizeof a->gravity) || memcmp(a->ik, b->ik, sizeof a->ik) ||
+      memcmp(a->errors, b->errors, sizeof a->errors) || memcmp(a->reference, b->reference, sizeof a->reference)) {
+    return 0;
+  }
+  if (memcmp(a->trajectory_references, b->trajectory_references, sizeof(double) * 6 * (size_t)sample_count)) return 0;
+  if (with_experiment && (memcmp(a->metrics, b->metrics, sizeof a->metrics) ||
+                          memcmp(a->plant_q, b->plant_q, sizeof a->plant_q) ||
+                          memcmp(a->plant_state, b->plant_state, sizeof a->plant_state))) {
+    return 0;
+  }
+  return 1;
+}
+
+static jc_robot* load(void) {
+  jc_robot* robot = NULL;
+  if (jc_robot_load(JOINTCOMP_TEST_URDF, JOINTCOMP_TEST_PARAMETERS, &robot) != JC_OK) {
+    fprintf(stderr, "cannot load the robot: %s\n", jc_last_error());
+    exit(1);
+  }
+  return robot;
+}
+
+int main(void) {
+  Work sequential[2], parallel[2], shared[2];
+  pthread_t threads[2];
+  jc_robot* plan_robot = load();
+  jc_robot* shared_robot;
+  int i, failures = 0;
+
+  if (jc_spiral_sample_count(plan_robot, &sample_count) != JC_OK) return 1;
+  spiral_q = (double*)malloc(sizeof(double) * 6 * (size_t)sample_count);
+  spiral_qd = (double*)malloc(sizeof(double) * 6 * (size_t)sample_count);
+  if (jc_spiral_plan(plan_robot, NULL, 0, NULL, 0, spiral_q, 6 * sample_count, spiral_qd, 6 * sample_count) != JC_OK) {
+    return 1;
+  }
+  jc_robot_free(plan_robot);
+
+  /* One after the other, each with a handle of its own. */
+  for (i = 0; i < 2; ++i) {
+    memset(&sequential[i], 0, sizeof sequential[i]);
+    sequential[i].robot = load();
+    sequential[i].with_experiment = 1;
+    work(&sequential[i]);
+  }
+  /* Two handles in two threads at once. */
+  for (i = 0; i < 2; ++i) {
+    memset(&parallel[i], 0, sizeof parallel[i]);
+    parallel[i].robot = load();
+    parallel[i].with_experiment = 1;
+    if (pthread_create(&threads[i], NULL, work, &parallel[i]) != 0) return 1;
+  }
+  for (i = 0; i < 2; ++i) pthread_join(threads[i], NULL);
+  /* One handle shared by two threads. */
+  shared_robot = load();
+  for (i = 0; i < 2; ++i) {
+    memset(&shared[i], 0, sizeof shared[i]);
+    shared[i].robot = shared_robot;
+    shared[i].with_experiment = 0;
+    if (pthread_create(&threads[i], NULL, work, &shared[i]) != 0) return 1;
+  }
+  for (i = 0; i < 2; ++i) pthread_join(threads[i], NULL);
+
+  if (!same_results(&sequential[0].results, &sequential[1].results, 1)) {
+    fprintf(stderr, "two sequential runs differ\n");
+    ++failures;
+  }
+  for (i = 0; i < 2; ++i) {
+    if (!same_results(&sequential[0].results, &parallel[i].results, 1)) {
+      fprintf(stderr, "parallel run %d differs from the sequential one\n", i);
+      ++failures;
+    }
+    if (!same_results(&sequential[0].results, &shared[i].results, 0)) {
+      fprintf(stderr, "shared-handle run %d differs from the sequential one\n", i);
+      ++failures;
+    }
+  }
+  for (i = 0; i < 2; ++i) {
+    jc_robot_free(sequential[i].robot);
+    jc_robot_free(parallel[i].robot);
+    free(sequential[i].results.trajectory_references);
+    free(parallel[i].results.trajectory_references);
+    free(shared[i].results.trajectory_references);
+  }
+  jc_robot_free(shared_robot);
+  free(spiral_q);
+  free(spiral_qd);
+  printf("test_capi_threads: %d samples, 2 sequential, 2 parallel and 2 shared-handle runs, %d differ\n", sample_count,
+         failures);
+  return failures == 0 ? 0 : 1;
+}
