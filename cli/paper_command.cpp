@@ -129,6 +129,21 @@ int runPaper(int argc, char** argv) {
               ra_gain * 100, (1 - kPaperRa[2] / kPaperRa[0]) * 100, rz_gain * 100, (1 - kPaperRz[2] / kPaperRz[0]) * 100);
   std::printf("wrote %s/spiral_runs.csv and %s/summary.json\n", out.c_str(), out.c_str());
 
+  // The FMUs of this build, handed out beside the results.
+  ::mkdir("out/fmu", 0755);
+  for (const char* name : {"jointcomp_fmi2.fmu", "jointcomp_fmi3.fmu"}) {
+    const std::string built = std::string(JOINTCOMP_FMU_DIR) + "/" + name;
+    std::ifstream source(built, std::ios::binary);
+    if (!source) {
+      std::printf("no FMU at %s (build the jointcomp_fmus target)\n", built.c_str());
+      continue;
+    }
+    std::ostringstream bytes;
+    bytes << source.rdbuf();
+    writeFileAtomically(std::string("out/fmu/") + name, bytes.str());
+    std::printf("wrote out/fmu/%s (FMI %s co-simulation of the plant with compensation)\n", name,
+                name[13] == '2' ? "2.0" : "3.0");
+  }
   if (!options.has("no-plot")) {
     const std::string command = "/usr/bin/python3 '" JOINTCOMP_SOURCE_DIR "/cli/plots/plot_spiral_runs.py' '" + out +
                                 "/spiral_runs.csv' '" + out + "/spiral_z_error.png'";

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 
 #include <cvode/cvode.h>
 #include <nvector/nvector_serial.h>
@@ -42,14 +43,22 @@ namespace {
 
 int plantRightHandSide(realtype t, N_Vector y, N_Vector ydot, void* user_data);
 
+// CVODE's name of a return flag. SUNDIALS 6 allocates the name for the caller, who must free it.
+std::string flagName(long flag) {
+  char* name = CVodeGetReturnFlagName(flag);
+  std::string text = name ? name : "unknown flag";
+  std::free(name);
+  return text;
+}
+
 void captureCvodeError(int error_code, const char* module, const char* function, char* message, void* user_data) {
   auto* solver = static_cast<std::string*>(user_data);
   *solver = std::string(module ? module : "CVODE") + "/" + (function ? function : "?") + " (" +
-            CVodeGetReturnFlagName(error_code) + "): " + (message ? message : "");
+            flagName(error_code) + "): " + (message ? message : "");
 }
 
 void check(int flag, const char* call) {
-  if (flag < 0) throw SolverError(std::string("CVODE setup failed in ") + call + ": " + CVodeGetReturnFlagName(flag));
+  if (flag < 0) throw SolverError(std::string("CVODE setup failed in ") + call + ": " + flagName(flag));
 }
 
 }  // namespace
@@ -369,7 +378,7 @@ void FlexibleJointPlant::advance(double end_time) {
     restart_ = true;
     throw SolverError("plant: CVODE failed between t = " + std::to_string(reached) + " s and " +
                       std::to_string(end_time) + " s: " +
-                      (s.last_error.empty() ? std::string(CVodeGetReturnFlagName(flag)) : s.last_error));
+                      (s.last_error.empty() ? flagName(flag) : s.last_error));
   }
   time_ = end_time;
 }

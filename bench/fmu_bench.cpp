@@ -1,0 +1,368 @@
+// The FMU's speed: doStep calls per second with a 1 ms communication step on the paper's spiral, the
+// real-time factor, and the overhead of the FMI layer over calling the plant and the compensator directly.
+// The FMUs' binaries are dlopen-ed from the build tree (JOINTCOMP_FMU_DIR, set by bench/CMakeLists.txt).
+//
+// Per step, as a master does it: set the 6 desired joint positions, doStep(t, 1 ms), read the 6 link
+// positions and the tool position. "Direct" does the same work on FlexibleJointPlant + Compensator
+// (the sequence fmu/instance.hpp documents). "AllOutputs" reads all 45 outputs per step.
+// Target: at least 100x real time through the FMU with a 1 ms step.
+#include <dlfcn.h>
+
+#include <cstdio>
+#include <map>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <benchmark/benchmark.h>
+
+#include "fmu/fmi2_api.hpp"
+#include "fmu/fmi3_api.hpp"
+#include "model/compensation/compensator.hpp"
+#include "model/compensation/feed_rate.hpp"
+#include "model/compensation/joint_trajectory.hpp"
+#include "model/compensation/path.hpp"
+#include "model/compensation/spiral_experiment.hpp"
+#include "model/io/parameter_file.hpp"
+#include "model/io/robot_file.hpp"
+#include "model/plant/flexible_joint_plant.hpp"
+#include "model/robot/kinematics.hpp"
+
+#ifndef JOINTCOMP_FMU_DIR
+// bench/CMakeLists.txt sets JOINTCOMP_FMU_DIR when the FMUs are part of the build; without it there is
+// nothing to measure, and the build of the other benchmarks must not break.
+int main() {
+  std::fprintf(stderr, "fmu_bench: built without JOINTCOMP_FMU_DIR (the build folder of fmu/); nothing to run\n");
+  return 1;
+}
+#else
+
+namespace {
+
+using namespace jointcomp;
+
+constexpr double kStep = 0.001;
+constexpr int kDof = 6;
+constexpr double kDegree = 3.14159265358979323846 / 180.0;
+
+std::string fmuDir(int version) { return std::string(JOINTCOMP_FMU_DIR) + "/jointcomp_fmi" + std::to_string(version); }
+
+struct Spiral {
+  std::shared_ptr<const Robot> robot;
+  std::vector<double> time;
+  std::vector<JointVector> q;
+};
+
+const Spiral& spiral() {
+  static const Spiral s = [] {
+    Spiral result;
+    result.robot = std::make_shared<const Robot>(loadRobotFile(fmuDir(2) + "/resources/robot.json"));
+    FeedRateSpec feed;
+    feed.controller_period = kStep;
+    JointVector seed = JointVector::Zero(kDof);
+    seed[1] = seed[2] = seed[4] = 60 * kDegree;
+    const JointTrajectory trajectory = planJointTrajectory(
+        *result.robot, planFeedRate(logarithmicSpiral(SpiralExperimentSpec::defaultSpiral()), feed), toolPointingDown(),
+        seed);
+    result.time = trajectory.time;
+    result.q = trajectory.q;
+    return result;
+  }();
+  return s;
+}
+
+// Value references, as in modelDescription/variables.csv.
+constexpr std::uint32_t kCompensation = 1;
+const std::uint32_t kQDesired[kDof] = {100, 101, 102, 103, 104, 105};
+const std::uint32_t kReadBack[kDof + 3] = {220, 221, 222, 223, 224, 225, 240, 241, 242};  // q_link, tool
+std::vector<std::uint32_t> allOutputs() {
+  std::vector<std::uint32_t> vrs;
+  for (std::uint32_t base : {200u, 210u, 220u, 230u, 250u, 260u, 270u}) {
+    for (std::uint32_t j = 0; j < kDof; ++j) vrs.push_back(base + j);
+  }
+  for (std::uint32_t k = 0; k < 3; ++k) vrs.push_back(240 + k);
+  return vrs;
+}
+
+void* openLibrary(int version) {
+  const std::string path =
+      fmuDir(version) + (version == 2 ? "/binaries/linux64/jointcomp.so" : "/binaries/x86_64-linux/jointcomp.so");
+  void* handle = dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL);
+  if (!handle) throw std::runtime_error(std::string("dlopen: ") + dlerror());
+  return handle;
+}
+
+template <typename F>
+F symbol(void* library, const char* name) {
+  void* p = dlsym(library, name);
+  if (!p) throw std::runtime_error(std::string("dlsym ") + name);
+  return reinterpret_cast<F>(p);
+}
+
+std::string guid(int version) {
+  std::FILE* file = std::fopen((fmuDir(version) + "/modelDescription.xml").c_str(), "rb");
+  if (!file) throw std::runtime_error("no modelDescription.xml");
+  std::string text(1 << 16, '\0');
+  text.resize(std::fread(text.data(), 1, text.size(), file));
+  std::fclose(file);
+  const std::string key = version == 2 ? "guid=\"" : "instantiationToken=\"";
+  const std::size_t begin = text.find(key) + key.size();
+  return text.substr(begin, text.find('"', begin) - begin);
+}
+
+void quiet2(fmi2ComponentEnvironment, fmi2String, fmi2Status, fmi2String, fmi2String, ...) {}
+void quiet3(fmi3InstanceEnvironment, fmi3Status, fmi3String, fmi3String) {}
+
+// One FMU instance of either version behind the few calls the benchmark makes.
+class Fmu {
+public:
+  explicit Fmu(int version) : version_(version), library_(openLibrary(version)) {
+    if (version == 2) {
+      instantiate2_ = symbol<decltype(&fmi2Instantiate)>(library_, "fmi2Instantiate");
+      free2_ = symbol<decltype(&fmi2FreeInstance)>(library_, "fmi2FreeInstance");
+      setup2_ = symbol<decltype(&fmi2SetupExperiment)>(library_, "fmi2SetupExperiment");
+      enter2_ = symbol<decltype(&fmi2EnterInitializationMode)>(library_, "fmi2EnterInitializationMode");
+      exit2_ = symbol<decltype(&fmi2ExitInitializationMode)>(library_, "fmi2ExitInitializationMode");
+      set2_ = symbol<decltype(&fmi2SetReal)>(library_, "fmi2SetReal");
+      get2_ = symbol<decltype(&fmi2GetReal)>(library_, "fmi2GetReal");
+      setInteger2_ = symbol<decltype(&fmi2SetInteger)>(library_, "fmi2SetInteger");
+      step2_ = symbol<decltype(&fmi2DoStep)>(library_, "fmi2DoStep");
+      callbacks_ = {quiet2, nullptr, nullptr, nullptr, nullptr};
+      const std::string uri = "file://" + fmuDir(2) + "/resources/";
+      instance_ = instantiate2_("bench", fmi2CoSimulation, guid(2).c_str(), uri.c_str(), &callbacks_, 0, 0);
+    } else {
+      instantiate3_ = symbol<decltype(&fmi3InstantiateCoSimulation)>(library_, "fmi3InstantiateCoSimulation");
+      free3_ = symbol<decltype(&fmi3FreeInstance)>(library_, "fmi3FreeInstance");
+      enter3_ = symbol<decltype(&fmi3EnterInitializationMode)>(library_, "fmi3EnterInitializationMode");
+      exit3_ = symbol<decltype(&fmi3ExitInitializationMode)>(library_, "fmi3ExitInitializationMode");
+      set3_ = symbol<decltype(&fmi3SetFloat64)>(library_, "fmi3SetFloat64");
+      get3_ = symbol<decltype(&fmi3GetFloat64)>(library_, "fmi3GetFloat64");
+      setInt64_3_ = symbol<decltype(&fmi3SetInt64)>(library_, "fmi3SetInt64");
+      step3_ = symbol<decltype(&fmi3DoStep)>(library_, "fmi3DoStep");
+      const std::string path = fmuDir(3) + "/resources/";
+      instance_ = instantiate3_("bench", guid(3).c_str(), path.c_str(), false, false, false, false, nullptr, 0, nullptr,
+                                quiet3, nullptr);
+    }
+    if (!instance_) throw std::runtime_error("instantiation failed");
+  }
+  ~Fmu() {
+    if (version_ == 2) free2_(instance_); else free3_(instance_);
+    dlclose(library_);
+  }
+
+  void initialise(long mode, double t0, const JointVector& q0) {
+    if (version_ == 2) check(setup2_(instance_, 0, 0.0, t0, 0, 0.0));
+    check(version_ == 2 ? int(enter2_(instance_)) : int(enter3_(instance_, false, 0.0, t0, false, 0.0)));
+    if (version_ == 2) {
+      const int m = static_cast<int>(mode);
+      check(setInteger2_(instance_, &kCompensation, 1, &m));
+    } else {
+      const std::int64_t m = mode;
+      check(setInt64_3_(instance_, &kCompensation, 1, &m, 1));
+    }
+    setReals(kQDesired, kDof, q0.data());
+    check(version_ == 2 ? int(exit2_(instance_)) : int(exit3_(instance_)));
+  }
+  void setReals(const std::uint32_t* vrs, std::size_t n, const double* values) {
+    check(version_ == 2 ? int(set2_(instance_, vrs, n, values)) : int(set3_(instance_, vrs, n, values, n)));
+  }
+  void getReals(const std::uint32_t* vrs, std::size_t n, double* values) {
+    check(version_ == 2 ? int(get2_(instance_, vrs, n, values)) : int(get3_(instance_, vrs, n, values, n)));
+  }
+  void doStep(double t, double h) {
+    if (version_ == 2) {
+      check(step2_(instance_, t, h, 1));
+    } else {
+      bool event = false, terminate = false, early = false;
+      double last = 0.0;
+      check(step3_(instance_, t, h, true, &event, &terminate, &early, &last));
+    }
+  }
+
+private:
+  static void check(int status) {
+    if (status != 0) throw std::runtime_error("FMI call returned " + std::to_string(status));
+  }
+  int version_;
+  void* library_;
+  void* instance_ = nullptr;
+  fmi2CallbackFunctions callbacks_{};
+  decltype(&fmi2Instantiate) instantiate2_ = nullptr;
+  decltype(&fmi2FreeInstance) free2_ = nullptr;
+  decltype(&fmi2SetupExperiment) setup2_ = nullptr;
+  decltype(&fmi2EnterInitializationMode) enter2_ = nullptr;
+  decltype(&fmi2ExitInitializationMode) exit2_ = nullptr;
+  decltype(&fmi2SetReal) set2_ = nullptr;
+  decltype(&fmi2GetReal) get2_ = nullptr;
+  decltype(&fmi2SetInteger) setInteger2_ = nullptr;
+  decltype(&fmi2DoStep) step2_ = nullptr;
+  decltype(&fmi3InstantiateCoSimulation) instantiate3_ = nullptr;
+  decltype(&fmi3FreeInstance) free3_ = nullptr;
+  decltype(&fmi3EnterInitializationMode) enter3_ = nullptr;
+  decltype(&fmi3ExitInitializationMode) exit3_ = nullptr;
+  decltype(&fmi3SetFloat64) set3_ = nullptr;
+  decltype(&fmi3GetFloat64) get3_ = nullptr;
+  decltype(&fmi3SetInt64) setInt64_3_ = nullptr;
+  decltype(&fmi3DoStep) step3_ = nullptr;
+};
+
+void reportRates(benchmark::State& state, std::size_t steps) {
+  state.SetItemsProcessed(static_cast<std::int64_t>(steps));  // doStep calls per second
+  state.counters["realtime_x"] =
+      benchmark::Counter(static_cast<double>(steps) * kStep, benchmark::Counter::kIsRate);  // simulated s per s
+}
+
+// version 2 or 3; range(1): 1 reads all outputs.
+void BM_FmuSpiral(benchmark::State& state) {
+  const int version = static_cast<int>(state.range(0));
+  const bool all = state.range(1) != 0;
+  const Spiral& s = spiral();
+  const std::vector<std::uint32_t> outputs = allOutputs();
+  std::vector<double> read(outputs.size());
+  std::unique_ptr<Fmu> fmu;
+  std::size_t k = s.time.size();  // start a run at the first iteration
+  std::size_t steps = 0;
+  for (auto _ : state) {
+    if (k + 1 >= s.time.size()) {
+      state.PauseTiming();
+      fmu.reset();
+      fmu = std::make_unique<Fmu>(version);
+      fmu->initialise(2, s.time[0], s.q[0]);
+      k = 0;
+      state.ResumeTiming();
+    }
+    fmu->setReals(kQDesired, kDof, s.q[k].data());
+    fmu->doStep(s.time[k], s.time[k + 1] - s.time[k]);
+    if (all) {
+      fmu->getReals(outputs.data(), outputs.size(), read.data());
+    } else {
+      fmu->getReals(kReadBack, kDof + 3, read.data());
+    }
+    benchmark::DoNotOptimize(read.data());
+    ++k;
+    ++steps;
+  }
+  reportRates(state, steps);
+}
+BENCHMARK(BM_FmuSpiral)->ArgNames({"fmi", "all_outputs"})->Args({2, 0})->Args({3, 0})->Args({2, 1})
+    ->Unit(benchmark::kMicrosecond)->MinTime(2.0);
+
+// The FMI layer alone: a step's set of the inputs and get of the outputs, with nothing to compute (the
+// values are those already set, the outputs already up to date). What the layer adds to each step
+// beyond the model's own work, without the noise of the plant's timing.
+void BM_FmuCallsOnly(benchmark::State& state) {
+  const int version = static_cast<int>(state.range(0));
+  const Spiral& s = spiral();
+  Fmu fmu(version);
+  fmu.initialise(2, s.time[0], s.q[0]);
+  fmu.doStep(s.time[0], kStep);
+  double read[kDof + 3];
+  for (auto _ : state) {
+    fmu.setReals(kQDesired, kDof, s.q[0].data());
+    fmu.getReals(kReadBack, kDof + 3, read);
+    benchmark::DoNotOptimize(read);
+  }
+}
+BENCHMARK(BM_FmuCallsOnly)->ArgName("fmi")->Arg(2)->Arg(3)->Unit(benchmark::kNanosecond);
+
+// The same work without the FMI layer.
+void BM_DirectSpiral(benchmark::State& state) {
+  const Spiral& s = spiral();
+  const std::string parameters = fmuDir(2) + "/resources/parameters.json";
+  const JointErrorModel nominal = loadParameterFile(parameters, s.robot);
+  const std::vector<DriveParameters> drives = loadDriveParameters(parameters, *s.robot);
+  const EffectMask mask = nominal.loadsAnd({"compliance", "transmission_error"});
+  std::unique_ptr<FlexibleJointPlant> plant;
+  Compensator compensator(nominal, mask);
+  JointContext ctx(kDof);
+  RobotWorkspace ws(*s.robot);
+  JointVector reference, last_q;
+  double last_t = 0.0;
+  bool has_last = false;
+  double read[kDof + 3];
+  std::size_t k = s.time.size();
+  std::size_t steps = 0;
+  for (auto _ : state) {
+    if (k + 1 >= s.time.size()) {
+      state.PauseTiming();
+      plant = std::make_unique<FlexibleJointPlant>(nominal, drives, PlantOptions{});
+      ctx.q = s.q[0];
+      ctx.velocity = JointVector::Zero(kDof);
+      ctx.time = s.time[0];
+      compensator.compensate(ctx, reference);
+      plant->setToolWrench(Vector6::Zero());
+      plant->reset(reference, s.time[0]);
+      has_last = false;
+      k = 0;
+      state.ResumeTiming();
+    }
+    const double t = s.time[k];
+    const JointVector v = has_last ? JointVector((s.q[k] - last_q) / (t - last_t)) : JointVector(JointVector::Zero(kDof));
+    ctx.q = s.q[k];
+    ctx.velocity = v;
+    ctx.time = t;
+    compensator.compensate(ctx, reference);
+    plant->setReference(reference, v);
+    plant->advance(t + (s.time[k + 1] - t));
+    const JointVector q = plant->linkPositions();
+    forwardKinematics(*s.robot, ws, q);
+    for (int j = 0; j < kDof; ++j) read[j] = q[j];
+    for (int i = 0; i < 3; ++i) read[kDof + i] = ws.tool_pose.translation()[i];
+    benchmark::DoNotOptimize(read);
+    has_last = true;
+    last_q = s.q[k];
+    last_t = t;
+    ++k;
+    ++steps;
+  }
+  reportRates(state, steps);
+}
+BENCHMARK(BM_DirectSpiral)->Unit(benchmark::kMicrosecond)->MinTime(2.0);
+
+// Remembers each benchmark's CPU time per step, to print the FMI layer's overhead at the end. CPU time,
+// not wall-clock time: on a shared machine it is what the step costs.
+class Reporter : public benchmark::ConsoleReporter {
+public:
+  void ReportRuns(const std::vector<Run>& runs) override {
+    for (const Run& run : runs) {
+      // In the benchmark's unit: us for the spirals, ns for the calls alone.
+      if (run.run_type == Run::RT_Iteration) per_step[run.benchmark_name()] = run.GetAdjustedCPUTime();
+    }
+    ConsoleReporter::ReportRuns(runs);
+  }
+  std::map<std::string, double> per_step;
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  benchmark::Initialize(&argc, argv);
+  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+  spiral();  // planned before any timing
+  Reporter reporter;
+  benchmark::RunSpecifiedBenchmarks(&reporter);
+  double direct = 0.0;
+  for (const auto& [name, us] : reporter.per_step) {
+    if (name.rfind("BM_DirectSpiral", 0) == 0) direct = us;
+  }
+  if (direct > 0.0) {
+    std::printf("\nRX170 spiral, 1 ms communication step, stiffness + kinematic compensation (CPU time per step)\n");
+    std::printf("  %-40s %7.2f us/step %6.0fx real time\n", "direct (plant + compensator)", direct, kStep * 1e6 / direct);
+    for (const auto& [name, us] : reporter.per_step) {
+      if (name.rfind("BM_FmuSpiral", 0) != 0) continue;
+      std::printf("  %-40s %7.2f us/step %6.0fx real time, FMI layer %+.2f us/step (%+.1f %%)\n", name.c_str(), us,
+                  kStep * 1e6 / us, us - direct, 100.0 * (us - direct) / direct);
+    }
+    for (const auto& [name, us] : reporter.per_step) {
+      if (name.rfind("BM_FmuCallsOnly", 0) == 0) {
+        std::printf("  %-40s %7.0f ns/step (set 6 inputs, get 9 outputs, nothing to compute)\n", name.c_str(), us);
+      }
+    }
+    std::printf("  target: at least 100x real time through the FMU\n");
+  }
+  benchmark::Shutdown();
+  return 0;
+}
+
+#endif  // JOINTCOMP_FMU_DIR

@@ -1,0 +1,179 @@
+// The FMU's instance, independent of the FMI version: the flexible-joint plant with the compensator in
+// front of it, every variable of modelDescription/variables.csv by value reference, the state machine,
+// and the FMU state as a snapshot or as bytes. fmi2_functions.cpp and fmi3_functions.cpp are thin glue
+// over it; everything the two versions share lives here.
+//
+// What one communication step does (the C++ sequence a test can replay on FlexibleJointPlant and
+// Compensator directly, bit for bit):
+//   at time t (the importer's currentCommunicationPoint) with inputs q_desired, qd_desired, tool_wrench:
+//   1. v = qd_desired if use_velocity_inputs, else (q_desired - q_desired of the previous step) / (t - t of
+//      the previous step), and 0 on the first step after initialisation;
+//   2. Q_ref = q_desired when compensation is none, else Compensator(nominal, mask).compensate() with
+//      ctx.q = q_desired, ctx.velocity = v, ctx.time = t, ctx.tool_wrench = tool_wrench if
+//      compensate_wrench else 0; mask = nominal.loadsAnd({"compliance"}) or
+//      nominal.loadsAnd({"compliance", "transmission_error"});
+//   3. plant.setToolWrench(tool_wrench) if it differs from the wrench last applied;
+//   4. plant.setReference(Q_ref, v); plant.advance(t + h).
+// Initialisation (exitInitializationMode): plant.setToolWrench(tool_wrench); plant.reset(Q_ref, t0), Q_ref
+// as in 1-2 with no previous step (v = 0 unless use_velocity_inputs).
+// The plant's truth is the parameter file with the plant.* parameters applied; the compensator's nominal
+// model is the same file with the compensator.* parameters applied.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "jointcomp_fmu_variables.hpp"
+#include "model/compensation/compensator.hpp"
+#include "model/plant/flexible_joint_plant.hpp"
+
+namespace jointcomp::fmu {
+
+// The status values of FMI 2 and FMI 3 agree for these five.
+enum class Status : int { OK = 0, Warning = 1, Discard = 2, Error = 3, Fatal = 4 };
+
+// States of the state machine, as bits so that a function can name every state it is allowed in.
+enum Phase : unsigned {
+  kInstantiated = 1u << 0,
+  kInitializationMode = 1u << 1,
+  kStepMode = 1u << 2,         // FMI 2: slave initialised, step complete
+  kStepDiscarded = 1u << 3,    // the last step was discarded (FMI 2: step failed)
+  kTerminated = 1u << 4,
+  kErrorState = 1u << 5,       // a call failed in a way that leaves the instance unusable until reset
+  kAnyPhase = (1u << 6) - 1,
+};
+const char* phaseName(unsigned phase);
+
+// Accepted variable types for a typed get or set, as bits.
+enum TypeMask : unsigned {
+  kReal = 1u << 0,
+  kInteger = 1u << 1,
+  kBoolean = 1u << 2,
+  kEnumeration = 1u << 3,
+};
+
+// The log channel to the importer: the FMI glue turns these into its logger's calls.
+using LogSink = void (*)(void* context, Status status, const char* category, const char* message);
+
+struct Snapshot;  // an FMU state (fmi2FMUstate, fmi3FMUState)
+
+class Instance {
+public:
+  // Loads <resource_dir>/robot.json and <resource_dir>/parameters.json. Throws jointcomp::Error with a
+  // message naming the file at fault (missing resources, a robot other than the one the variable table
+  // was generated for, a parameter file without the table's parameters).
+  Instance(std::string name, const std::string& resource_dir, LogSink sink, void* sink_context, bool logging_on);
+  ~Instance();
+  Instance(const Instance&) = delete;
+  Instance& operator=(const Instance&) = delete;
+
+  const std::string& name() const { return name_; }
+  unsigned phase() const { return phase_; }
+  double time() const { return time_; }
+
+  // State machine: true when the call is allowed in the current phase; otherwise logs why (naming the
+  // function, the phase and the phases it is allowed in) and returns false. Every FMI function starts here.
+  bool allowed(const char* function, unsigned phases);
+
+  // Logging, in the category of the status (logStatusError, logStatusDiscard, logStatusWarning; OK goes
+  // to logCalls). Errors are always reported; the others when logging is on for their category.
+  void log(Status status, const char* format, ...) __attribute__((format(printf, 3, 4)));
+  bool logsCalls() const { return logging_[kLogCalls]; }
+  // Log an error naming the function and return Status::Error: for what the FMU does not provide, and
+  // for arguments the glue checks itself.
+  Status unsupported(const char* function, const char* why);
+  Status badArgument(const char* function, const char* why);
+  // For typed functions of types the FMU has no variables of (fmi3GetFloat32, ...): OK for no value
+  // references, otherwise an error naming the first one and its real type.
+  Status noVariablesOfType(const char* function, const char* type_name, const std::uint32_t vrs[], std::size_t count);
+  // Inputs the variable depends on directly (fmi3GetVariableDependencies), by value reference.
+  Status dependencies(const char* function, std::uint32_t vr, std::vector<std::uint32_t>& inputs);
+  Status setDebugLogging(const char* function, bool on, std::size_t count, const char* const categories[]);
+  // Logs an error naming the function and the argument and returns Status::Error.
+  Status nullArgument(const char* function, const char* argument);
+  // For exceptions that reach the FMI boundary: logs, enters the error state, returns Status::Error.
+  Status internalError(const char* function, const char* what);
+
+  // Lifecycle.
+  Status setupExperiment(const char* function, bool tolerance_defined, double tolerance, double start_time,
+                         bool stop_time_defined, double stop_time);
+  Status enterInitializationMode(const char* function);
+  Status exitInitializationMode(const char* function);
+  Status doStep(const char* function, double current_time, double step, double* last_successful_time);
+  Status terminate(const char* function);
+  Status reset(const char* function);
+
+  // Values by value reference. `types` lists the variable types the calling function may access
+  // (fmi2GetInteger: Integer and Enumeration; fmi3GetInt64: Enumeration; ...). Values are converted
+  // exactly (all integers of the table fit a double).
+  template <typename T>
+  Status get(const char* function, unsigned types, const std::uint32_t vrs[], std::size_t count, T values[]);
+  template <typename T>
+  Status set(const char* function, unsigned types, const std::uint32_t vrs[], std::size_t count, const T values[]);
+  // Index into table::kVariables of a value reference, -1 if unknown.
+  static int indexOf(std::uint32_t vr);
+
+  // FMU state. Snapshots belong to the instance that made them (or deserialised them); a pointer that
+  // is not one of this instance's live snapshots is refused without being dereferenced.
+  Status getState(const char* function, Snapshot** state);  // *state: nullptr or one to overwrite
+  Status setState(const char* function, const Snapshot* state);
+  Status freeState(const char* function, Snapshot** state);
+  Status serializedSize(const char* function, const Snapshot* state, std::size_t* size);
+  Status serialize(const char* function, const Snapshot* state, unsigned char bytes[], std::size_t size);
+  Status deserialize(const char* function, const unsigned char bytes[], std::size_t size, Snapshot** state);
+
+  // For FMI 2's fmi2GetRealStatus(fmi2LastSuccessfulTime).
+  double lastSuccessfulTime() const { return time_; }
+
+private:
+  enum LogCategory { kLogWarning, kLogDiscard, kLogError, kLogCalls, kLogCategoryCount };
+  // Groups of outputs computed together, lazily, as bits.
+  enum OutputGroup : unsigned { kStateOutputs = 1u, kToolOutputs = 2u, kPredictedOutputs = 4u, kReferenceOutputs = 8u };
+  struct Models;
+
+  void setStartValues();
+  bool ownsState(const Snapshot* state) const;
+  // Builds the models, the plant and the compensator from the fixed parameters when they changed since
+  // the last build (or were never built). Throws jointcomp::Error naming the parameter at fault.
+  void ensureModels();
+  void ensureCompensator();
+  // Initialises the plant at the start time from the current inputs (initialisation mode, lazily).
+  void ensureInitialized();
+  // Q_ref and v for the current inputs, cached until an input or the compensation mode changes.
+  Status ensureReference(const char* function);
+  Status updateOutputs(const char* function, unsigned groups);
+  Status fail(Status status, const char* function, const std::string& what);
+  Status checkValue(const char* function, int index, double value);
+  bool fixedParametersDiffer(const std::vector<double>& values) const;
+  std::string describe(int index) const;
+
+  std::string name_;
+  LogSink sink_;
+  void* sink_context_;
+  bool logging_[kLogCategoryCount];
+
+  unsigned phase_ = kInstantiated;
+  std::vector<double> values_;  // every variable, in table order
+  double time_ = 0.0;
+  double start_time_ = 0.0;
+  bool stop_time_defined_ = false;
+  double stop_time_ = 0.0;
+
+  std::unique_ptr<Models> models_;  // the loaded robot and parameter file, and what is built from them
+  bool initialized_ = false;        // the plant holds the state of this instance
+  bool reference_valid_ = false;
+  unsigned outputs_valid_ = 0;      // OutputGroup bits
+  JointVector reference_;           // Q_ref for the current inputs
+  JointVector reference_velocity_;  // v for the current inputs
+  bool has_last_step_ = false;      // a step was done since initialisation: v can be estimated
+  JointVector last_q_desired_;
+  double last_step_time_ = 0.0;
+  Vector6 applied_wrench_ = Vector6::Zero();  // what the plant was last given
+
+  std::vector<std::unique_ptr<Snapshot>> states_;
+};
+
+}  // namespace jointcomp::fmu

@@ -1,0 +1,39 @@
+// The plant's integrator options by name, as the FMU's "integrator:" parameters bind to them. Shared by
+// the build-time tool (which lists their defaults as start values) and the instance (which sets them).
+#pragma once
+
+#include <cstring>
+
+#include "model/plant/flexible_joint_plant.hpp"
+
+namespace jointcomp::fmu {
+
+struct IntegratorOption {
+  const char* name;
+  double (*get)(const PlantOptions& options);
+  void (*set)(PlantOptions& options, double value);
+};
+
+inline constexpr IntegratorOption kIntegratorOptions[] = {
+    {"relative_tolerance", [](const PlantOptions& o) { return o.relative_tolerance; },
+     [](PlantOptions& o, double v) { o.relative_tolerance = v; }},
+    {"absolute_tolerance", [](const PlantOptions& o) { return o.absolute_tolerance; },
+     [](PlantOptions& o, double v) { o.absolute_tolerance = v; }},
+    {"velocity_tolerance_factor", [](const PlantOptions& o) { return o.velocity_tolerance_factor; },
+     [](PlantOptions& o, double v) { o.velocity_tolerance_factor = v; }},
+    {"max_step", [](const PlantOptions& o) { return o.max_step; }, [](PlantOptions& o, double v) { o.max_step = v; }},
+    {"max_steps_per_advance", [](const PlantOptions& o) { return static_cast<double>(o.max_steps_per_advance); },
+     [](PlantOptions& o, double v) { o.max_steps_per_advance = static_cast<long>(v); }},
+    {"max_order", [](const PlantOptions& o) { return static_cast<double>(o.max_order); },
+     [](PlantOptions& o, double v) { o.max_order = static_cast<int>(v); }},
+};
+
+// The option of that name, nullptr if there is none.
+inline const IntegratorOption* findIntegratorOption(const char* name) {
+  for (const IntegratorOption& option : kIntegratorOptions) {
+    if (std::strcmp(option.name, name) == 0) return &option;
+  }
+  return nullptr;
+}
+
+}  // namespace jointcomp::fmu

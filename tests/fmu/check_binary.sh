@@ -1,0 +1,31 @@
+#!/usr/bin/env bash
+# The FMU binary needs nothing on the target machine beyond libc, libm, libstdc++ (and the loader), and
+# exports exactly the functions of the FMI API (every one of them, nothing else).
+#   check_binary.sh <2|3> <unzipped FMU folder> <fmu/fmiN_api.hpp>
+set -euo pipefail
+version="$1" folder="$2" api="$3"
+if [ "$version" = 2 ]; then platform=linux64 count=44; else platform=x86_64-linux count=75; fi
+binary="$folder/binaries/$platform/jointcomp.so"
+[ -f "$binary" ] || { echo "no binary at $binary"; exit 1; }
+status=0
+
+needed=$(readelf -d "$binary" | sed -n 's/.*(NEEDED).*\[\(.*\)\]/\1/p' | sort)
+echo "NEEDED: $(echo $needed)"
+for library in $needed; do
+  case "$library" in
+    libc.so.6|libm.so.6|libstdc++.so.6|ld-linux-x86-64.so.2) ;;
+    *) echo "not allowed on the target machine: $library"; status=1 ;;
+  esac
+done
+if readelf -d "$binary" | grep -q -E 'R(UN)?PATH'; then echo "the binary has an RPATH/RUNPATH"; status=1; fi
+
+exported=$(nm -D --defined-only "$binary" | awk '{print $3}' | sort)
+expected=$(grep -o "^JOINTCOMP_FMI${version}_EXPORT [^(]*(" "$api" | sed -E "s/.*[ *](fmi${version}[A-Za-z0-9]*)\\($/\\1/" | sort)
+[ "$(echo "$expected" | wc -l)" = "$count" ] || { echo "$api declares $(echo "$expected" | wc -l) functions, the standard $count"; status=1; }
+if [ "$exported" != "$expected" ]; then
+  echo "exported symbols differ from the FMI $version API:"
+  diff <(echo "$expected") <(echo "$exported") || true
+  status=1
+fi
+echo "exported: $(echo "$exported" | wc -l) functions, all fmi${version}*"
+exit $status

@@ -1,0 +1,1279 @@
+// The FMUs as a master uses them: the binary is loaded with dlopen from the unzipped FMU (in a folder
+// whose path has a space), value references are read from its modelDescription.xml, and the paper's
+// spiral is stepped through it. What a master may do wrong is tried too; every such call must return an
+// error (and say why in the log), never crash.
+//
+// The numbers through the FMU are compared with the same sequence run on FlexibleJointPlant and
+// Compensator directly (the sequence fmu/instance.hpp documents): they must agree bit for bit.
+#include <dlfcn.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <cstdarg>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <functional>
+#include <limits>
+#include <map>
+#include <memory>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <sys/stat.h>
+
+#include <gtest/gtest.h>
+
+#include "fmu/fmi2_api.hpp"
+#include "fmu/fmi3_api.hpp"
+#include "model/compensation/compensator.hpp"
+#include "model/compensation/feed_rate.hpp"
+#include "model/compensation/joint_trajectory.hpp"
+#include "model/compensation/path.hpp"
+#include "model/compensation/spiral_experiment.hpp"
+#include "model/effects/perturbation.hpp"
+#include "model/io/atomic_file.hpp"
+#include "model/io/parameter_file.hpp"
+#include "model/io/robot_file.hpp"
+#include "model/plant/flexible_joint_plant.hpp"
+#include "model/robot/kinematics.hpp"
+
+namespace jointcomp {
+namespace {
+
+constexpr int kOK = 0, kWarning = 1, kDiscard = 2, kError = 3;
+constexpr int kDof = 6;
+constexpr double kDegree = 3.14159265358979323846 / 180.0;
+
+std::string unzipped(int version) { return std::string(JOINTCOMP_FMU_UNZIPPED_DIR) + "/fmi" + std::to_string(version); }
+
+std::string readFile(const std::string& path) { return readTextFile(path, "file"); }
+
+// What a master reads from modelDescription.xml: the token and the value reference of every name.
+struct ModelDescription {
+  std::string token;
+  std::map<std::string, std::uint32_t> vr;
+  std::vector<std::uint32_t> outputs;  // in file order
+};
+
+// The text of attribute `name` in the element text [begin, end), "" if it has none.
+std::string attribute(const std::string& xml, std::size_t begin, std::size_t end, const std::string& name) {
+  const std::string key = " " + name + "=\"";
+  const std::size_t at = xml.find(key, begin);
+  if (at == std::string::npos || at >= end) return "";
+  const std::size_t value = at + key.size();
+  return xml.substr(value, xml.find('"', value) - value);
+}
+
+ModelDescription readModelDescription(int version) {
+  const std::string xml = readFile(unzipped(version) + "/modelDescription.xml");
+  ModelDescription md;
+  md.token = attribute(xml, 0, xml.find('>', xml.find("<fmiModelDescription")), version == 2 ? "guid" : "instantiationToken");
+  // Every element with a valueReference inside ModelVariables is a variable.
+  const std::size_t variables_end = xml.find("</ModelVariables>");
+  for (std::size_t at = xml.find("<ModelVariables>"); (at = xml.find('<', at + 1)) < variables_end;) {
+    const std::size_t end = xml.find('>', at);
+    const std::string vr = attribute(xml, at, end, "valueReference");
+    if (vr.empty()) continue;
+    md.vr[attribute(xml, at, end, "name")] = static_cast<std::uint32_t>(std::stoul(vr));
+    if (attribute(xml, at, end, "causality") == "output") md.outputs.push_back(static_cast<std::uint32_t>(std::stoul(vr)));
+  }
+  return md;
+}
+
+std::string percentEncoded(const std::string& path) {
+  std::string uri;
+  for (unsigned char ch : path) {
+    if (std::isalnum(ch) || ch == '/' || ch == '-' || ch == '_' || ch == '.' || ch == '~') {
+      uri += static_cast<char>(ch);
+    } else {
+      char hex[4];
+      std::snprintf(hex, sizeof hex, "%%%02X", ch);
+      uri += hex;
+    }
+  }
+  return uri;
+}
+
+// ---- A master over either FMI version -------------------------------------------------------------------
+
+class Master {
+public:
+  virtual ~Master() = default;
+  virtual int version() const = 0;
+  // resources: "" for the FMU's own resources/ folder; otherwise a folder (FMI 3) or a URI (FMI 2) as given.
+  bool instantiate(const std::string& name = "robot", const std::string& resources = "", const std::string& token = "",
+                   bool logging = true) {
+    return instantiateAs(name, resources, token, logging);
+  }
+  int enterInitialization(double start = 0.0, bool stop_defined = false, double stop = 0.0) {
+    return enterInitializationAt(start, stop_defined, stop);
+  }
+  virtual bool instantiateAs(const std::string& name, const std::string& resources, const std::string& token,
+                             bool logging) = 0;
+  virtual int enterInitializationAt(double start, bool stop_defined, double stop) = 0;
+  virtual int exitInitialization() = 0;
+  virtual int setReals(const std::vector<std::uint32_t>& vrs, const std::vector<double>& values) = 0;
+  virtual int getReals(const std::vector<std::uint32_t>& vrs, std::vector<double>& values) = 0;
+  virtual int setInteger(std::uint32_t vr, int value) = 0;
+  virtual int setEnumeration(std::uint32_t vr, long value) = 0;
+  virtual int getEnumeration(std::uint32_t vr, long& value) = 0;
+  virtual int setBoolean(std::uint32_t vr, bool value) = 0;
+  virtual int doStep(double t, double h) = 0;
+  virtual double lastSuccessfulTime() = 0;
+  virtual int getState(void** state) = 0;
+  virtual int setState(void* state) = 0;
+  virtual int freeState(void** state) = 0;
+  virtual int serialize(void* state, std::vector<unsigned char>& bytes) = 0;
+  virtual int deserialize(const std::vector<unsigned char>& bytes, void** state) = 0;
+  virtual int terminate() = 0;
+  virtual int reset() = 0;
+  virtual void freeInstance() = 0;
+  virtual void* handle() const = 0;
+
+  std::uint32_t vr(const std::string& name) const {
+    const auto found = md.vr.find(name);
+    if (found == md.vr.end()) throw std::runtime_error("no variable " + name);
+    return found->second;
+  }
+  std::vector<std::uint32_t> vrs(const std::string& prefix, int count) const {
+    std::vector<std::uint32_t> list;
+    for (int j = 1; j <= count; ++j) list.push_back(vr(prefix + std::to_string(j)));
+    return list;
+  }
+  bool logged(const std::string& fragment) const {
+    for (const std::string& m : messages) {
+      if (m.find(fragment) != std::string::npos) return true;
+    }
+    return false;
+  }
+  std::string log() const {
+    std::string all;
+    for (const std::string& m : messages) all += m + "\n";
+    return all;
+  }
+
+  ModelDescription md;
+  std::vector<std::string> messages;
+};
+
+class Library {
+public:
+  explicit Library(const std::string& path) : handle_(dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL)) {
+    if (!handle_) throw std::runtime_error(std::string("dlopen: ") + dlerror());
+  }
+  ~Library() { dlclose(handle_); }
+  Library(const Library&) = delete;
+  Library& operator=(const Library&) = delete;
+  template <typename F>
+  void load(F& function, const char* name) {
+    function = reinterpret_cast<F>(dlsym(handle_, name));
+    if (!function) throw std::runtime_error(std::string("dlsym ") + name);
+  }
+
+private:
+  void* handle_;
+};
+
+#define LOAD(name) library.load(name, #name)
+
+// The FMI 2 functions, as a master gets them.
+struct Fmi2Api {
+  explicit Fmi2Api(Library& library) {
+    LOAD(fmi2GetTypesPlatform); LOAD(fmi2GetVersion); LOAD(fmi2SetDebugLogging); LOAD(fmi2Instantiate);
+    LOAD(fmi2FreeInstance); LOAD(fmi2SetupExperiment); LOAD(fmi2EnterInitializationMode);
+    LOAD(fmi2ExitInitializationMode); LOAD(fmi2Terminate); LOAD(fmi2Reset); LOAD(fmi2GetReal); LOAD(fmi2GetInteger);
+    LOAD(fmi2GetBoolean); LOAD(fmi2GetString); LOAD(fmi2SetReal); LOAD(fmi2SetInteger); LOAD(fmi2SetBoolean);
+    LOAD(fmi2SetString); LOAD(fmi2GetFMUstate); LOAD(fmi2SetFMUstate); LOAD(fmi2FreeFMUstate);
+    LOAD(fmi2SerializedFMUstateSize); LOAD(fmi2SerializeFMUstate); LOAD(fmi2DeSerializeFMUstate);
+    LOAD(fmi2GetDirectionalDerivative); LOAD(fmi2EnterEventMode); LOAD(fmi2NewDiscreteStates);
+    LOAD(fmi2EnterContinuousTimeMode); LOAD(fmi2CompletedIntegratorStep); LOAD(fmi2SetTime);
+    LOAD(fmi2SetContinuousStates); LOAD(fmi2GetDerivatives); LOAD(fmi2GetEventIndicators);
+    LOAD(fmi2GetContinuousStates); LOAD(fmi2GetNominalsOfContinuousStates); LOAD(fmi2SetRealInputDerivatives);
+    LOAD(fmi2GetRealOutputDerivatives); LOAD(fmi2DoStep); LOAD(fmi2CancelStep); LOAD(fmi2GetStatus);
+    LOAD(fmi2GetRealStatus); LOAD(fmi2GetIntegerStatus); LOAD(fmi2GetBooleanStatus); LOAD(fmi2GetStringStatus);
+  }
+  decltype(&::fmi2GetTypesPlatform) fmi2GetTypesPlatform;
+  decltype(&::fmi2GetVersion) fmi2GetVersion;
+  decltype(&::fmi2SetDebugLogging) fmi2SetDebugLogging;
+  decltype(&::fmi2Instantiate) fmi2Instantiate;
+  decltype(&::fmi2FreeInstance) fmi2FreeInstance;
+  decltype(&::fmi2SetupExperiment) fmi2SetupExperiment;
+  decltype(&::fmi2EnterInitializationMode) fmi2EnterInitializationMode;
+  decltype(&::fmi2ExitInitializationMode) fmi2ExitInitializationMode;
+  decltype(&::fmi2Terminate) fmi2Terminate;
+  decltype(&::fmi2Reset) fmi2Reset;
+  decltype(&::fmi2GetReal) fmi2GetReal;
+  decltype(&::fmi2GetInteger) fmi2GetInteger;
+  decltype(&::fmi2GetBoolean) fmi2GetBoolean;
+  decltype(&::fmi2GetString) fmi2GetString;
+  decltype(&::fmi2SetReal) fmi2SetReal;
+  decltype(&::fmi2SetInteger) fmi2SetInteger;
+  decltype(&::fmi2SetBoolean) fmi2SetBoolean;
+  decltype(&::fmi2SetString) fmi2SetString;
+  decltype(&::fmi2GetFMUstate) fmi2GetFMUstate;
+  decltype(&::fmi2SetFMUstate) fmi2SetFMUstate;
+  decltype(&::fmi2FreeFMUstate) fmi2FreeFMUstate;
+  decltype(&::fmi2SerializedFMUstateSize) fmi2SerializedFMUstateSize;
+  decltype(&::fmi2SerializeFMUstate) fmi2SerializeFMUstate;
+  decltype(&::fmi2DeSerializeFMUstate) fmi2DeSerializeFMUstate;
+  decltype(&::fmi2GetDirectionalDerivative) fmi2GetDirectionalDerivative;
+  decltype(&::fmi2EnterEventMode) fmi2EnterEventMode;
+  decltype(&::fmi2NewDiscreteStates) fmi2NewDiscreteStates;
+  decltype(&::fmi2EnterContinuousTimeMode) fmi2EnterContinuousTimeMode;
+  decltype(&::fmi2CompletedIntegratorStep) fmi2CompletedIntegratorStep;
+  decltype(&::fmi2SetTime) fmi2SetTime;
+  decltype(&::fmi2SetContinuousStates) fmi2SetContinuousStates;
+  decltype(&::fmi2GetDerivatives) fmi2GetDerivatives;
+  decltype(&::fmi2GetEventIndicators) fmi2GetEventIndicators;
+  decltype(&::fmi2GetContinuousStates) fmi2GetContinuousStates;
+  decltype(&::fmi2GetNominalsOfContinuousStates) fmi2GetNominalsOfContinuousStates;
+  decltype(&::fmi2SetRealInputDerivatives) fmi2SetRealInputDerivatives;
+  decltype(&::fmi2GetRealOutputDerivatives) fmi2GetRealOutputDerivatives;
+  decltype(&::fmi2DoStep) fmi2DoStep;
+  decltype(&::fmi2CancelStep) fmi2CancelStep;
+  decltype(&::fmi2GetStatus) fmi2GetStatus;
+  decltype(&::fmi2GetRealStatus) fmi2GetRealStatus;
+  decltype(&::fmi2GetIntegerStatus) fmi2GetIntegerStatus;
+  decltype(&::fmi2GetBooleanStatus) fmi2GetBooleanStatus;
+  decltype(&::fmi2GetStringStatus) fmi2GetStringStatus;
+};
+
+// The FMI 3 functions, as a master gets them (those the tests call).
+struct Fmi3Api {
+  explicit Fmi3Api(Library& library) {
+    LOAD(fmi3GetVersion); LOAD(fmi3SetDebugLogging); LOAD(fmi3InstantiateModelExchange);
+    LOAD(fmi3InstantiateCoSimulation); LOAD(fmi3InstantiateScheduledExecution); LOAD(fmi3FreeInstance);
+    LOAD(fmi3EnterInitializationMode); LOAD(fmi3ExitInitializationMode); LOAD(fmi3EnterEventMode);
+    LOAD(fmi3Terminate); LOAD(fmi3Reset); LOAD(fmi3GetFloat32); LOAD(fmi3GetFloat64); LOAD(fmi3GetInt32);
+    LOAD(fmi3GetInt64); LOAD(fmi3GetBoolean); LOAD(fmi3GetString); LOAD(fmi3GetBinary); LOAD(fmi3GetClock);
+    LOAD(fmi3SetFloat64); LOAD(fmi3SetInt32); LOAD(fmi3SetInt64); LOAD(fmi3SetBoolean); LOAD(fmi3SetUInt8);
+    LOAD(fmi3GetNumberOfVariableDependencies); LOAD(fmi3GetVariableDependencies); LOAD(fmi3GetFMUState);
+    LOAD(fmi3SetFMUState); LOAD(fmi3FreeFMUState); LOAD(fmi3SerializedFMUStateSize); LOAD(fmi3SerializeFMUState);
+    LOAD(fmi3DeserializeFMUState); LOAD(fmi3GetDirectionalDerivative); LOAD(fmi3EnterConfigurationMode);
+    LOAD(fmi3UpdateDiscreteStates); LOAD(fmi3EnterContinuousTimeMode); LOAD(fmi3GetNumberOfContinuousStates);
+    LOAD(fmi3EnterStepMode); LOAD(fmi3GetOutputDerivatives); LOAD(fmi3DoStep); LOAD(fmi3ActivateModelPartition);
+  }
+  decltype(&::fmi3GetVersion) fmi3GetVersion;
+  decltype(&::fmi3SetDebugLogging) fmi3SetDebugLogging;
+  decltype(&::fmi3InstantiateModelExchange) fmi3InstantiateModelExchange;
+  decltype(&::fmi3InstantiateCoSimulation) fmi3InstantiateCoSimulation;
+  decltype(&::fmi3InstantiateScheduledExecution) fmi3InstantiateScheduledExecution;
+  decltype(&::fmi3FreeInstance) fmi3FreeInstance;
+  decltype(&::fmi3EnterInitializationMode) fmi3EnterInitializationMode;
+  decltype(&::fmi3ExitInitializationMode) fmi3ExitInitializationMode;
+  decltype(&::fmi3EnterEventMode) fmi3EnterEventMode;
+  decltype(&::fmi3Terminate) fmi3Terminate;
+  decltype(&::fmi3Reset) fmi3Reset;
+  decltype(&::fmi3GetFloat32) fmi3GetFloat32;
+  decltype(&::fmi3GetFloat64) fmi3GetFloat64;
+  decltype(&::fmi3GetInt32) fmi3GetInt32;
+  decltype(&::fmi3GetInt64) fmi3GetInt64;
+  decltype(&::fmi3GetBoolean) fmi3GetBoolean;
+  decltype(&::fmi3GetString) fmi3GetString;
+  decltype(&::fmi3GetBinary) fmi3GetBinary;
+  decltype(&::fmi3GetClock) fmi3GetClock;
+  decltype(&::fmi3SetFloat64) fmi3SetFloat64;
+  decltype(&::fmi3SetInt32) fmi3SetInt32;
+  decltype(&::fmi3SetInt64) fmi3SetInt64;
+  decltype(&::fmi3SetBoolean) fmi3SetBoolean;
+  decltype(&::fmi3SetUInt8) fmi3SetUInt8;
+  decltype(&::fmi3GetNumberOfVariableDependencies) fmi3GetNumberOfVariableDependencies;
+  decltype(&::fmi3GetVariableDependencies) fmi3GetVariableDependencies;
+  decltype(&::fmi3GetFMUState) fmi3GetFMUState;
+  decltype(&::fmi3SetFMUState) fmi3SetFMUState;
+  decltype(&::fmi3FreeFMUState) fmi3FreeFMUState;
+  decltype(&::fmi3SerializedFMUStateSize) fmi3SerializedFMUStateSize;
+  decltype(&::fmi3SerializeFMUState) fmi3SerializeFMUState;
+  decltype(&::fmi3DeserializeFMUState) fmi3DeserializeFMUState;
+  decltype(&::fmi3GetDirectionalDerivative) fmi3GetDirectionalDerivative;
+  decltype(&::fmi3EnterConfigurationMode) fmi3EnterConfigurationMode;
+  decltype(&::fmi3UpdateDiscreteStates) fmi3UpdateDiscreteStates;
+  decltype(&::fmi3EnterContinuousTimeMode) fmi3EnterContinuousTimeMode;
+  decltype(&::fmi3GetNumberOfContinuousStates) fmi3GetNumberOfContinuousStates;
+  decltype(&::fmi3EnterStepMode) fmi3EnterStepMode;
+  decltype(&::fmi3GetOutputDerivatives) fmi3GetOutputDerivatives;
+  decltype(&::fmi3DoStep) fmi3DoStep;
+  decltype(&::fmi3ActivateModelPartition) fmi3ActivateModelPartition;
+};
+
+Library& library(int version) {
+  // Loaded once per process, as a master loads an FMU's binary once for all its instances.
+  static Library fmi2(unzipped(2) + "/binaries/linux64/jointcomp.so");
+  static Library fmi3(unzipped(3) + "/binaries/x86_64-linux/jointcomp.so");
+  return version == 2 ? fmi2 : fmi3;
+}
+const Fmi2Api& fmi2() {
+  static const Fmi2Api api(library(2));
+  return api;
+}
+const Fmi3Api& fmi3() {
+  static const Fmi3Api api(library(3));
+  return api;
+}
+
+void fmi2Logger(fmi2ComponentEnvironment environment, fmi2String, fmi2Status status, fmi2String category,
+                fmi2String message, ...) {
+  char text[2048];
+  va_list args;
+  va_start(args, message);
+  std::vsnprintf(text, sizeof text, message, args);  // the FMI 2 message is a printf format
+  va_end(args);
+  std::string line = std::string(category) + " [" + std::to_string(status) + "] " + text;
+  for (std::size_t at = line.find("##"); at != std::string::npos; at = line.find("##", at + 1)) line.erase(at, 1);
+  static_cast<Master*>(environment)->messages.push_back(line);
+}
+
+void fmi3Logger(fmi3InstanceEnvironment environment, fmi3Status status, fmi3String category, fmi3String message) {
+  static_cast<Master*>(environment)->messages.push_back(std::string(category) + " [" + std::to_string(status) + "] " +
+                                                          message);
+}
+
+class Master2 : public Master {
+public:
+  Master2() : api(fmi2()) { md = readModelDescription(2); }
+  ~Master2() override { freeInstance(); }
+  int version() const override { return 2; }
+  bool instantiateAs(const std::string& name, const std::string& resources, const std::string& token,
+                     bool logging) override {
+    callbacks = {fmi2Logger, nullptr, nullptr, nullptr, this};
+    const std::string uri = resources.empty() ? "file://" + percentEncoded(unzipped(2) + "/resources/") : resources;
+    c = api.fmi2Instantiate(name.c_str(), fmi2CoSimulation, token.empty() ? md.token.c_str() : token.c_str(),
+                            uri.c_str(), &callbacks, 0, logging ? 1 : 0);
+    return c != nullptr;
+  }
+  int enterInitializationAt(double start, bool stop_defined, double stop) override {
+    const int status = api.fmi2SetupExperiment(c, 0, 0.0, start, stop_defined, stop);
+    if (status != kOK) return status;
+    return api.fmi2EnterInitializationMode(c);
+  }
+  int exitInitialization() override { return api.fmi2ExitInitializationMode(c); }
+  int setReals(const std::vector<std::uint32_t>& vrs, const std::vector<double>& values) override {
+    return api.fmi2SetReal(c, vrs.data(), vrs.size(), values.data());
+  }
+  int getReals(const std::vector<std::uint32_t>& vrs, std::vector<double>& values) override {
+    values.resize(vrs.size());
+    return api.fmi2GetReal(c, vrs.data(), vrs.size(), values.data());
+  }
+  int setInteger(std::uint32_t vr, int value) override { return api.fmi2SetInteger(c, &vr, 1, &value); }
+  int setEnumeration(std::uint32_t vr, long value) override {
+    const int v = static_cast<int>(value);
+    return api.fmi2SetInteger(c, &vr, 1, &v);
+  }
+  int getEnumeration(std::uint32_t vr, long& value) override {
+    int v = 0;
+    const int status = api.fmi2GetInteger(c, &vr, 1, &v);
+    value = v;
+    return status;
+  }
+  int setBoolean(std::uint32_t vr, bool value) override {
+    const int v = value;
+    return api.fmi2SetBoolean(c, &vr, 1, &v);
+  }
+  int doStep(double t, double h) override { return api.fmi2DoStep(c, t, h, 1); }
+  double lastSuccessfulTime() override {
+    double t = std::nan("");
+    EXPECT_EQ(api.fmi2GetRealStatus(c, fmi2LastSuccessfulTime, &t), kOK);
+    return t;
+  }
+  int getState(void** state) override { return api.fmi2GetFMUstate(c, state); }
+  int setState(void* state) override { return api.fmi2SetFMUstate(c, state); }
+  int freeState(void** state) override { return api.fmi2FreeFMUstate(c, state); }
+  int serialize(void* state, std::vector<unsigned char>& bytes) override {
+    std::size_t size = 0;
+    const int status = api.fmi2SerializedFMUstateSize(c, state, &size);
+    if (status != kOK) return status;
+    bytes.resize(size);
+    return api.fmi2SerializeFMUstate(c, state, reinterpret_cast<fmi2Byte*>(bytes.data()), size);
+  }
+  int deserialize(const std::vector<unsigned char>& bytes, void** state) override {
+    return api.fmi2DeSerializeFMUstate(c, reinterpret_cast<const fmi2Byte*>(bytes.data()), bytes.size(), state);
+  }
+  int terminate() override { return api.fmi2Terminate(c); }
+  int reset() override { return api.fmi2Reset(c); }
+  void freeInstance() override {
+    if (c) api.fmi2FreeInstance(c);
+    c = nullptr;
+  }
+  void* handle() const override { return c; }
+
+  const Fmi2Api& api;
+  fmi2CallbackFunctions callbacks{};
+  fmi2Component c = nullptr;
+};
+
+class Master3 : public Master {
+public:
+  Master3() : api(fmi3()) { md = readModelDescription(3); }
+  ~Master3() override { freeInstance(); }
+  int version() const override { return 3; }
+  bool instantiateAs(const std::string& name, const std::string& resources, const std::string& token,
+                     bool logging) override {
+    const std::string path = resources.empty() ? unzipped(3) + "/resources/" : resources;
+    c = api.fmi3InstantiateCoSimulation(name.c_str(), token.empty() ? md.token.c_str() : token.c_str(), path.c_str(),
+                                        false, logging, false, false, nullptr, 0, this, fmi3Logger, nullptr);
+    return c != nullptr;
+  }
+  int enterInitializationAt(double start, bool stop_defined, double stop) override {
+    return api.fmi3EnterInitializationMode(c, false, 0.0, start, stop_defined, stop);
+  }
+  int exitInitialization() override { return api.fmi3ExitInitializationMode(c); }
+  int setReals(const std::vector<std::uint32_t>& vrs, const std::vector<double>& values) override {
+    return api.fmi3SetFloat64(c, vrs.data(), vrs.size(), values.data(), values.size());
+  }
+  int getReals(const std::vector<std::uint32_t>& vrs, std::vector<double>& values) override {
+    values.resize(vrs.size());
+    return api.fmi3GetFloat64(c, vrs.data(), vrs.size(), values.data(), values.size());
+  }
+  int setInteger(std::uint32_t vr, int value) override {
+    const std::int32_t v = value;
+    return api.fmi3SetInt32(c, &vr, 1, &v, 1);
+  }
+  int setEnumeration(std::uint32_t vr, long value) override {
+    const std::int64_t v = value;
+    return api.fmi3SetInt64(c, &vr, 1, &v, 1);
+  }
+  int getEnumeration(std::uint32_t vr, long& value) override {
+    std::int64_t v = 0;
+    const int status = api.fmi3GetInt64(c, &vr, 1, &v, 1);
+    value = v;
+    return status;
+  }
+  int setBoolean(std::uint32_t vr, bool value) override { return api.fmi3SetBoolean(c, &vr, 1, &value, 1); }
+  int doStep(double t, double h) override {
+    bool event = true, terminate_now = true, early = true;
+    const int status = api.fmi3DoStep(c, t, h, true, &event, &terminate_now, &early, &last_successful_time);
+    if (status == kOK || status == kDiscard) {  // after an error the flags are undefined
+      EXPECT_FALSE(event);
+      EXPECT_FALSE(terminate_now);
+      EXPECT_FALSE(early);
+    }
+    return status;
+  }
+  double lastSuccessfulTime() override { return last_successful_time; }
+  int getState(void** state) override { return api.fmi3GetFMUState(c, state); }
+  int setState(void* state) override { return api.fmi3SetFMUState(c, state); }
+  int freeState(void** state) override { return api.fmi3FreeFMUState(c, state); }
+  int serialize(void* state, std::vector<unsigned char>& bytes) override {
+    std::size_t size = 0;
+    const int status = api.fmi3SerializedFMUStateSize(c, state, &size);
+    if (status != kOK) return status;
+    bytes.resize(size);
+    return api.fmi3SerializeFMUState(c, state, bytes.data(), size);
+  }
+  int deserialize(const std::vector<unsigned char>& bytes, void** state) override {
+    return api.fmi3DeserializeFMUState(c, bytes.data(), bytes.size(), state);
+  }
+  int terminate() override { return api.fmi3Terminate(c); }
+  int reset() override { return api.fmi3Reset(c); }
+  void freeInstance() override {
+    if (c) api.fmi3FreeInstance(c);
+    c = nullptr;
+  }
+  void* handle() const override { return c; }
+
+  const Fmi3Api& api;
+  fmi3Instance c = nullptr;
+  double last_successful_time = std::nan("");
+};
+
+std::unique_ptr<Master> makeMaster(int version) {
+  if (version == 2) return std::make_unique<Master2>();
+  return std::make_unique<Master3>();
+}
+
+// ---- The paper's spiral at 1 ms ------------------------------------------------------------------------
+
+struct Spiral {
+  std::shared_ptr<const Robot> robot;  // the FMU's own robot.json
+  std::vector<double> time;
+  std::vector<JointVector> q;
+  std::vector<Eigen::Vector3d> tool;
+};
+
+const Spiral& spiral() {
+  static const Spiral s = [] {
+    Spiral result;
+    result.robot = std::make_shared<const Robot>(loadRobotFile(unzipped(2) + "/resources/robot.json"));
+    const Path path = logarithmicSpiral(SpiralExperimentSpec::defaultSpiral());
+    FeedRateSpec feed;
+    feed.controller_period = 0.001;
+    JointVector seed = JointVector::Zero(kDof);
+    seed[1] = seed[2] = seed[4] = 60 * kDegree;  // as the paper's experiment: forward, elbow up
+    const JointTrajectory trajectory =
+        planJointTrajectory(*result.robot, planFeedRate(path, feed), toolPointingDown(), seed);
+    result.time = trajectory.time;
+    result.q = trajectory.q;
+    result.tool = trajectory.tool_position;
+    return result;
+  }();
+  return s;
+}
+
+std::vector<double> values(const JointVector& q) { return std::vector<double>(q.data(), q.data() + q.size()); }
+
+// The paper's truth: the nominal parameters moved by the paper experiment's default perturbation.
+JointErrorModel nominalModel() {
+  return loadParameterFile(unzipped(2) + "/resources/parameters.json", spiral().robot);
+}
+JointErrorModel truthModel() { return perturbedModel(nominalModel(), PerturbationSpec{}); }
+
+// Gives the FMU's plant the truth's effect parameters, through the FMU's plant.* parameters.
+void setTruth(Master& m, const JointErrorModel& truth) {
+  std::vector<std::uint32_t> vrs;
+  std::vector<double> numbers;
+  for (int e = 0; e < truth.effectCount(); ++e) {
+    const std::vector<std::string> names = truth.effect(e).parameterNames();
+    const std::vector<double> v = truth.effect(e).parameters();
+    for (std::size_t k = 0; k < names.size(); ++k) {
+      // Model names carry the unit after the last '_' of the last part: joint_1.stiffness_nm_per_rad.
+      std::string name = names[k];
+      for (const char* unit : {"_nm_per_rad", "_n_per_m", "_rad", "_m", "_n"}) {
+        const std::string suffix = unit;
+        if (name.size() > suffix.size() && name.compare(name.size() - suffix.size(), suffix.size(), suffix) == 0) {
+          name.erase(name.size() - suffix.size());
+          break;
+        }
+      }
+      vrs.push_back(m.vr("plant." + name));
+      numbers.push_back(v[k]);
+    }
+  }
+  ASSERT_EQ(vrs.size(), 20u);
+  ASSERT_EQ(m.setReals(vrs, numbers), kOK) << m.log();
+}
+
+// Instantiates and initialises at the spiral's first sample.
+void start(Master& m, long mode, const JointErrorModel* truth = nullptr) {
+  ASSERT_TRUE(m.instantiate()) << m.log();
+  ASSERT_EQ(m.enterInitialization(spiral().time[0]), kOK) << m.log();
+  ASSERT_EQ(m.setEnumeration(m.vr("compensation"), mode), kOK) << m.log();
+  if (truth) setTruth(m, *truth);
+  ASSERT_EQ(m.setReals(m.vrs("q_desired_", kDof), values(spiral().q[0])), kOK) << m.log();
+  ASSERT_EQ(m.exitInitialization(), kOK) << m.log();
+}
+
+// Communication steps as sample counts of the 1 ms plan: 1 throughout, or a varying pattern.
+std::vector<int> stepPattern(bool varying) {
+  if (!varying) return {1};
+  return {1, 2, 3, 1, 5, 2, 1, 4};
+}
+
+// Outputs after each step.
+struct Record {
+  std::vector<std::vector<double>> q_link, q_ref, outputs;
+  std::vector<std::size_t> sample;  // the spiral sample each step ended at
+};
+
+// Steps the FMU from sample `from` until sample `to` (or the end), reading the outputs after each step.
+Record run(Master& m, std::size_t from, std::size_t to, bool varying) {
+  const Spiral& s = spiral();
+  Record record;
+  const auto q_desired = m.vrs("q_desired_", kDof);
+  const auto q_link = m.vrs("q_link_", kDof);
+  const auto q_ref = m.vrs("q_ref_", kDof);
+  const std::vector<int> pattern = stepPattern(varying);
+  std::size_t k = from;
+  for (std::size_t i = 0; k + 1 < std::min(to, s.time.size()); ++i) {
+    const std::size_t next = std::min(k + pattern[i % pattern.size()], s.time.size() - 1);
+    EXPECT_EQ(m.setReals(q_desired, values(s.q[k])), kOK);
+    std::vector<double> ref;
+    EXPECT_EQ(m.getReals(q_ref, ref), kOK);  // the command for this step, before it is taken
+    const int status = m.doStep(s.time[k], s.time[next] - s.time[k]);
+    if (status != kOK) {
+      ADD_FAILURE() << "step at t = " << s.time[k] << " returned " << status << "\n" << m.log();
+      break;
+    }
+    std::vector<double> link, all;
+    EXPECT_EQ(m.getReals(q_link, link), kOK);
+    EXPECT_EQ(m.getReals(m.md.outputs, all), kOK);
+    record.q_link.push_back(link);
+    record.q_ref.push_back(ref);
+    record.outputs.push_back(all);
+    record.sample.push_back(next);
+    k = next;
+  }
+  return record;
+}
+
+// The same sequence on the plant and the compensator directly (fmu/instance.hpp, steps 1-4).
+Record runDirectly(long mode, const JointErrorModel& truth, std::size_t to, bool varying) {
+  const Spiral& s = spiral();
+  const JointErrorModel nominal = nominalModel();
+  const std::vector<DriveParameters> drives =
+      loadDriveParameters(unzipped(2) + "/resources/parameters.json", *s.robot);
+  FlexibleJointPlant plant(truth, drives, PlantOptions{});
+  EffectMask mask = 0;
+  if (mode == 1) mask = nominal.loadsAnd({"compliance"});
+  if (mode == 2) mask = nominal.loadsAnd({"compliance", "transmission_error"});
+  Compensator compensator(nominal, mask);
+  JointContext ctx(kDof);
+  auto reference = [&](const JointVector& q, const JointVector& v, double t) {
+    if (mode == 0) return q;
+    ctx.q = q;
+    ctx.velocity = v;
+    ctx.time = t;
+    ctx.tool_wrench = Vector6::Zero();
+    JointVector ref;
+    EXPECT_TRUE(compensator.compensate(ctx, ref).converged);
+    return ref;
+  };
+  plant.setToolWrench(Vector6::Zero());
+  plant.reset(reference(s.q[0], JointVector::Zero(kDof), s.time[0]), s.time[0]);
+  Record record;
+  const std::vector<int> pattern = stepPattern(varying);
+  bool has_last = false;
+  JointVector last_q;
+  double last_t = 0.0;
+  std::size_t k = 0;
+  for (std::size_t i = 0; k + 1 < std::min(to, s.time.size()); ++i) {
+    const std::size_t next = std::min(k + pattern[i % pattern.size()], s.time.size() - 1);
+    const double t = s.time[k];
+    const JointVector v = has_last ? JointVector((s.q[k] - last_q) / (t - last_t)) : JointVector(JointVector::Zero(kDof));
+    const JointVector ref = reference(s.q[k], v, t);
+    plant.setReference(ref, v);
+    plant.advance(t + (s.time[next] - t));
+    record.q_link.push_back(values(plant.linkPositions()));
+    record.q_ref.push_back(values(ref));
+    record.sample.push_back(next);
+    has_last = true;
+    last_q = s.q[k];
+    last_t = t;
+    k = next;
+  }
+  return record;
+}
+
+// RMS of the tool's Z deviation from the planned spiral (the paper's measure), from the FMU's tool output.
+double rmsZError(Master& m, const Record& record) {
+  const std::size_t tool_z = std::find(m.md.outputs.begin(), m.md.outputs.end(), m.vr("tool_z")) - m.md.outputs.begin();
+  double sum = 0.0;
+  for (std::size_t i = 0; i < record.outputs.size(); ++i) {
+    const double e = record.outputs[i][tool_z] - spiral().tool[record.sample[i]].z();
+    sum += e * e;
+  }
+  return std::sqrt(sum / static_cast<double>(record.outputs.size()));
+}
+
+class FmuTest : public ::testing::TestWithParam<int> {};
+
+// ---- The spiral through the FMU ------------------------------------------------------------------------
+
+TEST_P(FmuTest, DescribesItselfAndExportsTheStandardVersion) {
+  if (GetParam() == 2) {
+    EXPECT_STREQ(fmi2().fmi2GetVersion(), "2.0");
+    EXPECT_STREQ(fmi2().fmi2GetTypesPlatform(), "default");
+  } else {
+    EXPECT_STREQ(fmi3().fmi3GetVersion(), "3.0");
+  }
+  const ModelDescription md = readModelDescription(GetParam());
+  EXPECT_EQ(md.outputs.size(), 45u);
+  EXPECT_EQ(md.vr.size(), 131u);
+  EXPECT_FALSE(md.token.empty());
+}
+
+TEST_P(FmuTest, SpiralAt1msMatchesThePlantAndCompensatorRunDirectlyBitForBit) {
+  const JointErrorModel truth = truthModel();
+  for (long mode : {0L, 1L, 2L}) {
+    auto m = makeMaster(GetParam());
+    start(*m, mode, &truth);
+    const Record fmu = run(*m, 0, spiral().time.size(), false);
+    const Record direct = runDirectly(mode, truth, spiral().time.size(), false);
+    ASSERT_EQ(fmu.q_link.size(), direct.q_link.size());
+    ASSERT_EQ(fmu.q_link.size() + 1, spiral().time.size());
+    std::size_t differing = 0;
+    for (std::size_t i = 0; i < fmu.q_link.size(); ++i) {
+      if (fmu.q_link[i] != direct.q_link[i] || fmu.q_ref[i] != direct.q_ref[i]) ++differing;
+    }
+    EXPECT_EQ(differing, 0u) << "mode " << mode;
+    m->freeInstance();
+  }
+}
+
+TEST_P(FmuTest, VaryingCommunicationStepsMatchTheDirectRunBitForBit) {
+  const JointErrorModel truth = truthModel();
+  auto m = makeMaster(GetParam());
+  start(*m, 2, &truth);
+  const std::size_t end = 8000;
+  const Record fmu = run(*m, 0, end, true);
+  const Record direct = runDirectly(2, truth, end, true);
+  ASSERT_EQ(fmu.q_link.size(), direct.q_link.size());
+  EXPECT_GT(fmu.q_link.size(), 2000u);
+  for (std::size_t i = 0; i < fmu.q_link.size(); ++i) {
+    ASSERT_EQ(fmu.q_link[i], direct.q_link[i]) << "step " << i;
+    ASSERT_EQ(fmu.q_ref[i], direct.q_ref[i]) << "step " << i;
+  }
+}
+
+TEST(FmuRegression, CompensationThroughTheFmuReducesThePaperErrorAndBothVersionsAgree) {
+  // The paper's Table II through the FMU: none, stiffness, stiffness and kinematic correction against a
+  // robot whose parameters differ from the compensator's.
+  const JointErrorModel truth = truthModel();
+  double rms[3];
+  Record fmi2_record;
+  for (long mode : {0L, 1L, 2L}) {
+    Master2 m;
+    start(m, mode, &truth);
+    const Record record = run(m, 0, spiral().time.size(), false);
+    rms[mode] = rmsZError(m, record);
+    if (mode == 2) fmi2_record = record;
+  }
+  std::printf("RMS Z error through the FMU [mm]: none %.4f, stiffness %.4f, stiffness and kinematic %.4f\n",
+              rms[0] * 1e3, rms[1] * 1e3, rms[2] * 1e3);
+  EXPECT_LT(rms[1], rms[0]);
+  EXPECT_LT(rms[2], rms[1]);
+  EXPECT_LT(rms[2], 0.5 * rms[0]);
+  Master3 m3;
+  start(m3, 2, &truth);
+  const Record fmi3_record = run(m3, 0, spiral().time.size(), false);
+  EXPECT_EQ(fmi3_record.outputs, fmi2_record.outputs);  // one instance code, two APIs
+}
+
+TEST_P(FmuTest, OutputsAreConsistentWithTheModel) {
+  auto m = makeMaster(GetParam());
+  start(*m, 2);
+  std::vector<double> q_link, q_motor, tool, dq_actual, dq_predicted, q_ref;
+  ASSERT_EQ(m->getReals(m->vrs("q_link_", kDof), q_link), kOK);
+  ASSERT_EQ(m->getReals(m->vrs("q_motor_", kDof), q_motor), kOK);
+  ASSERT_EQ(m->getReals({m->vr("tool_x"), m->vr("tool_y"), m->vr("tool_z")}, tool), kOK);
+  ASSERT_EQ(m->getReals(m->vrs("dq_actual_", kDof), dq_actual), kOK);
+  ASSERT_EQ(m->getReals(m->vrs("dq_predicted_", kDof), dq_predicted), kOK);
+  ASSERT_EQ(m->getReals(m->vrs("q_ref_", kDof), q_ref), kOK);
+  // At rest in static equilibrium, with the plant's truth the nominal model: prediction = actual error.
+  for (int j = 0; j < kDof; ++j) {
+    EXPECT_EQ(dq_actual[j], q_link[j] - q_motor[j]);
+    EXPECT_NEAR(dq_predicted[j], dq_actual[j], 1e-9) << "joint " << j + 1;
+    EXPECT_NEAR(q_motor[j], q_ref[j], 1e-9);  // the motors start at the command
+  }
+  // The compensated command brings the links to the desired positions.
+  for (int j = 0; j < kDof; ++j) EXPECT_NEAR(q_link[j], spiral().q[0][j], 1e-9) << "joint " << j + 1;
+  RobotWorkspace ws(*spiral().robot);
+  JointVector q(kDof);
+  for (int j = 0; j < kDof; ++j) q[j] = q_link[j];
+  forwardKinematics(*spiral().robot, ws, q);
+  for (int k = 0; k < 3; ++k) EXPECT_EQ(tool[k], ws.tool_pose.translation()[k]);
+  // q_ref follows the inputs at once (direct feed-through), the plant's outputs do not.
+  std::vector<double> moved = values(spiral().q[0]);
+  moved[0] += 0.01;
+  ASSERT_EQ(m->setReals(m->vrs("q_desired_", kDof), moved), kOK);
+  std::vector<double> q_ref_after, q_link_after;
+  ASSERT_EQ(m->getReals(m->vrs("q_ref_", kDof), q_ref_after), kOK);
+  ASSERT_EQ(m->getReals(m->vrs("q_link_", kDof), q_link_after), kOK);
+  EXPECT_NEAR(q_ref_after[0] - q_ref[0], 0.01, 1e-4);
+  EXPECT_EQ(q_link_after, q_link);
+  // Switching the compensation off (tunable) changes the command to the plan.
+  ASSERT_EQ(m->setEnumeration(m->vr("compensation"), 0), kOK);
+  ASSERT_EQ(m->getReals(m->vrs("q_ref_", kDof), q_ref_after), kOK);
+  EXPECT_EQ(q_ref_after, moved);
+  long mode = -1;
+  ASSERT_EQ(m->getEnumeration(m->vr("compensation"), mode), kOK);
+  EXPECT_EQ(mode, 0);
+}
+
+// ---- FMU state -----------------------------------------------------------------------------------------
+
+TEST_P(FmuTest, RestoringAStateMidRunContinuesIdentically) {
+  auto m = makeMaster(GetParam());
+  start(*m, 2);
+  const Spiral& s = spiral();
+  const std::size_t mid = 3000, end = 4500;
+  run(*m, 0, mid, false);
+  void* state = nullptr;
+  ASSERT_EQ(m->getState(&state), kOK);
+  ASSERT_NE(state, nullptr);
+  const Record first = run(*m, mid - 1, end, true);
+  ASSERT_EQ(m->setState(state), kOK) << m->log();
+  const Record again = run(*m, mid - 1, end, true);
+  ASSERT_FALSE(first.outputs.empty());
+  EXPECT_EQ(first.outputs, again.outputs);
+
+  // Serialised and read back into another instance: the same continuation there.
+  std::vector<unsigned char> bytes;
+  ASSERT_EQ(m->serialize(state, bytes), kOK);
+  auto other = makeMaster(GetParam());
+  ASSERT_TRUE(other->instantiate("other"));
+  void* copy = nullptr;
+  ASSERT_EQ(other->deserialize(bytes, &copy), kOK) << other->log();
+  ASSERT_EQ(other->setState(copy), kOK) << other->log();
+  const Record elsewhere = run(*other, mid - 1, end, true);
+  EXPECT_EQ(first.outputs, elsewhere.outputs);
+  // A state can be overwritten in place (FMI 2: a non-null *FMUstate), and freed once.
+  ASSERT_EQ(m->getState(&state), kOK);
+  EXPECT_EQ(m->freeState(&state), kOK);
+  EXPECT_EQ(state, nullptr);
+  EXPECT_EQ(other->freeState(&copy), kOK);
+  (void)s;
+}
+
+TEST_P(FmuTest, CorruptOrForeignStatesAreRefused) {
+  auto m = makeMaster(GetParam());
+  start(*m, 1);
+  ASSERT_EQ(m->doStep(spiral().time[0], 0.001), kOK);
+  void* state = nullptr;
+  ASSERT_EQ(m->getState(&state), kOK);
+  std::vector<unsigned char> bytes;
+  ASSERT_EQ(m->serialize(state, bytes), kOK);
+  void* copy = nullptr;
+  auto expect_refused = [&](std::vector<unsigned char> broken, const char* fragment) {
+    m->messages.clear();
+    EXPECT_EQ(m->deserialize(broken, &copy), kError) << fragment;
+    EXPECT_EQ(copy, nullptr);
+    EXPECT_TRUE(m->logged(fragment)) << m->log();
+  };
+  std::vector<unsigned char> flipped = bytes;
+  flipped[bytes.size() / 2] ^= 0x10;
+  expect_refused(flipped, "checksum");
+  expect_refused(std::vector<unsigned char>(bytes.begin(), bytes.begin() + bytes.size() / 2), "says it has");
+  expect_refused(std::vector<unsigned char>(bytes.begin(), bytes.begin() + 3), "ends inside");
+  expect_refused(std::vector<unsigned char>(200, 0x5a), "magic");
+  EXPECT_EQ(m->deserialize(std::vector<unsigned char>(), &copy), kError);
+  // Pointers that are not this instance's states are refused without being followed.
+  double not_a_state[64] = {};
+  m->messages.clear();
+  EXPECT_EQ(m->setState(not_a_state), kError);
+  EXPECT_TRUE(m->logged("not a state of this instance")) << m->log();
+  void* foreign = not_a_state;
+  EXPECT_EQ(m->freeState(&foreign), kError);
+  EXPECT_EQ(m->setState(nullptr), kError);
+  EXPECT_EQ(m->getState(nullptr), kError);
+  auto other = makeMaster(GetParam());
+  ASSERT_TRUE(other->instantiate("other"));
+  EXPECT_EQ(other->setState(state), kError);  // a state belongs to the instance that made it
+  std::vector<unsigned char> short_buffer(bytes.size() - 1);
+  if (GetParam() == 2) {
+    EXPECT_EQ(fmi2().fmi2SerializeFMUstate(m->handle(), state, reinterpret_cast<fmi2Byte*>(short_buffer.data()),
+                                           short_buffer.size()),
+              kError);
+  } else {
+    EXPECT_EQ(fmi3().fmi3SerializeFMUState(m->handle(), state, short_buffer.data(), short_buffer.size()), kError);
+  }
+  EXPECT_EQ(m->freeState(&state), kOK);
+  // The instance is still fine.
+  EXPECT_EQ(m->doStep(spiral().time[0] + 0.001, 0.001), kOK) << m->log();
+}
+
+// ---- Two instances at once -----------------------------------------------------------------------------
+
+TEST_P(FmuTest, TwoInstancesInTwoThreadsGiveTheSingleThreadedNumbers) {
+  const std::size_t end = 2500;
+  auto alone = makeMaster(GetParam());
+  start(*alone, 2);
+  const Record reference = run(*alone, 0, end, false);
+  alone->freeInstance();
+  Record results[2];
+  auto worker = [&](int i) {
+    auto m = makeMaster(GetParam());
+    start(*m, 2);
+    results[i] = run(*m, 0, end, false);
+  };
+  std::thread a(worker, 0), b(worker, 1);
+  a.join();
+  b.join();
+  EXPECT_EQ(results[0].outputs, reference.outputs);
+  EXPECT_EQ(results[1].outputs, reference.outputs);
+  EXPECT_EQ(results[0].outputs.size() + 1, end);
+}
+
+// ---- Misuse --------------------------------------------------------------------------------------------
+
+TEST_P(FmuTest, CallsOutOfOrderAreRefusedAndLogged) {
+  auto m = makeMaster(GetParam());
+  ASSERT_TRUE(m->instantiate());
+  EXPECT_EQ(m->doStep(0.0, 0.001), kError);
+  EXPECT_TRUE(m->logged("not allowed in state Instantiated")) << m->log();
+  EXPECT_EQ(m->exitInitialization(), kError);
+  EXPECT_EQ(m->terminate(), kError);
+  std::vector<double> out;
+  EXPECT_EQ(m->getReals({m->vr("q_link_1")}, out), kError);  // FMI 2: no get before init; FMI 3: not computed yet
+  ASSERT_EQ(m->enterInitialization(), kOK);
+  EXPECT_EQ(m->enterInitialization(), kError);
+  EXPECT_EQ(m->doStep(0.0, 0.001), kError);
+  ASSERT_EQ(m->exitInitialization(), kOK) << m->log();
+  EXPECT_EQ(m->exitInitialization(), kError);
+  EXPECT_EQ(m->enterInitialization(), kError);
+  ASSERT_EQ(m->doStep(0.0, 0.001), kOK) << m->log();
+  ASSERT_EQ(m->terminate(), kOK);
+  m->messages.clear();
+  EXPECT_EQ(m->doStep(0.001, 0.001), kError);
+  EXPECT_TRUE(m->logged("not allowed in state Terminated")) << m->log();
+  EXPECT_EQ(m->setReals({m->vr("q_desired_1")}, {0.1}), kError);
+  EXPECT_EQ(m->getReals({m->vr("q_link_1")}, out), kOK);  // the final values can be read
+  ASSERT_EQ(m->reset(), kOK);
+  ASSERT_EQ(m->enterInitialization(), kOK);
+  ASSERT_EQ(m->exitInitialization(), kOK);
+  EXPECT_EQ(m->doStep(0.0, 0.001), kOK) << m->log();
+}
+
+TEST_P(FmuTest, BadStepsAreRefused) {
+  auto m = makeMaster(GetParam());
+  start(*m, 2);
+  const double t0 = spiral().time[0];
+  m->messages.clear();
+  EXPECT_EQ(m->doStep(t0, 0.0), kError);
+  EXPECT_TRUE(m->logged("step size positive")) << m->log();
+  EXPECT_EQ(m->doStep(t0, -0.001), kError);
+  EXPECT_EQ(m->doStep(t0, std::nan("")), kError);
+  EXPECT_EQ(m->doStep(std::nan(""), 0.001), kError);
+  EXPECT_EQ(m->doStep(t0, std::numeric_limits<double>::infinity()), kError);
+  m->messages.clear();
+  EXPECT_EQ(m->doStep(t0 + 0.5, 0.001), kError);  // not the FMU's time
+  EXPECT_TRUE(m->logged("is not the FMU's time")) << m->log();
+  EXPECT_EQ(m->doStep(t0, 0.001), kOK) << m->log();  // and nothing was broken
+  m->messages.clear();
+  EXPECT_EQ(m->doStep(t0 + 0.001, 1e-300), kError);  // a step that does not move the time
+  EXPECT_TRUE(m->logged("too small")) << m->log();
+  EXPECT_EQ(m->doStep(t0 + 0.001, 0.001), kOK) << m->log();
+}
+
+TEST_P(FmuTest, StopTimeIsEnforced) {
+  auto m = makeMaster(GetParam());
+  ASSERT_TRUE(m->instantiate());
+  ASSERT_EQ(m->enterInitialization(0.0, true, 0.002), kOK);
+  ASSERT_EQ(m->exitInitialization(), kOK);
+  EXPECT_EQ(m->doStep(0.0, 0.002), kOK);
+  EXPECT_EQ(m->doStep(0.002, 0.001), kError);
+  EXPECT_TRUE(m->logged("beyond the stop time")) << m->log();
+}
+
+TEST_P(FmuTest, BadValuesAreRefusedAndChangeNothing) {
+  auto m = makeMaster(GetParam());
+  start(*m, 2);
+  const std::uint32_t q1 = m->vr("q_desired_1");
+  std::vector<double> before, after;
+  ASSERT_EQ(m->getReals({q1}, before), kOK);
+  m->messages.clear();
+  EXPECT_EQ(m->setReals({q1}, {std::nan("")}), kError);
+  EXPECT_TRUE(m->logged("is not finite")) << m->log();
+  EXPECT_EQ(m->setReals({q1}, {std::numeric_limits<double>::infinity()}), kError);
+  // A refused call sets none of its values, even the good ones before the bad one.
+  EXPECT_EQ(m->setReals({m->vr("q_desired_2"), q1}, {0.123, std::nan("")}), kError);
+  ASSERT_EQ(m->getReals({q1, m->vr("q_desired_2")}, after), kOK);
+  EXPECT_EQ(after[0], before[0]);
+  EXPECT_NE(after[1], 0.123);
+  // Unknown value references, wrong types, outputs, fixed parameters after initialisation.
+  m->messages.clear();
+  EXPECT_EQ(m->setReals({99999}, {1.0}), kError);
+  EXPECT_EQ(m->getReals({99999}, after), kError);
+  EXPECT_TRUE(m->logged("vr 99999 is not a variable of this FMU")) << m->log();
+  EXPECT_EQ(m->setReals({m->vr("compensation")}, {1.0}), kError);  // an enumeration, not a real
+  EXPECT_EQ(m->setReals({m->vr("q_link_1")}, {1.0}), kError);
+  EXPECT_TRUE(m->logged("is an output")) << m->log();
+  EXPECT_EQ(m->setReals({m->vr("time")}, {1.0}), kError);
+  EXPECT_EQ(m->setReals({m->vr("plant.joint_2.stiffness")}, {1e6}), kError);
+  EXPECT_TRUE(m->logged("fixed parameter")) << m->log();
+  EXPECT_EQ(m->setEnumeration(m->vr("compensation"), 7), kError);  // not an item
+  EXPECT_EQ(m->setEnumeration(m->vr("q_desired_1"), 1), kError);
+  // Null arrays with values to transfer; none with nothing to transfer is fine.
+  if (GetParam() == 2) {
+    const fmi2ValueReference vr = q1;
+    double v = 0.0;
+    EXPECT_EQ(fmi2().fmi2GetReal(m->handle(), nullptr, 1, &v), kError);
+    EXPECT_EQ(fmi2().fmi2GetReal(m->handle(), &vr, 1, nullptr), kError);
+    EXPECT_EQ(fmi2().fmi2SetReal(m->handle(), &vr, 1, nullptr), kError);
+    EXPECT_EQ(fmi2().fmi2GetReal(m->handle(), nullptr, 0, nullptr), kOK);
+    fmi2String s = nullptr;
+    EXPECT_EQ(fmi2().fmi2GetString(m->handle(), &vr, 1, &s), kError);
+    int integer = 0;
+    EXPECT_EQ(fmi2().fmi2GetInteger(m->handle(), &vr, 1, &integer), kError);  // a real
+  } else {
+    const fmi3ValueReference vr = q1;
+    double v = 0.0;
+    float f = 0.0f;
+    EXPECT_EQ(fmi3().fmi3GetFloat64(m->handle(), nullptr, 1, &v, 1), kError);
+    EXPECT_EQ(fmi3().fmi3GetFloat64(m->handle(), &vr, 1, nullptr, 1), kError);
+    EXPECT_EQ(fmi3().fmi3GetFloat64(m->handle(), &vr, 1, &v, 2), kError);  // nValues != nValueReferences
+    EXPECT_EQ(fmi3().fmi3GetFloat32(m->handle(), &vr, 1, &f, 1), kError);
+    EXPECT_EQ(fmi3().fmi3GetFloat32(m->handle(), nullptr, 0, nullptr, 0), kOK);
+    const std::uint8_t byte = 1;
+    EXPECT_EQ(fmi3().fmi3SetUInt8(m->handle(), &vr, 1, &byte, 1), kError);
+    std::int32_t integer = 0;
+    EXPECT_EQ(fmi3().fmi3GetInt32(m->handle(), &vr, 1, &integer, 1), kError);
+    bool clock = false;
+    EXPECT_EQ(fmi3().fmi3GetClock(m->handle(), &vr, 1, &clock), kError);
+  }
+  // Out of range (below a minimum) is discarded, not set.
+  ASSERT_TRUE(m->reset() == kOK);
+  m->messages.clear();
+  EXPECT_EQ(m->setReals({m->vr("plant.joint_2.stiffness")}, {-5.0}), kDiscard);
+  EXPECT_EQ(m->setInteger(m->vr("integrator.max_order"), 9), kDiscard);
+  // The instance still works.
+  ASSERT_EQ(m->enterInitialization(), kOK);
+  ASSERT_EQ(m->exitInitialization(), kOK);
+  EXPECT_EQ(m->doStep(0.0, 0.001), kOK) << m->log();
+}
+
+TEST_P(FmuTest, ParametersTheModelRejectsFailInitialisationWithTheReason) {
+  auto m = makeMaster(GetParam());
+  ASSERT_TRUE(m->instantiate());
+  ASSERT_EQ(m->enterInitialization(), kOK);
+  ASSERT_EQ(m->setReals({m->vr("plant.joint_3.stiffness")}, {0.0}), kOK);  // at the minimum, but not positive
+  EXPECT_EQ(m->exitInitialization(), kError);
+  EXPECT_TRUE(m->logged("stiffness")) << m->log();
+  EXPECT_EQ(m->doStep(0.0, 0.001), kError);
+  EXPECT_EQ(m->reset(), kOK);  // back to the start values
+  ASSERT_EQ(m->enterInitialization(), kOK);
+  ASSERT_EQ(m->exitInitialization(), kOK) << m->log();
+}
+
+TEST_P(FmuTest, AFailingIntegrationIsDiscardedWithCvodesReason) {
+  auto m = makeMaster(GetParam());
+  ASSERT_TRUE(m->instantiate());
+  ASSERT_EQ(m->enterInitialization(), kOK);
+  ASSERT_EQ(m->setInteger(m->vr("integrator.max_steps"), 1), kOK);
+  ASSERT_EQ(m->setReals({m->vr("q_desired_2"), m->vr("q_desired_3")}, {1.0, 1.0}), kOK);
+  ASSERT_EQ(m->exitInitialization(), kOK) << m->log();
+  void* before = nullptr;
+  ASSERT_EQ(m->getState(&before), kOK);
+  ASSERT_EQ(m->setReals({m->vr("q_desired_2")}, {1.2}), kOK);
+  EXPECT_EQ(m->doStep(0.0, 0.01), kDiscard);
+  EXPECT_TRUE(m->logged("logStatusDiscard")) << m->log();
+  EXPECT_TRUE(m->logged("CVODE")) << m->log();
+  EXPECT_TRUE(m->logged("mxstep")) << m->log();  // CVODE's own words
+  EXPECT_LT(m->lastSuccessfulTime(), 0.01);
+  EXPECT_EQ(m->doStep(m->lastSuccessfulTime(), 0.01), kError);  // not after a discarded step
+  EXPECT_TRUE(m->logged("not allowed in state StepDiscarded")) << m->log();
+  // Back to the state before the step: stepping is allowed again.
+  ASSERT_EQ(m->setState(before), kOK);
+  EXPECT_EQ(m->doStep(0.0, 0.01), kDiscard);  // still too few steps allowed
+  EXPECT_EQ(m->terminate(), kOK);
+  EXPECT_EQ(m->freeState(&before), kOK);
+}
+
+TEST_P(FmuTest, MissingOrWrongResourcesFailInstantiationWithTheReason) {
+  const std::string scratch = JOINTCOMP_FMU_SCRATCH_DIR;
+  ::mkdir(scratch.c_str(), 0755);
+  const std::string empty = scratch + "/empty resources " + std::to_string(GetParam());
+  ::mkdir(empty.c_str(), 0755);
+  const std::string half = scratch + "/robot only " + std::to_string(GetParam());
+  ::mkdir(half.c_str(), 0755);
+  writeFileAtomically(half + "/robot.json", readFile(unzipped(2) + "/resources/robot.json"));
+  const std::string wrong = scratch + "/wrong robot " + std::to_string(GetParam());
+  ::mkdir(wrong.c_str(), 0755);
+  std::string robot_text = readFile(unzipped(2) + "/resources/robot.json");
+  robot_text.replace(robot_text.find("\"rx170\""), 7, "\"other\"");
+  writeFileAtomically(wrong + "/robot.json", robot_text);
+  auto location = [&](const std::string& dir) {
+    return GetParam() == 2 ? "file://" + percentEncoded(dir) : dir + "/";
+  };
+  auto expect_refused = [&](const std::string& resources, const std::string& token, const char* fragment) {
+    auto m = makeMaster(GetParam());
+    EXPECT_FALSE(m->instantiate("robot", resources, token)) << resources;
+    EXPECT_TRUE(m->logged(fragment)) << resources << "\n" << m->log();
+  };
+  expect_refused(location(empty), "", "robot.json");
+  expect_refused(location(half), "", "parameters.json");
+  expect_refused(location(wrong), "", "describes robot 'other'");
+  expect_refused("", "{00000000-0000-0000-0000-000000000000}", "is not this FMU's");
+  if (GetParam() == 2) {
+    expect_refused("http://example.org/resources/", "", "only file: URIs");
+    expect_refused("file://elsewhere/resources/", "", "another host");
+    expect_refused("file:///tmp/%zz/", "", "hexadecimal");
+    expect_refused("resources/", "", "only file: URIs");
+    // The other URI forms of the same folder are understood.
+    for (const std::string& uri : {"file:" + percentEncoded(unzipped(2) + "/resources"),
+                                   "file://localhost" + percentEncoded(unzipped(2) + "/resources/")}) {
+      Master2 m;
+      EXPECT_TRUE(m.instantiate("robot", uri)) << uri << "\n" << m.log();
+    }
+  }
+}
+
+TEST(FmuMisuse2, NullAndForeignPointersNeverCrash) {
+  const Fmi2Api& api = fmi2();
+  double d = 0.0;
+  int i = 0;
+  fmi2ValueReference vr = 0;
+  fmi2FMUstate state = nullptr;
+  EXPECT_EQ(api.fmi2DoStep(nullptr, 0.0, 0.001, 1), kError);
+  EXPECT_EQ(api.fmi2GetReal(nullptr, &vr, 1, &d), kError);
+  EXPECT_EQ(api.fmi2SetReal(nullptr, &vr, 1, &d), kError);
+  EXPECT_EQ(api.fmi2SetInteger(nullptr, &vr, 1, &i), kError);
+  EXPECT_EQ(api.fmi2EnterInitializationMode(nullptr), kError);
+  EXPECT_EQ(api.fmi2ExitInitializationMode(nullptr), kError);
+  EXPECT_EQ(api.fmi2SetupExperiment(nullptr, 0, 0.0, 0.0, 0, 0.0), kError);
+  EXPECT_EQ(api.fmi2Terminate(nullptr), kError);
+  EXPECT_EQ(api.fmi2Reset(nullptr), kError);
+  EXPECT_EQ(api.fmi2GetFMUstate(nullptr, &state), kError);
+  EXPECT_EQ(api.fmi2SetDebugLogging(nullptr, 1, 0, nullptr), kError);
+  EXPECT_EQ(api.fmi2GetRealStatus(nullptr, fmi2LastSuccessfulTime, &d), kError);
+  EXPECT_EQ(api.fmi2EnterEventMode(nullptr), kError);
+  api.fmi2FreeInstance(nullptr);
+  // A pointer to something else (here: an FMU state's memory would do; a plain buffer is used).
+  std::uint64_t buffer[16] = {};
+  EXPECT_EQ(api.fmi2DoStep(buffer, 0.0, 0.001, 1), kError);
+  api.fmi2FreeInstance(buffer);
+  // Instantiation with missing pieces.
+  fmi2CallbackFunctions callbacks{};
+  const ModelDescription md = readModelDescription(2);
+  const std::string uri = "file://" + percentEncoded(unzipped(2) + "/resources/");
+  EXPECT_EQ(api.fmi2Instantiate("x", fmi2CoSimulation, md.token.c_str(), uri.c_str(), nullptr, 0, 0), nullptr);
+  EXPECT_EQ(api.fmi2Instantiate(nullptr, fmi2CoSimulation, md.token.c_str(), uri.c_str(), &callbacks, 0, 0), nullptr);
+  EXPECT_EQ(api.fmi2Instantiate("  ", fmi2CoSimulation, md.token.c_str(), uri.c_str(), &callbacks, 0, 0), nullptr);
+  EXPECT_EQ(api.fmi2Instantiate("x", fmi2CoSimulation, nullptr, uri.c_str(), &callbacks, 0, 0), nullptr);
+  EXPECT_EQ(api.fmi2Instantiate("x", fmi2CoSimulation, md.token.c_str(), nullptr, &callbacks, 0, 0), nullptr);
+  EXPECT_EQ(api.fmi2Instantiate("x", fmi2ModelExchange, md.token.c_str(), uri.c_str(), &callbacks, 0, 0), nullptr);
+  // Without a logger the instance works and its errors do not crash.
+  fmi2Component c = api.fmi2Instantiate("quiet", fmi2CoSimulation, md.token.c_str(), uri.c_str(), &callbacks, 0, 0);
+  ASSERT_NE(c, nullptr);
+  EXPECT_EQ(api.fmi2DoStep(c, 0.0, 0.001, 1), kError);
+  api.fmi2FreeInstance(c);
+}
+
+TEST(FmuMisuse2, FunctionsNotProvidedReturnAnError) {
+  Master2 m;
+  start(m, 2);
+  const Fmi2Api& api = m.api;
+  fmi2Component c = m.c;
+  fmi2ValueReference vr = m.vr("q_link_1");
+  double d = 0.0;
+  int i = 0;
+  fmi2Status status = fmi2OK;
+  fmi2String text = nullptr;
+  fmi2EventInfo info{};
+  m.messages.clear();
+  EXPECT_EQ(api.fmi2GetDirectionalDerivative(c, &vr, 1, &vr, 1, &d, &d), kError);
+  EXPECT_TRUE(m.logged("fmi2GetDirectionalDerivative")) << m.log();
+  EXPECT_EQ(api.fmi2SetRealInputDerivatives(c, &vr, 1, &i, &d), kError);
+  EXPECT_EQ(api.fmi2GetRealOutputDerivatives(c, &vr, 1, &i, &d), kError);
+  EXPECT_EQ(api.fmi2CancelStep(c), kError);
+  EXPECT_EQ(api.fmi2GetStatus(c, fmi2DoStepStatus, &status), kError);
+  EXPECT_EQ(api.fmi2GetIntegerStatus(c, fmi2LastSuccessfulTime, &i), kError);
+  EXPECT_EQ(api.fmi2GetStringStatus(c, fmi2PendingStatus, &text), kError);
+  EXPECT_EQ(api.fmi2GetRealStatus(c, fmi2DoStepStatus, &d), kError);
+  EXPECT_EQ(api.fmi2GetRealStatus(c, fmi2LastSuccessfulTime, nullptr), kError);
+  EXPECT_EQ(api.fmi2GetRealStatus(c, fmi2LastSuccessfulTime, &d), kOK);
+  EXPECT_EQ(d, spiral().time[0]);
+  EXPECT_EQ(api.fmi2GetBooleanStatus(c, fmi2Terminated, &i), kOK);
+  EXPECT_EQ(i, 0);
+  EXPECT_EQ(api.fmi2EnterEventMode(c), kError);
+  EXPECT_EQ(api.fmi2NewDiscreteStates(c, &info), kError);
+  EXPECT_EQ(api.fmi2EnterContinuousTimeMode(c), kError);
+  EXPECT_EQ(api.fmi2CompletedIntegratorStep(c, 1, &i, &i), kError);
+  EXPECT_EQ(api.fmi2SetTime(c, 0.0), kError);
+  EXPECT_EQ(api.fmi2SetContinuousStates(c, &d, 1), kError);
+  EXPECT_EQ(api.fmi2GetDerivatives(c, &d, 1), kError);
+  EXPECT_EQ(api.fmi2GetEventIndicators(c, &d, 1), kError);
+  EXPECT_EQ(api.fmi2GetContinuousStates(c, &d, 1), kError);
+  EXPECT_EQ(api.fmi2GetNominalsOfContinuousStates(c, &d, 1), kError);
+  EXPECT_TRUE(m.logged("co-simulation only")) << m.log();
+  const fmi2String bad[] = {"logNoSuchThing"};
+  EXPECT_EQ(api.fmi2SetDebugLogging(c, 1, 1, bad), kError);
+  const fmi2String good[] = {"logCalls"};
+  EXPECT_EQ(api.fmi2SetDebugLogging(c, 1, 1, good), kOK);
+  m.messages.clear();
+  EXPECT_EQ(m.doStep(spiral().time[0], 0.001), kOK);
+  EXPECT_TRUE(m.logged("logCalls")) << m.log();
+  // After all that, the instance steps on.
+  EXPECT_EQ(m.doStep(spiral().time[0] + 0.001, 0.001), kOK) << m.log();
+}
+
+TEST(FmuMisuse3, EventModeAndEarlyReturnAreDeclinedGracefully) {
+  const Fmi3Api& api = fmi3();
+  const ModelDescription md = readModelDescription(3);
+  const std::string resources = unzipped(3) + "/resources/";
+  Master3 m;
+  const fmi3ValueReference wanted[] = {m.vr("q_link_1")};
+  m.c = api.fmi3InstantiateCoSimulation("events", md.token.c_str(), resources.c_str(), false, true, true, true, wanted,
+                                        1, &m, fmi3Logger, nullptr);
+  ASSERT_NE(m.c, nullptr) << m.log();
+  EXPECT_TRUE(m.logged("no event mode")) << m.log();
+  EXPECT_TRUE(m.logged("never returns early")) << m.log();
+  EXPECT_TRUE(m.logged("intermediate")) << m.log();
+  ASSERT_EQ(m.enterInitialization(), kOK);
+  ASSERT_EQ(m.exitInitialization(), kOK);
+  EXPECT_EQ(api.fmi3EnterStepMode(m.c), kError);
+  EXPECT_EQ(api.fmi3EnterEventMode(m.c), kError);
+  EXPECT_TRUE(m.logged("hasEventMode is false")) << m.log();
+  EXPECT_EQ(m.doStep(0.0, 0.001), kOK);  // checks eventHandlingNeeded, terminate and earlyReturn are false
+  EXPECT_EQ(m.lastSuccessfulTime(), 0.001);
+  bool flag = false;
+  double d = 0.0;
+  EXPECT_EQ(api.fmi3DoStep(m.c, 0.001, 0.001, false, nullptr, &flag, &flag, &d), kError);
+  EXPECT_EQ(api.fmi3DoStep(m.c, 0.001, 0.001, false, &flag, &flag, &flag, nullptr), kError);
+  EXPECT_EQ(api.fmi3UpdateDiscreteStates(m.c, &flag, &flag, &flag, &flag, &flag, &d), kError);
+  EXPECT_EQ(api.fmi3EnterConfigurationMode(m.c), kError);
+  EXPECT_EQ(api.fmi3EnterContinuousTimeMode(m.c), kError);
+  std::size_t n = 0;
+  EXPECT_EQ(api.fmi3GetNumberOfContinuousStates(m.c, &n), kError);
+  const fmi3ValueReference vr = m.vr("q_link_1");
+  const std::int32_t order = 1;
+  EXPECT_EQ(api.fmi3GetOutputDerivatives(m.c, &vr, 1, &order, &d, 1), kError);
+  EXPECT_EQ(api.fmi3GetDirectionalDerivative(m.c, &vr, 1, &vr, 1, &d, 1, &d, 1), kError);
+  EXPECT_EQ(api.fmi3ActivateModelPartition(m.c, 0, 0.0), kError);
+  // Model exchange and scheduled execution are not provided: no instance, and a reason.
+  Master3 other;
+  EXPECT_EQ(api.fmi3InstantiateModelExchange("me", md.token.c_str(), resources.c_str(), false, true, &other,
+                                             fmi3Logger),
+            nullptr);
+  EXPECT_EQ(api.fmi3InstantiateScheduledExecution("se", md.token.c_str(), resources.c_str(), false, true, &other,
+                                                  fmi3Logger, nullptr, nullptr, nullptr),
+            nullptr);
+  EXPECT_TRUE(other.logged("co-simulation only")) << other.log();
+  EXPECT_EQ(m.doStep(0.001, 0.001), kOK) << m.log();
+}
+
+TEST(FmuMisuse3, NoLoggerAndNullPointersNeverCrash) {
+  const Fmi3Api& api = fmi3();
+  const ModelDescription md = readModelDescription(3);
+  const std::string resources = unzipped(3) + "/resources/";
+  // logMessage may be null.
+  fmi3Instance c = api.fmi3InstantiateCoSimulation("quiet", md.token.c_str(), resources.c_str(), false, true, false,
+                                                   false, nullptr, 0, nullptr, nullptr, nullptr);
+  ASSERT_NE(c, nullptr);
+  bool flag = false;
+  double d = 0.0;
+  EXPECT_EQ(api.fmi3DoStep(c, 0.0, 0.001, false, &flag, &flag, &flag, &d), kError);  // not initialised
+  EXPECT_EQ(api.fmi3EnterEventMode(c), kError);
+  EXPECT_EQ(api.fmi3EnterInitializationMode(c, false, 0.0, 0.0, false, 0.0), kOK);
+  EXPECT_EQ(api.fmi3ExitInitializationMode(c), kOK);
+  EXPECT_EQ(api.fmi3DoStep(c, 0.0, 0.001, false, &flag, &flag, &flag, &d), kOK);
+  api.fmi3FreeInstance(c);
+  EXPECT_EQ(api.fmi3InstantiateCoSimulation("x", md.token.c_str(), nullptr, false, true, false, false, nullptr, 0,
+                                            nullptr, nullptr, nullptr),
+            nullptr);
+  EXPECT_EQ(api.fmi3InstantiateCoSimulation(nullptr, md.token.c_str(), resources.c_str(), false, true, false, false,
+                                            nullptr, 0, nullptr, nullptr, nullptr),
+            nullptr);
+  EXPECT_EQ(api.fmi3DoStep(nullptr, 0.0, 0.001, false, &flag, &flag, &flag, &d), kError);
+  EXPECT_EQ(api.fmi3GetFloat64(nullptr, nullptr, 0, nullptr, 0), kError);
+  EXPECT_EQ(api.fmi3Reset(nullptr), kError);
+  EXPECT_EQ(api.fmi3Terminate(nullptr), kError);
+  EXPECT_EQ(api.fmi3EnterEventMode(nullptr), kError);
+  EXPECT_EQ(api.fmi3ExitInitializationMode(nullptr), kError);
+  api.fmi3FreeInstance(nullptr);
+  std::uint64_t buffer[16] = {};
+  EXPECT_EQ(api.fmi3Terminate(buffer), kError);
+}
+
+TEST(FmuMisuse3, VariableDependenciesFollowTheModelStructure) {
+  Master3 m;
+  ASSERT_TRUE(m.instantiate());
+  const Fmi3Api& api = m.api;
+  std::size_t n = 99;
+  ASSERT_EQ(api.fmi3GetNumberOfVariableDependencies(m.c, m.vr("q_ref_1"), &n), kOK);
+  EXPECT_EQ(n, 18u);
+  std::vector<std::size_t> dependent(n), element(n);
+  std::vector<fmi3ValueReference> independents(n);
+  std::vector<fmi3DependencyKind> kinds(n);
+  ASSERT_EQ(api.fmi3GetVariableDependencies(m.c, m.vr("q_ref_1"), dependent.data(), independents.data(), element.data(),
+                                           kinds.data(), n),
+            kOK);
+  EXPECT_EQ(independents.front(), m.vr("q_desired_1"));
+  EXPECT_EQ(independents.back(), m.vr("tool_wrench.moment_z"));
+  EXPECT_EQ(api.fmi3GetVariableDependencies(m.c, m.vr("q_ref_1"), dependent.data(), independents.data(),
+                                            element.data(), kinds.data(), 3),
+            kError);
+  ASSERT_EQ(api.fmi3GetNumberOfVariableDependencies(m.c, m.vr("q_link_1"), &n), kOK);
+  EXPECT_EQ(n, 0u);
+  EXPECT_EQ(api.fmi3GetNumberOfVariableDependencies(m.c, 99999, &n), kError);
+  EXPECT_EQ(api.fmi3GetNumberOfVariableDependencies(m.c, m.vr("q_ref_1"), nullptr), kError);
+}
+
+INSTANTIATE_TEST_SUITE_P(Fmi, FmuTest, ::testing::Values(2, 3),
+                         [](const ::testing::TestParamInfo<int>& param) { return "fmi" + std::to_string(param.param); });
+
+}  // namespace
+}  // namespace jointcomp
