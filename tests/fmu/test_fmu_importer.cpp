@@ -27,6 +27,10 @@
 
 #include <gtest/gtest.h>
 
+#ifdef JOINTCOMP_TEST_WITH_CAPI
+#include "jointcomp/jointcomp.h"
+#endif
+
 #include "fmu/fmi2_api.hpp"
 #include "fmu/fmi3_api.hpp"
 #include "model/compensation/compensator.hpp"
@@ -692,6 +696,59 @@ TEST_P(FmuTest, SpiralAt1msMatchesThePlantAndCompensatorRunDirectlyBitForBit) {
     m->freeInstance();
   }
 }
+
+#ifdef JOINTCOMP_TEST_WITH_CAPI
+// The regression of plant against corrected plant, through the FMU and through the C API with the same
+// robot and parameter files: the same numbers, bit for bit (none and stiffness + kinematic correction).
+TEST_P(FmuTest, RegressionThroughTheFmuEqualsTheCApi) {
+  const std::string resources = unzipped(2) + "/resources/";
+  jc_robot* robot = nullptr;
+  ASSERT_EQ(jc_robot_load((resources + "rx170.urdf").c_str(), (resources + "parameters.json").c_str(), &robot), JC_OK)
+      << jc_last_error();
+  const std::size_t end = 3000;
+  for (long mode : {0L, 2L}) {
+    auto m = makeMaster(GetParam());
+    start(*m, mode);
+    const Record fmu = run(*m, 0, end, false);
+    m->freeInstance();
+    ASSERT_EQ(fmu.q_link.size(), end - 1);
+    ASSERT_EQ(fmu.q_ref.size(), end - 1);
+
+    jc_plant* plant = nullptr;
+    ASSERT_EQ(jc_plant_create(robot, &plant), JC_OK) << jc_last_error();
+    const Spiral& s = spiral();
+    auto reference = [&](const JointVector& q, const JointVector& v) {
+      JointVector ref = q;
+      if (mode == 2) {
+        int32_t iterations = 0;
+        EXPECT_EQ(jc_compensate_point(robot, nullptr, q.data(), kDof, v.data(),
+                                      kDof, ref.data(), kDof, &iterations),
+                  JC_OK)
+            << jc_last_error();
+      }
+      return ref;
+    };
+    const JointVector start_reference = reference(s.q[0], JointVector::Zero(kDof));
+    ASSERT_EQ(jc_plant_reset(plant, start_reference.data(), kDof, s.time[0]), JC_OK) << jc_last_error();
+    std::size_t differing = 0;
+    JointVector last_q = s.q[0];
+    for (std::size_t k = 0; k + 1 < end; ++k) {
+      const double t = s.time[k];
+      const JointVector v = k > 0 ? JointVector((s.q[k] - last_q) / (t - s.time[k - 1])) : JointVector(JointVector::Zero(kDof));
+      const JointVector ref = reference(s.q[k], v);
+      ASSERT_EQ(jc_plant_set_reference(plant, ref.data(), kDof, v.data(), kDof), JC_OK) << jc_last_error();
+      ASSERT_EQ(jc_plant_advance(plant, s.time[k + 1]), JC_OK) << jc_last_error();
+      JointVector link(kDof);
+      ASSERT_EQ(jc_plant_link_positions(plant, link.data(), kDof), JC_OK);
+      if (values(link) != fmu.q_link[k] || values(ref) != fmu.q_ref[k]) ++differing;
+      last_q = s.q[k];
+    }
+    EXPECT_EQ(differing, 0u) << "mode " << mode;
+    jc_plant_free(plant);
+  }
+  jc_robot_free(robot);
+}
+#endif
 
 TEST_P(FmuTest, VaryingCommunicationStepsMatchTheDirectRunBitForBit) {
   const JointErrorModel truth = truthModel();
