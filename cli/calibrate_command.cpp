@@ -26,16 +26,6 @@
 namespace jointcomp::cli {
 namespace {
 
-std::vector<std::string> splitList(const std::string& text) {
-  std::vector<std::string> items;
-  std::stringstream stream(text);
-  std::string item;
-  while (std::getline(stream, item, ',')) {
-    if (!item.empty()) items.push_back(item);
-  }
-  return items;
-}
-
 std::string baseName(const std::string& path) {
   const auto slash = path.find_last_of('/');
   return slash == std::string::npos ? path : path.substr(slash + 1);
@@ -83,7 +73,7 @@ int runCalibrate(int argc, char** argv) {
   for (int i = 1; i < argc; ++i) {
     if (std::string(argv[i]) == "--holdout") {
       if (i + 1 >= argc) throw std::invalid_argument("option --holdout needs a value");
-      for (const std::string& item : splitList(argv[++i])) holdouts.push_back(item);
+      for (const std::string& item : splitCommaList(argv[++i])) holdouts.push_back(item);
       continue;
     }
     rest.push_back(argv[i]);
@@ -111,7 +101,7 @@ int runCalibrate(int argc, char** argv) {
   if (options.has("pivot-threshold")) {
     calibration.identifiability.relative_pivot_threshold = std::stod(options.get("pivot-threshold", "1e-4"));
   }
-  calibration.fixed = splitList(options.get("fix", ""));
+  calibration.fixed = splitCommaList(options.get("fix", ""));
 
   std::printf("jointcomp calibrate: robot %s (%s), campaign %s\n", robot->name.c_str(), urdf.c_str(),
               campaign_path.c_str());

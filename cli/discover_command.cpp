@@ -28,16 +28,6 @@
 namespace jointcomp::cli {
 namespace {
 
-std::vector<std::string> splitItems(const std::string& text) {
-  std::vector<std::string> items;
-  std::stringstream stream(text);
-  std::string item;
-  while (std::getline(stream, item, ',')) {
-    if (!item.empty()) items.push_back(item);
-  }
-  return items;
-}
-
 nlohmann::ordered_json stats(const ErrorStatistics& s) {
   return {{"rows", s.rows}, {"mean_mm", s.mean * 1e3}, {"rms_mm", s.rms * 1e3}, {"max_mm", s.max * 1e3}};
 }
@@ -69,7 +59,7 @@ int runDiscover(int argc, char** argv) {
     const std::string arg = argv[i];
     if (arg == "--campaign" || arg == "--holdout") {
       if (i + 1 >= argc) throw std::invalid_argument("option " + arg + " needs a value");
-      for (const std::string& item : splitItems(argv[++i])) (arg == "--campaign" ? campaigns : holdouts).push_back(item);
+      for (const std::string& item : splitCommaList(argv[++i])) (arg == "--campaign" ? campaigns : holdouts).push_back(item);
       continue;
     }
     rest.push_back(argv[i]);
@@ -98,7 +88,7 @@ int runDiscover(int argc, char** argv) {
   discovery.folds = std::stoi(options.get("folds", "5"));
   discovery.min_cv_gain = std::stod(options.get("min-cv-gain", "0.02"));
   discovery.noise_floor = std::stod(options.get("noise-floor-mm", "0")) * 1e-3;
-  discovery.types = splitItems(options.get("types", ""));
+  discovery.types = splitCommaList(options.get("types", ""));
   for (const std::string& type : discovery.types) {
     bool known = false;
     for (const std::string& t : discoveryEffectTypes()) known = known || t == type;

@@ -3,10 +3,23 @@
 
 #include <map>
 #include <set>
+#include <sstream>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 namespace jointcomp::cli {
+
+// "a,b,,c" -> {"a", "b", "c"}: the items of a comma-separated option value, empty ones dropped.
+inline std::vector<std::string> splitCommaList(const std::string& text) {
+  std::vector<std::string> items;
+  std::stringstream stream(text);
+  std::string item;
+  while (std::getline(stream, item, ',')) {
+    if (!item.empty()) items.push_back(item);
+  }
+  return items;
+}
 
 class Options {
 public:

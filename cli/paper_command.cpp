@@ -70,9 +70,12 @@ int runPaper(int argc, char** argv) {
                                                              : "flexible-joint plant integrated by CVODE");
   if (options.has("seed")) spec.truth.seed = std::stoull(options.get("seed", "2012"));
   if (options.has("compensate-joints")) {
-    std::stringstream list(options.get("compensate-joints", ""));
-    std::string item;
-    while (std::getline(list, item, ',')) spec.compensated_joints.push_back(std::stoi(item) - 1);
+    for (const std::string& item : splitCommaList(options.get("compensate-joints", ""))) {
+      if (item.empty() || item.size() > 2 || item.find_first_not_of("0123456789") != std::string::npos) {
+        throw std::invalid_argument("--compensate-joints: '" + item + "' is not a joint number (1, 2, ...)");
+      }
+      spec.compensated_joints.push_back(std::stoi(item) - 1);
+    }
   }
   std::printf("  truth: nominal parameters moved by up to %.0f %% (stiffness), %.0f %% (harmonic amplitudes), "
               "%.2f rad (phases); seed %llu\n",

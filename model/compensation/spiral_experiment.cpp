@@ -28,7 +28,8 @@ SpiralExperimentResult runSpiralExperiment(const JointErrorModel& nominal, const
   const Robot& robot = nominal.robot();
   for (int joint : spec.compensated_joints) {
     if (joint < 0 || joint >= robot.dof()) {
-      throw InvalidArgument("compensated joint index " + std::to_string(joint) + " is out of range");
+      throw InvalidArgument("compensated joint " + std::to_string(joint + 1) + " does not exist: robot '" + robot.name +
+                            "' has joints 1 to " + std::to_string(robot.dof()));
     }
   }
   SpiralExperimentResult result;
