@@ -11,6 +11,8 @@
 
 #include <benchmark/benchmark.h>
 
+#include "bench/ipa_ur10_data.hpp"
+
 #include "model/identify/discovery.hpp"
 #include "model/io/ipa_ur10_import.hpp"
 #include "model/robot/load_urdf.hpp"
@@ -19,28 +21,7 @@ namespace {
 
 using namespace jointcomp;
 
-std::string ipa(const std::string& file) { return std::string(JOINTCOMP_SHARED_DIR) + "/data/ipa-ur10/" + file; }
-
-bool haveData() { return std::ifstream(ipa("Series_A/measurements_grid.csv")).good(); }
-
-const JointErrorModel& prior() {
-  static const JointErrorModel model(
-      std::make_shared<const Robot>(loadRobotFromUrdfFile(std::string(JOINTCOMP_DATA_DIR) + "/robots/ur10.urdf")),
-      GearTrain::direct(6), {});
-  return model;
-}
-
-const MeasurementCampaign& seriesA() {
-  static const MeasurementCampaign campaign =
-      importIpaUr10(ipa("Series_A/measurements_grid.csv"), ipa("Series_A/Trafo_TM_F_init.txt"));
-  return campaign;
-}
-
-const MeasurementCampaign& seriesB() {
-  static const MeasurementCampaign campaign =
-      importIpaUr10(ipa("Series_B/measurements_joint_configurations.csv"), ipa("Series_B/Trafo_TM_F_init.txt"));
-  return campaign;
-}
+using namespace bench_ipa;
 
 MeasurementCampaign firstRows(const MeasurementCampaign& c, std::size_t rows) {
   MeasurementCampaign out = c;

@@ -18,24 +18,6 @@
 namespace jointcomp::cli {
 namespace {
 
-std::vector<double> orderList(const std::string& text) {
-  std::vector<double> values;
-  std::stringstream list(text);
-  std::string item;
-  while (std::getline(list, item, ',')) {
-    std::size_t used = 0;
-    double value = 0.0;
-    try {
-      value = std::stod(item, &used);
-    } catch (const std::exception&) {
-      used = 0;
-    }
-    if (used == 0 || used != item.size()) throw std::invalid_argument("--orders: '" + item + "' is not a number");
-    values.push_back(value);
-  }
-  return values;
-}
-
 int integerOption(const Options& options, const std::string& name, int fallback) {
   if (!options.has(name)) return fallback;
   const std::string text = options.get(name, "");
@@ -112,7 +94,7 @@ int runIdentify(int argc, char** argv) {
     TransmissionIdentificationOptions o;
     o.joint = integerOption(options, "joint", 2) - 1;
     o.stage = integerOption(options, "stage", 2);
-    if (options.has("orders")) o.candidate_orders = orderList(options.get("orders", ""));
+    if (options.has("orders")) o.candidate_orders = numberList(options.get("orders", ""), "orders");
     const TransmissionIdentificationResult result = identifyTransmissionError(nominal, campaign, o);
     const JointErrorModel updated = withIdentifiedHarmonics(nominal, result, campaign_path);
     saveParameterFile(updated, sources.updated_parameters, drives);

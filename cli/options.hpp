@@ -21,6 +21,23 @@ inline std::vector<std::string> splitCommaList(const std::string& text) {
   return items;
 }
 
+// "1,2.5,-3" -> {1, 2.5, -3}; throws naming --option and the item that is not a number.
+inline std::vector<double> numberList(const std::string& text, const std::string& option) {
+  std::vector<double> values;
+  for (const std::string& item : splitCommaList(text)) {
+    std::size_t used = 0;
+    double value = 0.0;
+    try {
+      value = std::stod(item, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (used == 0 || used != item.size()) throw std::invalid_argument("--" + option + ": '" + item + "' is not a number");
+    values.push_back(value);
+  }
+  return values;
+}
+
 class Options {
 public:
   // Reads argv[1..argc) as --name value pairs (or bare --flag when `flags` holds the name).

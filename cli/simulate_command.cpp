@@ -17,24 +17,6 @@ namespace {
 
 constexpr double kDegree = 3.14159265358979323846 / 180.0;
 
-std::vector<double> numberList(const std::string& text, const std::string& option) {
-  std::vector<double> values;
-  std::stringstream list(text);
-  std::string item;
-  while (std::getline(list, item, ',')) {
-    std::size_t used = 0;
-    double value = 0.0;
-    try {
-      value = std::stod(item, &used);
-    } catch (const std::exception&) {
-      used = 0;
-    }
-    if (used == 0 || used != item.size()) throw std::invalid_argument("--" + option + ": '" + item + "' is not a number");
-    values.push_back(value);
-  }
-  return values;
-}
-
 double numberOption(const Options& options, const std::string& name, double fallback) {
   if (!options.has(name)) return fallback;
   const std::vector<double> values = numberList(options.get(name, ""), name);
