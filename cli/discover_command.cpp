@@ -18,7 +18,7 @@
 #include "cli/commands.hpp"
 #include "cli/options.hpp"
 #include "model/common/errors.hpp"
-#include "model/identify/discovery.hpp"
+#include "model/identify/discovery_report.hpp"
 #include "model/io/atomic_file.hpp"
 #include "model/io/measurement_campaign.hpp"
 #include "model/io/parameter_file.hpp"
@@ -26,31 +26,6 @@
 #include "model/robot/load_urdf.hpp"
 
 namespace jointcomp::cli {
-namespace {
-
-nlohmann::ordered_json stats(const ErrorStatistics& s) {
-  return {{"rows", s.rows}, {"mean_mm", s.mean * 1e3}, {"rms_mm", s.rms * 1e3}, {"max_mm", s.max * 1e3}};
-}
-
-nlohmann::ordered_json stateJson(const DiscoveryState& s, const std::vector<std::string>& holdouts) {
-  nlohmann::ordered_json held = nlohmann::ordered_json::array();
-  for (std::size_t k = 0; k < s.heldout.size(); ++k) {
-    nlohmann::ordered_json entry = stats(s.heldout[k]);
-    entry["campaign"] = holdouts[k];
-    held.push_back(entry);
-  }
-  return {{"fitted", stats(s.fitted)}, {"held_out", held}, {"cv_rms_per_axis_mm", s.cv_rms * 1e3},
-          {"ra_rz_on_paths", nullptr}};
-}
-
-std::string heldRms(const DiscoveryState& s) {
-  if (s.heldout.empty()) return "-";
-  char text[64];
-  std::snprintf(text, sizeof(text), "%.4f", s.heldout[0].rms * 1e3);
-  return text;
-}
-
-}  // namespace
 
 int runDiscover(int argc, char** argv) {
   std::vector<std::string> campaigns, holdouts;
@@ -121,92 +96,18 @@ int runDiscover(int argc, char** argv) {
   const std::string params_out = out + "/parameters.json";
   saveParameterFile(result.model, params_out, drives);
 
-  nlohmann::ordered_json report;
-  report["format"] = "jointcomp-discovery-report/1";
-  report["robot"] = robot->name;
-  report["urdf"] = urdf;
-  report["params"] = has_params ? nlohmann::ordered_json(options.get("params", "")) : nlohmann::ordered_json(nullptr);
-  report["campaigns"] = campaigns;
-  report["held_out"] = holdouts;
-  report["vocabulary"] = discoveryEffectTypes();
-  report["selection"] = {{"cross_validation", "time-blocked K-fold (blocks of consecutive rows)"},
-                         {"folds", discovery.folds},
-                         {"min_cv_gain", discovery.min_cv_gain},
-                         {"criterion", "dBIC = N ln(RSS_c/RSS_0) + dk ln N + 2 ln(candidates) < 0"},
-                         {"base", base},
-                         {"max_steps", discovery.max_steps},
-                         {"max_harmonic_order", discovery.max_harmonic_order},
-                         {"candidates", result.candidates}};
-  report["fitted_rows"] = result.fitted_rows;
-  report["initial"] = stateJson(result.initial, holdouts);
-  report["initial"]["joint_residual_rms_rad"] = result.joint_residual_rms_initial;
-  nlohmann::ordered_json steps = nlohmann::ordered_json::array();
-  std::ostringstream csv;
-  csv << "step,effect,fitted_rms_mm,heldout_rms_mm,cv_rms_mm\n";
-  csv << "0,base," << result.initial.fitted.rms * 1e3 << ',' << heldRms(result.initial) << ','
-      << result.initial.cv_rms * 1e3 << "\n";
-  std::ostringstream summary;
-  summary << "jointcomp discover: " << robot->name << ", " << result.fitted_rows << " fitted rows, "
-          << result.candidates << " candidates, base " << base << "\n";
-  char line[512];
-  std::snprintf(line, sizeof(line), "base model: fitted RMS %.4f mm, held-out RMS %s mm\n", result.initial.fitted.rms * 1e3,
-                heldRms(result.initial).c_str());
-  summary << line;
-  int index = 0;
-  for (const DiscoveryStep& s : result.steps) {
-    ++index;
-    nlohmann::ordered_json entry = {{"step", index}, {"type", s.type}, {"joint", s.joint_name}, {"joint_index", s.joint + 1}};
-    if (s.type == "harmonic") {
-      entry["part"] = s.part;
-      entry["stage"] = s.stage;
-      entry["order"] = s.cycles;
-    }
-    if (s.type == "thermal") entry["variant"] = s.part;
-    nlohmann::ordered_json parameters = nlohmann::ordered_json::array();
-    for (const DiscoveredParameter& p : s.parameters) parameters.push_back({{"name", p.name}, {"value", p.value}, {"sigma", p.sigma}});
-    entry["parameters"] = parameters;
-    entry["evidence"] = {{"cv_rms_per_axis_mm_before", s.cv_rms_before * 1e3},
-                         {"cv_rms_per_axis_mm_after", s.cv_rms_after * 1e3},
-                         {"delta_bic", s.delta_bic},
-                         {"candidates_tried", s.candidates_tried},
-                         {"runner_up", s.runner_up}};
-    entry["before"] = stateJson(s.before, holdouts);
-    entry["after"] = stateJson(s.after, holdouts);
-    steps.push_back(entry);
-    std::string label = s.type + " " + s.joint_name;
-    if (s.type == "harmonic") label += " " + s.part + " order " + std::to_string(static_cast<int>(s.cycles));
-    if (s.type == "thermal") label += " (" + s.part + ")";
-    std::snprintf(line, sizeof(line), "step %d: %-44s CV %.4f -> %.4f mm/axis, dBIC %.1f; fitted RMS %.4f -> %.4f mm, held-out %s -> %s mm\n",
-                  index, label.c_str(), s.cv_rms_before * 1e3, s.cv_rms_after * 1e3, s.delta_bic, s.before.fitted.rms * 1e3,
-                  s.after.fitted.rms * 1e3, heldRms(s.before).c_str(), heldRms(s.after).c_str());
-    summary << line;
-    for (const DiscoveredParameter& p : s.parameters) {
-      std::snprintf(line, sizeof(line), "    %-48s %.6g +- %.3g\n", p.name.c_str(), p.value, p.sigma);
-      summary << line;
-    }
-    csv << index << ',' << label << ',' << s.after.fitted.rms * 1e3 << ',' << heldRms(s.after) << ','
-        << s.after.cv_rms * 1e3 << "\n";
-  }
-  report["steps"] = steps;
-  report["final"] = stateJson(result.final_state, holdouts);
-  report["final"]["joint_residual_rms_rad"] = result.joint_residual_rms_final;
-  report["stop_reason"] = result.stop_reason;
-  const double final_held = result.final_state.heldout.empty() ? result.final_state.fitted.rms : result.final_state.heldout[0].rms;
-  report["noise_floor"] = {{"rms_3d_mm", result.noise_floor * 1e3},
-                           {"final_over_floor", result.noise_floor > 0.0 ? nlohmann::ordered_json(final_held / result.noise_floor)
-                                                                          : nlohmann::ordered_json(nullptr)}};
-  report["not_candidates"] = {"payload", "hysteresis"};
-  report["seconds"] = seconds;
-  report["outputs"] = {{"parameters", params_out}, {"urdf", urdf_out}};
-  writeFileAtomically(out + "/report.json", report.dump(2) + "\n");
-  writeFileAtomically(out + "/steps.csv", csv.str());
-  std::snprintf(line, sizeof(line), "stopped: %s\nfinal: fitted RMS %.4f mm, held-out RMS %s mm; noise floor %.4f mm (3-D RMS)%s\n",
-                result.stop_reason.c_str(), result.final_state.fitted.rms * 1e3, heldRms(result.final_state).c_str(),
-                result.noise_floor * 1e3, result.noise_floor > 0.0 ? "" : " (not known: give --noise-floor-mm)");
-  summary << line;
-  summary << "Wrote " << params_out << ", " << urdf_out << ", " << out << "/report.json, " << out << "/steps.csv\n";
-  writeFileAtomically(out + "/summary.txt", summary.str());
-  std::fputs(summary.str().c_str(), stdout);
+  DiscoverySources sources;
+  sources.urdf = urdf;
+  sources.parameters = has_params ? options.get("params", "") : "";
+  sources.campaigns = campaigns;
+  sources.held_out = holdouts;
+  sources.outputs = {{"parameters", params_out}, {"urdf", urdf_out}};
+  writeFileAtomically(out + "/report.json", discoveryReportJson(result, discovery, sources, seconds).dump(2) + "\n");
+  writeFileAtomically(out + "/steps.csv", discoveryStepsCsv(result));
+  const std::string summary = discoverySummary(result, discovery, sources) + "Wrote " + params_out + ", " + urdf_out +
+                              ", " + out + "/report.json, " + out + "/steps.csv\n";
+  writeFileAtomically(out + "/summary.txt", summary);
+  std::fputs(summary.c_str(), stdout);
   if (!options.has("no-plot")) {
     const std::string command = "/usr/bin/python3 '" JOINTCOMP_SOURCE_DIR "/cli/plots/plot_discovery.py' '" + out +
                                 "/steps.csv' '" + out + "/discovery.png'";

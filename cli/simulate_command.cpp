@@ -38,8 +38,7 @@ int runSimulate(int argc, char** argv) {
   const std::string protocol_name = options.get("protocol", "");
   const std::string urdf = options.get("urdf", JOINTCOMP_DATA_DIR "/robots/rx170.urdf");
   const std::string truth_path = options.get("truth", "");
-  CampaignSimulationSpec spec;
-  spec.protocol = protocolFromName(protocol_name);
+  CampaignSimulationSpec spec = defaultCampaignSpec(protocolFromName(protocol_name));
   const std::string out = options.get("out", "out/" + protocolName(spec.protocol) + ".csv");
   auto robot = std::make_shared<const Robot>(loadRobotFromUrdfFile(urdf));
   JointErrorModel truth = loadParameterFile(truth_path, robot);
@@ -70,12 +69,6 @@ int runSimulate(int argc, char** argv) {
     for (int j = 0; j < robot->dof(); ++j) q[j] = pose[j] * kDegree;
     spec.stiffness.pose = q;
     spec.sweep.pose = q;
-  }
-  if (spec.protocol == CampaignProtocol::BackAndForth) {
-    spec.sweep.from_rad = -20.0 * kDegree;
-    spec.sweep.to_rad = 20.0 * kDegree;
-    spec.sweep.step_rad = 0.5 * kDegree;
-    spec.sweep.cycles = 2;
   }
   spec.sweep.joint = static_cast<int>(numberOption(options, "joint", 2)) - 1;
   spec.sweep.from_rad = numberOption(options, "from", spec.sweep.from_rad / kDegree) * kDegree;

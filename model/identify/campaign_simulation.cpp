@@ -506,6 +506,19 @@ void simulateSpiral(Simulator& sim, const CampaignSimulationSpec& spec, const Jo
 
 SpiralCampaignSpec::SpiralCampaignSpec() : spiral(SpiralExperimentSpec::defaultSpiral()) {}
 
+CampaignSimulationSpec defaultCampaignSpec(CampaignProtocol protocol) {
+  CampaignSimulationSpec spec;
+  spec.protocol = protocol;
+  if (protocol == CampaignProtocol::BackAndForth) {
+    constexpr double kDegree = 3.14159265358979323846 / 180.0;
+    spec.sweep.from_rad = -20.0 * kDegree;
+    spec.sweep.to_rad = 20.0 * kDegree;
+    spec.sweep.step_rad = 0.5 * kDegree;
+    spec.sweep.cycles = 2;
+  }
+  return spec;
+}
+
 CampaignProtocol protocolFromName(const std::string& name) {
   if (name == "stiffness") return CampaignProtocol::Stiffness;
   if (name == "joint-sweep" || name == "joint2-sweep" || name == "sweep") return CampaignProtocol::JointSweep;

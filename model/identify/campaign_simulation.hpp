@@ -107,6 +107,10 @@ struct CampaignSimulationSpec {
   std::map<std::string, std::string> metadata;  // extra metadata lines (truth file, ...)
 };
 
+// The defaults of a protocol: those of the structs above, except back-and-forth, which sweeps -20..+20 deg
+// in 0.5 deg steps twice (a hysteresis loop does not need the full range, and two cycles show it repeats).
+CampaignSimulationSpec defaultCampaignSpec(CampaignProtocol protocol);
+
 // A non-singular pose in front of the robot: joints 2, 3, 5 at 40, 50, 50 deg (clamped into the limits),
 // the rest at 0 (or at mid-range when 0 is outside the limits).
 JointVector defaultStiffnessPose(const Robot& robot);

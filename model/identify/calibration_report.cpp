@@ -1,0 +1,208 @@
+#include "model/identify/calibration_report.hpp"
+
+#include <chrono>
+#include <cstdio>
+#include <sstream>
+
+namespace jointcomp {
+namespace {
+
+std::string baseName(const std::string& path) {
+  const auto slash = path.find_last_of('/');
+  return slash == std::string::npos ? path : path.substr(slash + 1);
+}
+
+std::string tableRow(const std::string& name, int rows, const ErrorStatistics& before, const ErrorStatistics& after) {
+  char line[256];
+  std::snprintf(line, sizeof(line), "%-34s %6d  %7.3f %7.3f %7.3f   %7.3f %7.3f %7.3f\n", name.c_str(), rows,
+                before.mean * 1e3, before.rms * 1e3, before.max * 1e3, after.mean * 1e3, after.rms * 1e3,
+                after.max * 1e3);
+  return line;
+}
+
+std::string parameterLine(const ParameterEstimate& p) {
+  const bool angle = p.unit == "rad";
+  const bool length = p.unit == "m";
+  const double scale = length ? 1e3 : angle ? 180.0 / 3.14159265358979323846 : 1.0;
+  const char* unit = length ? "mm" : angle ? "deg" : "rad/(N m)";
+  char line[320];
+  if (p.identified) {
+    std::snprintf(line, sizeof(line), "  %-34s %14.6g +- %-10.3g %s (nominal %.6g)\n", p.name.c_str(),
+                  p.value * scale, p.sigma * scale, unit, p.nominal * scale);
+  } else {
+    std::snprintf(line, sizeof(line), "  %-34s fixed at %.6g %s: %s\n", p.name.c_str(), p.value * scale, unit,
+                  p.fixed_because.c_str());
+  }
+  return line;
+}
+
+}  // namespace
+
+nlohmann::ordered_json errorStatisticsJson(const ErrorStatistics& s) {
+  return {{"rows", s.rows}, {"mean_mm", s.mean * 1e3}, {"rms_mm", s.rms * 1e3}, {"max_mm", s.max * 1e3}};
+}
+
+CalibrationRun runCalibration(const JointErrorModel& prior, const MeasurementCampaign& campaign,
+                              const std::vector<std::pair<std::string, MeasurementCampaign>>& holdouts,
+                              const GeometricCalibrationOptions& options) {
+  const auto started = std::chrono::steady_clock::now();
+  GeometricCalibrationResult result = calibrateGeometry(prior, campaign, options);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+  std::vector<CalibrationHoldoutRun> runs;
+  for (const auto& [name, held] : holdouts) {
+    CalibrationHoldoutRun run;
+    run.name = name;
+    run.before = evaluateOnCampaign(prior, nominalParameters(prior, held), held, true, options);
+    run.after = evaluateOnCampaign(prior, result.estimate, held, true, options);
+    run.shared_frame = evaluateOnCampaign(prior, result.estimate, held, false, options);
+    runs.push_back(std::move(run));
+  }
+  auto calibrated_robot = std::make_shared<const Robot>(correctedRobot(prior.robot(), result.estimate));
+  std::vector<std::string> left_out;
+  JointErrorModel calibrated = calibratedJointErrorModel(prior, calibrated_robot, result, left_out);
+  return CalibrationRun{std::move(result), std::move(runs), calibrated_robot, std::move(calibrated),
+                        std::move(left_out), seconds};
+}
+
+nlohmann::ordered_json calibrationReportJson(const CalibrationRun& run, const MeasurementCampaign& campaign,
+                                             const GeometricCalibrationOptions& options,
+                                             const CalibrationSources& sources) {
+  const GeometricCalibrationResult& result = run.result;
+  nlohmann::ordered_json report;
+  report["format"] = "jointcomp-calibration-report/1";
+  report["robot"] = run.calibrated_robot->name;
+  report["urdf"] = sources.urdf;
+  report["params"] = sources.parameters.empty() ? nlohmann::ordered_json(nullptr) : nlohmann::ordered_json(sources.parameters);
+  report["campaign"] = sources.campaign;
+  report["model"] =
+      "measured = Exp(frame_r) * FK(q_cmd + offset - compliance .* tau(q_cmd) + other effects) * target + frame_t; "
+      "joint placements corrected by placement * Trans(d) * Exp(r)";
+  report["solver"] = {{"method", "Levenberg-Marquardt (dense, Eigen), robust loss by IRLS"},
+                      {"iterations", result.iterations},
+                      {"stop_reason", result.stop_reason},
+                      {"seconds", run.seconds}};
+  report["rows"] = {{"total", campaign.size()},
+                    {"used", result.used_rows},
+                    {"skipped_not_measured", result.skipped_rows},
+                    {"downweighted", result.downweighted_rows},
+                    {"downweighted_below_half", result.outlier_rows}};
+  report["loss"] = {{"type", robustLossName(result.loss)}, {"scale_mm", result.loss_scale * 1e3}};
+  report["residual_sigma_per_axis_mm"] = result.residual_sigma * 1e3;
+  report["identifiability"] = {{"relative_pivot_threshold", options.identifiability.relative_pivot_threshold},
+                               {"identified", result.free.size()},
+                               {"fixed", result.names.size() - result.free.size()},
+                               {"condition_number_at_start", result.condition_number_at_start},
+                               {"condition_number", result.condition_number}};
+  nlohmann::ordered_json parameters = nlohmann::ordered_json::array();
+  for (const ParameterEstimate& p : result.parameters) {
+    nlohmann::ordered_json entry = {{"name", p.name}, {"unit", p.unit}, {"nominal", p.nominal}, {"value", p.value},
+                                    {"identified", p.identified}, {"pivot", p.pivot}};
+    if (p.identified) {
+      entry["sigma"] = p.sigma;
+    } else {
+      entry["fixed_because"] = p.fixed_because;
+      nlohmann::ordered_json with = nlohmann::ordered_json::array();
+      for (const auto& r : p.redundant_with) with.push_back({{"name", r.first}, {"ratio", r.second}});
+      if (!with.empty()) entry["redundant_with"] = with;
+    }
+    parameters.push_back(entry);
+  }
+  report["parameters"] = parameters;
+  report["compliance_left_out"] = run.compliance_left_out;
+  nlohmann::ordered_json campaigns = nlohmann::ordered_json::array();
+  campaigns.push_back({{"file", sources.campaign},
+                       {"role", "calibration"},
+                       {"rows", result.used_rows},
+                       {"before", errorStatisticsJson(result.before)},
+                       {"after", errorStatisticsJson(result.after)},
+                       {"downweighted_rows", result.downweighted_rows},
+                       {"downweighted_below_half_rows", result.outlier_rows}});
+  for (const CalibrationHoldoutRun& held : run.holdouts) {
+    campaigns.push_back({{"file", held.name},
+                         {"role", "holdout (robot fixed, instrument frame re-fitted)"},
+                         {"rows", held.after.statistics.rows},
+                         {"skipped_not_measured", held.after.skipped_rows},
+                         {"before", errorStatisticsJson(held.before.statistics)},
+                         {"after", errorStatisticsJson(held.after.statistics)},
+                         {"downweighted_rows", held.after.downweighted_rows},
+                         {"downweighted_below_half_rows", held.after.outlier_rows},
+                         {"after_with_calibration_frame", errorStatisticsJson(held.shared_frame.statistics)}});
+  }
+  report["campaigns"] = campaigns;
+  report["outputs"] = sources.outputs;
+  return report;
+}
+
+std::string calibrationSummary(const CalibrationRun& run, const CalibrationSources& sources) {
+  const GeometricCalibrationResult& result = run.result;
+  std::ostringstream summary;
+  summary << "Kinematic calibration of " << run.calibrated_robot->name << " on " << sources.campaign << "\n";
+  char line[512];
+  std::snprintf(line, sizeof(line),
+                "%d rows used, %d skipped (no measured position), %d down-weighted by the %s loss (scale %.3f mm), "
+                "%d of them below half weight\n",
+                result.used_rows, result.skipped_rows, result.downweighted_rows, robustLossName(result.loss),
+                result.loss_scale * 1e3, result.outlier_rows);
+  summary << line;
+  std::snprintf(line, sizeof(line),
+                "%zu of %zu parameters identified; condition number of the scaled Jacobian %.3g (at the start %.3g); "
+                "residual sigma %.4f mm per axis; %d LM iterations, %.2f s\n",
+                result.free.size(), result.names.size(), result.condition_number, result.condition_number_at_start,
+                result.residual_sigma * 1e3, result.iterations, run.seconds);
+  summary << line;
+  summary << "\n3-D error [mm]                      rows     before (nominal, frame fitted)   after (calibrated)\n";
+  summary << "                                           mean     rms     max      mean     rms     max\n";
+  summary << tableRow(baseName(sources.campaign) + " (calibration)", result.used_rows, result.before, result.after);
+  for (const CalibrationHoldoutRun& held : run.holdouts) {
+    summary << tableRow(baseName(held.name) + " (held out, frame re-fitted)", held.after.statistics.rows,
+                        held.before.statistics, held.after.statistics);
+  }
+  for (const CalibrationHoldoutRun& held : run.holdouts) {
+    std::snprintf(line, sizeof(line),
+                  "%s: %d rows down-weighted in its frame fit (scale %.3f mm), %d of them below half weight\n",
+                  baseName(held.name).c_str(), held.after.downweighted_rows, held.after.loss_scale * 1e3,
+                  held.after.outlier_rows);
+    summary << line;
+    // A frame that fits three times worse than the re-fitted one means the set-ups differ.
+    std::snprintf(line, sizeof(line), "%s with the calibration campaign's frame (not re-fitted): RMS %.3f mm%s\n",
+                  baseName(held.name).c_str(), held.shared_frame.statistics.rms * 1e3,
+                  held.shared_frame.statistics.rms > 3.0 * held.after.statistics.rms + 1e-4
+                      ? ": the campaigns do not share the instrument frame"
+                      : ": the campaigns share the instrument frame");
+    summary << line;
+  }
+  summary << "\nIdentified parameters (1 sigma):\n";
+  for (const ParameterEstimate& p : result.parameters) {
+    if (p.identified) summary << parameterLine(p);
+  }
+  summary << "\nFixed parameters:\n";
+  for (const ParameterEstimate& p : result.parameters) {
+    if (!p.identified) summary << parameterLine(p);
+  }
+  if (!run.compliance_left_out.empty()) {
+    summary << "\nCompliance effect NOT written to the parameter file (the effect needs a positive stiffness for "
+               "every joint; give a parameter file with a compliance effect to supply the missing ones):\n";
+    for (const std::string& item : run.compliance_left_out) summary << "  " << item << "\n";
+  }
+  return summary.str();
+}
+
+std::string calibrationResidualsCsv(const CalibrationRun& run, const CalibrationSources& sources) {
+  const GeometricCalibrationResult& result = run.result;
+  std::ostringstream csv;
+  csv.precision(9);
+  csv << "campaign,role,row,before_mm,after_mm,weight\n";
+  for (std::size_t k = 0; k < result.row.size(); ++k) {
+    csv << baseName(sources.campaign) << ",calibration," << result.row[k] << ',' << result.error_before[k] * 1e3 << ','
+        << result.error_after[k] * 1e3 << ',' << result.weight[k] << "\n";
+  }
+  for (const CalibrationHoldoutRun& held : run.holdouts) {
+    for (std::size_t k = 0; k < held.after.row.size(); ++k) {
+      csv << baseName(held.name) << ",holdout," << held.after.row[k] << ',' << held.before.error[k] * 1e3 << ','
+          << held.after.error[k] * 1e3 << ',' << held.after.weight[k] << "\n";
+    }
+  }
+  return csv.str();
+}
+
+}  // namespace jointcomp

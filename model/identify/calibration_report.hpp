@@ -1,0 +1,55 @@
+// A kinematic calibration run end to end, as the CLI (`jointcomp calibrate`) and the C API (jc_calibrate)
+// both do it: fit on one campaign, check on held-out ones, build the calibrated robot and joint-error
+// model; then its report (JSON, a readable summary, the per-row residuals as CSV).
+#pragma once
+
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "model/identify/geometric_calibration.hpp"
+
+namespace jointcomp {
+
+struct CalibrationHoldoutRun {
+  std::string name;  // the campaign's file name, as given
+  HoldoutEvaluation before;        // nominal robot, frame re-fitted
+  HoldoutEvaluation after;         // calibrated robot, frame re-fitted
+  HoldoutEvaluation shared_frame;  // calibrated robot in the calibration campaign's frame
+};
+
+struct CalibrationRun {
+  GeometricCalibrationResult result;
+  std::vector<CalibrationHoldoutRun> holdouts;
+  std::shared_ptr<const Robot> calibrated_robot;  // joint placements corrected
+  JointErrorModel calibrated;                     // offsets and compliance as fitted, on calibrated_robot
+  std::vector<std::string> compliance_left_out;   // "<joint>: reason" (see calibratedJointErrorModel)
+  double seconds = 0.0;                           // wall time of the fit
+};
+
+CalibrationRun runCalibration(const JointErrorModel& prior, const MeasurementCampaign& campaign,
+                              const std::vector<std::pair<std::string, MeasurementCampaign>>& holdouts,
+                              const GeometricCalibrationOptions& options);
+
+// What the report names: the inputs as the user gave them and, when written, the outputs.
+struct CalibrationSources {
+  std::string urdf;
+  std::string parameters;  // empty: no parameter file (no prior effects)
+  std::string campaign;
+  nlohmann::ordered_json outputs = nlohmann::ordered_json::object();
+};
+
+nlohmann::ordered_json calibrationReportJson(const CalibrationRun& run, const MeasurementCampaign& campaign,
+                                             const GeometricCalibrationOptions& options,
+                                             const CalibrationSources& sources);
+std::string calibrationSummary(const CalibrationRun& run, const CalibrationSources& sources);
+// campaign,role,row,before_mm,after_mm,weight: one line per used row of every campaign.
+std::string calibrationResidualsCsv(const CalibrationRun& run, const CalibrationSources& sources);
+
+// Statistics in the units people read (mm), as every report writes them.
+nlohmann::ordered_json errorStatisticsJson(const ErrorStatistics& statistics);
+
+}  // namespace jointcomp

@@ -1,0 +1,139 @@
+#include "model/identify/discovery_report.hpp"
+
+#include <cstdio>
+#include <sstream>
+
+#include "model/identify/calibration_report.hpp"
+
+namespace jointcomp {
+namespace {
+
+nlohmann::ordered_json stateJson(const DiscoveryState& s, const std::vector<std::string>& held_out) {
+  nlohmann::ordered_json held = nlohmann::ordered_json::array();
+  for (std::size_t k = 0; k < s.heldout.size(); ++k) {
+    nlohmann::ordered_json entry = errorStatisticsJson(s.heldout[k]);
+    entry["campaign"] = k < held_out.size() ? held_out[k] : "held-out campaign " + std::to_string(k + 1);
+    held.push_back(entry);
+  }
+  return {{"fitted", errorStatisticsJson(s.fitted)}, {"held_out", held}, {"cv_rms_per_axis_mm", s.cv_rms * 1e3},
+          {"ra_rz_on_paths", nullptr}};
+}
+
+// The first held-out campaign's RMS in mm, "-" without one.
+std::string heldRms(const DiscoveryState& s) {
+  if (s.heldout.empty()) return "-";
+  char text[64];
+  std::snprintf(text, sizeof(text), "%.4f", s.heldout[0].rms * 1e3);
+  return text;
+}
+
+std::string baseName(const DiscoveryOptions& options) { return options.base_geometry ? "textbook" : "frame"; }
+
+}  // namespace
+
+std::string discoveryStepLabel(const DiscoveryStep& step) {
+  std::string label = step.type + " " + step.joint_name;
+  if (step.type == "harmonic") label += " " + step.part + " order " + std::to_string(static_cast<int>(step.cycles));
+  if (step.type == "thermal") label += " (" + step.part + ")";
+  return label;
+}
+
+nlohmann::ordered_json discoveryReportJson(const DiscoveryResult& result, const DiscoveryOptions& options,
+                                           const DiscoverySources& sources, double seconds) {
+  nlohmann::ordered_json report;
+  report["format"] = "jointcomp-discovery-report/1";
+  report["robot"] = result.model.robot().name;
+  report["urdf"] = sources.urdf;
+  report["params"] = sources.parameters.empty() ? nlohmann::ordered_json(nullptr) : nlohmann::ordered_json(sources.parameters);
+  report["campaigns"] = sources.campaigns;
+  report["held_out"] = sources.held_out;
+  report["vocabulary"] = discoveryEffectTypes();
+  report["selection"] = {{"cross_validation", "time-blocked K-fold (blocks of consecutive rows)"},
+                         {"folds", options.folds},
+                         {"min_cv_gain", options.min_cv_gain},
+                         {"criterion", "dBIC = N ln(RSS_c/RSS_0) + dk ln N + 2 ln(candidates) < 0"},
+                         {"base", baseName(options)},
+                         {"max_steps", options.max_steps},
+                         {"max_harmonic_order", options.max_harmonic_order},
+                         {"candidates", result.candidates}};
+  report["fitted_rows"] = result.fitted_rows;
+  report["initial"] = stateJson(result.initial, sources.held_out);
+  report["initial"]["joint_residual_rms_rad"] = result.joint_residual_rms_initial;
+  nlohmann::ordered_json steps = nlohmann::ordered_json::array();
+  int index = 0;
+  for (const DiscoveryStep& s : result.steps) {
+    nlohmann::ordered_json entry = {{"step", ++index}, {"type", s.type}, {"joint", s.joint_name}, {"joint_index", s.joint + 1}};
+    if (s.type == "harmonic") {
+      entry["part"] = s.part;
+      entry["stage"] = s.stage;
+      entry["order"] = s.cycles;
+    }
+    if (s.type == "thermal") entry["variant"] = s.part;
+    nlohmann::ordered_json parameters = nlohmann::ordered_json::array();
+    for (const DiscoveredParameter& p : s.parameters) parameters.push_back({{"name", p.name}, {"value", p.value}, {"sigma", p.sigma}});
+    entry["parameters"] = parameters;
+    entry["evidence"] = {{"cv_rms_per_axis_mm_before", s.cv_rms_before * 1e3},
+                         {"cv_rms_per_axis_mm_after", s.cv_rms_after * 1e3},
+                         {"delta_bic", s.delta_bic},
+                         {"candidates_tried", s.candidates_tried},
+                         {"runner_up", s.runner_up}};
+    entry["before"] = stateJson(s.before, sources.held_out);
+    entry["after"] = stateJson(s.after, sources.held_out);
+    steps.push_back(entry);
+  }
+  report["steps"] = steps;
+  report["final"] = stateJson(result.final_state, sources.held_out);
+  report["final"]["joint_residual_rms_rad"] = result.joint_residual_rms_final;
+  report["stop_reason"] = result.stop_reason;
+  const double final_held = result.final_state.heldout.empty() ? result.final_state.fitted.rms : result.final_state.heldout[0].rms;
+  report["noise_floor"] = {{"rms_3d_mm", result.noise_floor * 1e3},
+                           {"final_over_floor", result.noise_floor > 0.0 ? nlohmann::ordered_json(final_held / result.noise_floor)
+                                                                          : nlohmann::ordered_json(nullptr)}};
+  report["not_candidates"] = {"payload", "hysteresis"};
+  report["seconds"] = seconds;
+  report["outputs"] = sources.outputs;
+  return report;
+}
+
+std::string discoverySummary(const DiscoveryResult& result, const DiscoveryOptions& options,
+                             const DiscoverySources& /*sources*/) {
+  std::ostringstream summary;
+  summary << "jointcomp discover: " << result.model.robot().name << ", " << result.fitted_rows << " fitted rows, "
+          << result.candidates << " candidates, base " << baseName(options) << "\n";
+  char line[512];
+  std::snprintf(line, sizeof(line), "base model: fitted RMS %.4f mm, held-out RMS %s mm\n", result.initial.fitted.rms * 1e3,
+                heldRms(result.initial).c_str());
+  summary << line;
+  int index = 0;
+  for (const DiscoveryStep& s : result.steps) {
+    std::snprintf(line, sizeof(line),
+                  "step %d: %-44s CV %.4f -> %.4f mm/axis, dBIC %.1f; fitted RMS %.4f -> %.4f mm, held-out %s -> %s mm\n",
+                  ++index, discoveryStepLabel(s).c_str(), s.cv_rms_before * 1e3, s.cv_rms_after * 1e3, s.delta_bic,
+                  s.before.fitted.rms * 1e3, s.after.fitted.rms * 1e3, heldRms(s.before).c_str(), heldRms(s.after).c_str());
+    summary << line;
+    for (const DiscoveredParameter& p : s.parameters) {
+      std::snprintf(line, sizeof(line), "    %-48s %.6g +- %.3g\n", p.name.c_str(), p.value, p.sigma);
+      summary << line;
+    }
+  }
+  std::snprintf(line, sizeof(line), "stopped: %s\nfinal: fitted RMS %.4f mm, held-out RMS %s mm; noise floor %.4f mm (3-D RMS)%s\n",
+                result.stop_reason.c_str(), result.final_state.fitted.rms * 1e3, heldRms(result.final_state).c_str(),
+                result.noise_floor * 1e3, result.noise_floor > 0.0 ? "" : " (not known: give the noise floor)");
+  summary << line;
+  return summary.str();
+}
+
+std::string discoveryStepsCsv(const DiscoveryResult& result) {
+  std::ostringstream csv;
+  csv << "step,effect,fitted_rms_mm,heldout_rms_mm,cv_rms_mm\n";
+  csv << "0,base," << result.initial.fitted.rms * 1e3 << ',' << heldRms(result.initial) << ','
+      << result.initial.cv_rms * 1e3 << "\n";
+  int index = 0;
+  for (const DiscoveryStep& s : result.steps) {
+    csv << ++index << ',' << discoveryStepLabel(s) << ',' << s.after.fitted.rms * 1e3 << ',' << heldRms(s.after) << ','
+        << s.after.cv_rms * 1e3 << "\n";
+  }
+  return csv.str();
+}
+
+}  // namespace jointcomp
