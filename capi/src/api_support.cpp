@@ -36,6 +36,7 @@ std::uint64_t magicOf(const void* handle) {
   std::string found = "a pointer that is not a live jointcomp handle (already freed, or never one)";
   if (magic == kRobotMagic) found = "a jc_robot";
   if (magic == kPlantMagic) found = "a jc_plant";
+  if (magic == kReportMagic) found = "a jc_report";
   if (magic == kFreedMagic) found = "a handle that was already freed";
   throw ApiError(JC_ERROR_WRONG_HANDLE, std::string("expected a ") + expected + ", got " + found);
 }
@@ -56,8 +57,8 @@ jc_status fail(const char* function, jc_status status, const char* message) noex
   return status;
 }
 
-jc_robot& robotHandle(jc_robot* robot) {
-  if (!robot) invalid("robot is NULL");
+jc_robot& robotHandle(jc_robot* robot, const char* name) {
+  if (!robot) invalid(std::string(name) + " is NULL");
   if (magicOf(robot) != kRobotMagic) wrongHandle(robot, "jc_robot");
   return *robot;
 }
@@ -66,6 +67,12 @@ jc_plant& plantHandle(jc_plant* plant) {
   if (!plant) invalid("plant is NULL");
   if (magicOf(plant) != kPlantMagic) wrongHandle(plant, "jc_plant");
   return *plant;
+}
+
+jc_report& reportHandle(jc_report* report) {
+  if (!report) invalid("report is NULL");
+  if (magicOf(report) != kReportMagic) wrongHandle(report, "jc_report");
+  return *report;
 }
 
 void requirePointer(const void* pointer, const char* name) {

@@ -20,6 +20,7 @@
 // wrong kind or an already freed one is recognised as long as its memory has not been reused.
 constexpr std::uint64_t kRobotMagic = 0x6a63'726f'626f'7431ULL;  // "jcrobot1"
 constexpr std::uint64_t kPlantMagic = 0x6a63'706c'616e'7431ULL;  // "jcplant1"
+constexpr std::uint64_t kReportMagic = 0x6a63'7265'706f'7274ULL;  // "jcreport"
 constexpr std::uint64_t kFreedMagic = 0x6a63'6672'6565'6421ULL;  // "jcfreed!"
 
 struct jc_robot {
@@ -46,6 +47,15 @@ struct jc_plant {
   std::uint64_t magic = kPlantMagic;
   std::mutex mutex;
   const std::unique_ptr<jointcomp::FlexibleJointPlant> plant;
+};
+
+struct jc_report {
+  jc_report(std::string json_text, std::string summary_text)
+      : json(std::move(json_text)), summary(std::move(summary_text)) {}
+
+  std::uint64_t magic = kReportMagic;
+  const std::string json;     // immutable once made: no lock needed
+  const std::string summary;
 };
 
 namespace jointcomp::capi {
@@ -99,8 +109,10 @@ jc_status guarded(const char* function, Body&& body) noexcept {
 #define CAPI_ENTRY(...) ::jointcomp::capi::guarded(__func__, [&]() __VA_ARGS__)
 
 // The handle behind a pointer, after checking that it is one of the expected kind and still alive.
-jc_robot& robotHandle(jc_robot* robot);
+// `name`: the parameter's name in the header, for the message.
+jc_robot& robotHandle(jc_robot* robot, const char* name = "robot");
 jc_plant& plantHandle(jc_plant* plant);
+jc_report& reportHandle(jc_report* report);
 
 // Argument checks; `name` is the parameter's name in the header.
 void requirePointer(const void* pointer, const char* name);

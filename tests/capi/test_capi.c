@@ -583,6 +583,174 @@ static void test_plant(jc_plant* plant) {
   EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "counts is NULL", jc_plant_statistics(plant, NULL, 5));
 }
 
+/* A report's JSON, read with the two-call protocol (length first); caller frees. */
+static char* report_text(jc_report* report, int summary) {
+  int32_t length = -1;
+  char* text;
+  if ((summary ? jc_report_summary(report, NULL, 0, &length) : jc_report_json(report, NULL, 0, &length)) != JC_OK)
+    return NULL;
+  text = (char*)malloc((size_t)length + 1);
+  if (!text) return NULL;
+  if ((summary ? jc_report_summary(report, text, length + 1, &length) : jc_report_json(report, text, length + 1, &length)) !=
+      JC_OK) {
+    free(text);
+    return NULL;
+  }
+  return text;
+}
+
+/* A fresh temporary path (the file exists, empty; the library replaces it). */
+static void temporary_path(char* path, const char* stem) {
+  int fd;
+  sprintf(path, "/tmp/jointcomp_capi_%s_XXXXXX", stem);
+  fd = mkstemp(path);
+  if (fd >= 0) close(fd);
+}
+
+static void test_identification(jc_robot* robot, jc_robot* bare) {
+  char sweep[64], stiffness[64], poses[64], held[64], urdf[64], params[64], missing[80];
+  char lists[200];
+  jc_robot* identified = NULL;
+  jc_robot* calibrated = NULL;
+  jc_robot* extended = NULL;
+  jc_robot* reloaded = NULL;
+  jc_report* report = NULL;
+  char* text;
+  char small[8];
+  int32_t length = 0;
+  double errors_a[6], errors_b[6], pose_a[16], pose_b[16];
+  temporary_path(sweep, "sweep");
+  temporary_path(stiffness, "stiffness");
+  temporary_path(poses, "poses");
+  temporary_path(held, "held");
+  temporary_path(urdf, "urdf");
+  temporary_path(params, "params");
+  sprintf(missing, "%s.missing", sweep);
+
+  /* Simulation: the robot is the truth. */
+  EXPECT_OK(jc_simulate_campaign(robot, "{\"protocol\": \"joint2-sweep\", \"seed\": 3, \"step_deg\": 0.25}", sweep));
+  EXPECT_OK(jc_simulate_campaign(robot, "{\"protocol\": \"stiffness\", \"seed\": 4}", stiffness));
+  EXPECT_OK(jc_simulate_campaign(robot, "{\"protocol\": \"random\", \"seed\": 5, \"count\": 80}", poses));
+  EXPECT_OK(jc_simulate_campaign(robot, "{\"protocol\": \"random\", \"seed\": 6, \"count\": 40}", held));
+  EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "truth is NULL" , jc_simulate_campaign(NULL, "{}", sweep));
+  EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "campaign_path is NULL", jc_simulate_campaign(robot, "{\"protocol\": \"random\"}", NULL));
+  EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "protocol: is required", jc_simulate_campaign(robot, NULL, sweep));
+  EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "not valid JSON", jc_simulate_campaign(robot, "{\"protocol\": ", sweep));
+  EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "JSON object", jc_simulate_campaign(robot, "[1, 2]", sweep));
+  EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "unknown protocol 'circle'",
+                jc_simulate_campaign(robot, "{\"protocol\": \"circle\"}", sweep));
+  EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "options_json.speed",
+                jc_simulate_campaign(robot, "{\"protocol\": \"random\", \"speed\": 2}", sweep));
+  EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "options_json.joint",
+                jc_simulate_campaign(robot, "{\"protocol\": \"joint-sweep\", \"joint\": 7}", sweep));
+  EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "options_json.seed",
+                jc_simulate_campaign(robot, "{\"protocol\": \"random\", \"seed\": -1}", sweep));
+  EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "options_json.pose_deg",
+                jc_simulate_campaign(robot, "{\"protocol\": \"stiffness\", \"pose_deg\": [1, 2]}", sweep));
+  EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "needs drives",
+                jc_simulate_campaign(bare, "{\"protocol\": \"joint-sweep\", \"plant\": true}", sweep));
+
+  /* Transmission error from the sweep. */
+  EXPECT_OK(jc_identify_transmission_error(robot, sweep, "{\"joint\": 2, \"stage\": 2}", &identified, &report));
+  CHECK(identified != NULL && report != NULL);
+  text = report_text(report, 0);
+  CHECK(text != NULL && strstr(text, "\"significant\": true") != NULL);
+  free(text);
+  text = report_text(report, 1);
+  CHECK(text != NULL && strstr(text, "joint_2") != NULL);
+  free(text);
+  EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "buffer holds 8 bytes", jc_report_json(report, small, 8, &length));
+  EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "length is NULL", jc_report_summary(report, NULL, 0, NULL));
+  EXPECT_STATUS(JC_ERROR_WRONG_HANDLE, "got a jc_robot", jc_report_json((jc_report*)robot, NULL, 0, &length));
+  EXPECT_STATUS(JC_ERROR_WRONG_HANDLE, "got a jc_report", jc_robot_dof((jc_robot*)report, &length));
+  /* Model = truth and noise small: the identified harmonics predict the truth's errors closely. */
+  EXPECT_OK(jc_predict_joint_errors(robot, "transmission_error", kPosture, 6, NULL, 0, errors_a, 6));
+  EXPECT_OK(jc_predict_joint_errors(identified, "transmission_error", kPosture, 6, NULL, 0, errors_b, 6));
+  CHECK(fabs(errors_a[1]) > 1e-5 && fabs(errors_b[1] - errors_a[1]) < 0.1 * fabs(errors_a[1]));
+  EXPECT_OK(jc_report_free(report));
+  EXPECT_STATUS(JC_ERROR_WRONG_HANDLE, "already freed", jc_report_json(report, NULL, 0, &length));
+  EXPECT_OK(jc_report_free(NULL));
+  EXPECT_OK(jc_robot_free(identified));
+  identified = NULL;
+  report = NULL;
+  EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "options_json.stage",
+                jc_identify_transmission_error(robot, sweep, "{\"stage\": 0}", &identified, &report));
+  EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "options_json.orders",
+                jc_identify_transmission_error(robot, sweep, "{\"orders\": [2, -1]}", &identified, &report));
+  EXPECT_STATUS(JC_ERROR_FILE, "jointcomp_capi_sweep",
+                jc_identify_transmission_error(robot, missing, NULL, &identified, &report));
+  EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "campaign_path is NULL",
+                jc_identify_transmission_error(robot, NULL, NULL, &identified, &report));
+  CHECK(identified == NULL && report == NULL); /* failures leave the outputs untouched */
+
+  /* Stiffness; the outputs are optional. */
+  EXPECT_OK(jc_identify_stiffness(robot, stiffness, "{\"method\": \"global\"}", &identified, NULL));
+  EXPECT_OK(jc_predict_joint_errors(robot, "compliance", kPosture, 6, NULL, 0, errors_a, 6));
+  EXPECT_OK(jc_predict_joint_errors(identified, "compliance", kPosture, 6, NULL, 0, errors_b, 6));
+  CHECK(fabs(errors_b[1] - errors_a[1]) < 0.1 * fabs(errors_a[1]));
+  EXPECT_OK(jc_robot_free(identified));
+  identified = NULL;
+  EXPECT_OK(jc_identify_stiffness(robot, stiffness, NULL, NULL, &report));
+  EXPECT_OK(jc_report_free(report));
+  report = NULL;
+  EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "options_json.method",
+                jc_identify_stiffness(robot, stiffness, "{\"method\": \"best\"}", &identified, &report));
+  EXPECT_STATUS(JC_ERROR_FILE, "format", jc_identify_stiffness(robot, temporary_file("not a campaign\n"), NULL,
+                                                               &identified, &report));
+
+  /* Calibration with a held-out campaign, then saving and reloading the calibrated robot. */
+  sprintf(lists, "%s\n", held);
+  EXPECT_OK(jc_calibrate(robot, poses, lists, "{\"loss\": \"huber\", \"fixed\": []}", &calibrated, &report));
+  text = report_text(report, 0);
+  CHECK(text != NULL && strstr(text, "jointcomp-calibration-report/1") != NULL && strstr(text, "holdout") != NULL);
+  free(text);
+  EXPECT_OK(jc_report_free(report));
+  report = NULL;
+  EXPECT_OK(jc_robot_save(calibrated, urdf, params));
+  EXPECT_OK(jc_robot_load(urdf, params, &reloaded));
+  EXPECT_OK(jc_forward_kinematics(calibrated, kPosture, 6, pose_a, 16));
+  EXPECT_OK(jc_forward_kinematics(reloaded, kPosture, 6, pose_b, 16));
+  CHECK(max_abs_difference(pose_a, pose_b, 16) < 1e-12);
+  EXPECT_OK(jc_predict_joint_errors(calibrated, NULL, kPosture, 6, NULL, 0, errors_a, 6));
+  EXPECT_OK(jc_predict_joint_errors(reloaded, NULL, kPosture, 6, NULL, 0, errors_b, 6));
+  CHECK(max_abs_difference(errors_a, errors_b, 6) < 1e-12);
+  EXPECT_OK(jc_robot_free(reloaded));
+  EXPECT_OK(jc_robot_free(calibrated));
+  calibrated = NULL;
+  EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "both NULL", jc_robot_save(robot, NULL, NULL));
+  EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "urdf_path is empty", jc_robot_save(robot, "", params));
+  EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "options_json.loss",
+                jc_calibrate(robot, poses, NULL, "{\"loss\": \"square\"}", &calibrated, &report));
+  EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "options_json.fixed",
+                jc_calibrate(robot, poses, NULL, "{\"fixed\": [1]}", &calibrated, &report));
+  sprintf(lists, "%s\n%s", held, missing);
+  EXPECT_STATUS(JC_ERROR_FILE, ".missing", jc_calibrate(robot, poses, lists, NULL, &calibrated, &report));
+  CHECK(calibrated == NULL && report == NULL);
+
+  /* Discovery: the truth is the model, so nothing is missing and nothing may be added. */
+  sprintf(lists, "%s\r\n\n", poses);
+  EXPECT_OK(jc_discover(robot, lists, held, "{\"max_steps\": 2, \"types\": [\"offset\", \"harmonic\"]}", &extended,
+                        &report));
+  text = report_text(report, 0);
+  CHECK(text != NULL && strstr(text, "jointcomp-discovery-report/1") != NULL && strstr(text, "\"steps\": []") != NULL);
+  free(text);
+  EXPECT_OK(jc_report_free(report));
+  EXPECT_OK(jc_robot_free(extended));
+  EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "campaign_paths names no file", jc_discover(robot, "\n\n", NULL, NULL, NULL, NULL));
+  EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "campaign_paths is NULL", jc_discover(robot, NULL, NULL, NULL, NULL, NULL));
+  EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "unknown effect type 'gremlin'",
+                jc_discover(robot, poses, NULL, "{\"types\": [\"gremlin\"]}", NULL, NULL));
+  EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "options_json.folds", jc_discover(robot, poses, NULL, "{\"folds\": 1}", NULL, NULL));
+  EXPECT_STATUS(JC_ERROR_WRONG_HANDLE, "expected a jc_robot", jc_discover((jc_robot*)(void*)held, poses, NULL, NULL, NULL, NULL));
+
+  remove(sweep);
+  remove(stiffness);
+  remove(poses);
+  remove(held);
+  remove(urdf);
+  remove(params);
+}
+
 int main(void) {
   jc_robot* robot = NULL;
   jc_robot* bare = NULL;
@@ -611,6 +779,7 @@ int main(void) {
   test_spiral(robot, bare);
   test_unreachable_spiral(ur10);
   test_metrics();
+  test_identification(robot, bare);
   /* The plant keeps its own copy of the model: the robot may go first. */
   EXPECT_OK(jc_robot_free(robot));
   test_plant(plant);

@@ -1,15 +1,22 @@
 // The C API returns what the C++ core computes, bit for bit: the same calls made on the core directly and
 // through libjointcomp.so, compared with == on every double (memcmp, so that even NaN or -0 would count).
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <memory>
 #include <string>
 #include <vector>
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 #include <jointcomp/jointcomp.h>
 
 #include "model/compensation/spiral_experiment.hpp"
+#include "model/identify/calibration_report.hpp"
+#include "model/identify/campaign_simulation.hpp"
+#include "model/identify/discovery.hpp"
+#include "model/identify/identification_report.hpp"
+#include "model/io/atomic_file.hpp"
 #include "model/io/parameter_file.hpp"
 #include "model/robot/dynamics.hpp"
 #include "model/robot/inverse_kinematics.hpp"
@@ -291,11 +298,10 @@ TEST_F(CapiMatchesCore, PlantSteppingAndSnapshots) {
   }
   compare("after 50 periods");
 
-  // The whole state: saveState's y (reading it restarts the integrator, as saving does).
-  const PlantState state = plant.saveState();
+  // The whole state, read without disturbing either run.
   double api_state[30];
   ASSERT_EQ(jc_plant_state(api_plant, api_state, 30), JC_OK);
-  EXPECT_TRUE(sameBits(state.y.data(), api_state, 30));
+  EXPECT_TRUE(sameBits(plant.state(), api_state, 30));
 
   int32_t size = 0;
   ASSERT_EQ(jc_plant_snapshot_size(api_plant, &size), JC_OK);
@@ -348,6 +354,98 @@ TEST_F(CapiMatchesCore, MetricsAndParameters) {
   ASSERT_EQ(jc_robot_joint_limits(handle_, lower, 6, upper, 6), JC_OK);
   EXPECT_TRUE(sameBits(robot_->lowerLimits().data(), lower, 6));
   EXPECT_TRUE(sameBits(robot_->upperLimits().data(), upper, 6));
+}
+
+std::string textOf(jc_report* report, bool summary) {
+  std::int32_t length = 0;
+  auto read = summary ? jc_report_summary : jc_report_json;
+  EXPECT_EQ(read(report, nullptr, 0, &length), JC_OK) << jc_last_error();
+  std::string text(static_cast<std::size_t>(length) + 1, '\0');
+  EXPECT_EQ(read(report, text.data(), length + 1, &length), JC_OK) << jc_last_error();
+  text.resize(static_cast<std::size_t>(length));
+  return text;
+}
+
+std::string parametersOf(jc_robot* robot) {
+  std::int32_t length = 0;
+  EXPECT_EQ(jc_robot_parameters_json(robot, nullptr, 0, &length), JC_OK) << jc_last_error();
+  std::string text(static_cast<std::size_t>(length) + 1, '\0');
+  EXPECT_EQ(jc_robot_parameters_json(robot, text.data(), length + 1, &length), JC_OK) << jc_last_error();
+  text.resize(static_cast<std::size_t>(length));
+  return text;
+}
+
+std::string scratchPath(const std::string& stem) {
+  return ::testing::TempDir() + "jointcomp_matches_core_" + stem + "_" + std::to_string(::getpid()) + ".csv";
+}
+
+// Simulation, identification and calibration give through the library the files, parameters and reports
+// the core gives.
+TEST_F(CapiMatchesCore, SimulationIdentificationAndCalibration) {
+  const std::string sweep_path = scratchPath("sweep");
+  ASSERT_EQ(jc_simulate_campaign(handle_, R"({"protocol": "joint2-sweep", "seed": 9, "step_deg": 0.5})",
+                                 sweep_path.c_str()),
+            JC_OK)
+      << jc_last_error();
+  CampaignSimulationSpec spec = defaultCampaignSpec(CampaignProtocol::JointSweep);
+  spec.seed = 9;
+  spec.sweep.step_rad = 0.5 * kDegree;
+  spec.metadata["truth"] = "rx170 (a jc_robot handle), through jc_simulate_campaign";
+  const MeasurementCampaign sweep = simulateCampaign(*model_, spec);
+  EXPECT_EQ(readTextFile(sweep_path, "campaign"), campaignToText(sweep));
+
+  jc_robot* identified = nullptr;
+  jc_report* report = nullptr;
+  ASSERT_EQ(jc_identify_transmission_error(handle_, sweep_path.c_str(), R"({"orders": [1, 2, 3]})", &identified, &report),
+            JC_OK)
+      << jc_last_error();
+  TransmissionIdentificationOptions options;
+  options.candidate_orders = {1, 2, 3};
+  // The library reads the campaign back from its file (millimetres and degrees in text): so does the core.
+  const TransmissionIdentificationResult result = identifyTransmissionError(*model_, readCampaignFile(sweep_path), options);
+  EXPECT_EQ(parametersOf(identified), parametersToJson(withIdentifiedHarmonics(*model_, result, sweep_path), drives_));
+  ReportSources sources;
+  sources.campaign = sweep_path;
+  sources.parameters = "rx170 (a jc_robot handle)";
+  sources.robot = "rx170";
+  EXPECT_EQ(textOf(report, false), transmissionReportJson(result, sources, nullptr).dump(2));
+  EXPECT_EQ(textOf(report, true), transmissionSummary(result, sources, nullptr));
+  EXPECT_EQ(jc_report_free(report), JC_OK);
+  EXPECT_EQ(jc_robot_free(identified), JC_OK);
+
+  const std::string poses_path = scratchPath("poses");
+  ASSERT_EQ(jc_simulate_campaign(handle_, R"({"protocol": "random", "seed": 10, "count": 60})", poses_path.c_str()), JC_OK)
+      << jc_last_error();
+  jc_robot* calibrated = nullptr;
+  ASSERT_EQ(jc_calibrate(handle_, poses_path.c_str(), nullptr, R"({"loss": "none"})", &calibrated, nullptr), JC_OK)
+      << jc_last_error();
+  GeometricCalibrationOptions calibration;
+  calibration.loss = RobustLoss::None;
+  const CalibrationRun run = runCalibration(*model_, readCampaignFile(poses_path), {}, calibration);
+  EXPECT_EQ(parametersOf(calibrated), parametersToJson(run.calibrated, drives_));
+  double pose_capi[16];
+  ASSERT_EQ(jc_forward_kinematics(calibrated, postures()[1].data(), 6, pose_capi, 16), JC_OK);
+  RobotWorkspace ws(*run.calibrated_robot);
+  forwardKinematics(*run.calibrated_robot, ws, postures()[1]);
+  const Eigen::Isometry3d pose_core = ws.tool_pose;
+  for (int r = 0; r < 4; ++r) {
+    for (int c = 0; c < 4; ++c) EXPECT_EQ(pose_capi[r * 4 + c], pose_core.matrix()(r, c));
+  }
+  EXPECT_EQ(jc_robot_free(calibrated), JC_OK);
+
+  jc_robot* extended = nullptr;
+  ASSERT_EQ(jc_discover(handle_, poses_path.c_str(), nullptr, R"({"max_steps": 1, "types": ["offset"]})", &extended,
+                        nullptr),
+            JC_OK)
+      << jc_last_error();
+  DiscoveryOptions discovery;
+  discovery.max_steps = 1;
+  discovery.types = {"offset"};
+  const DiscoveryResult found = discoverEffects(*model_, {readCampaignFile(poses_path)}, {}, discovery);
+  EXPECT_EQ(parametersOf(extended), parametersToJson(found.model, drives_));
+  EXPECT_EQ(jc_robot_free(extended), JC_OK);
+  std::remove(sweep_path.c_str());
+  std::remove(poses_path.c_str());
 }
 
 }  // namespace

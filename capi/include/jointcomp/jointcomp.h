@@ -13,7 +13,7 @@
  *   [r * C + c]. Poses are 4 x 4 homogeneous transforms (16 values, row-major).
  * - Inputs must be finite: NaN and infinities are rejected with JC_ERROR_INVALID_ARGUMENT.
  * - Outputs marked "optional" may be NULL with length 0 when not wanted.
- * - Handles (jc_robot, jc_plant) are created by jc_*_load / jc_*_create and released by jc_*_free;
+ * - Handles (jc_robot, jc_plant, jc_report) are created by jc_*_load / jc_*_create and released by jc_*_free;
  *   freeing NULL is a no-op. A handle of the wrong kind, or one already freed, is reported as
  *   JC_ERROR_WRONG_HANDLE as long as its memory has not been reused; a freed handle whose memory was
  *   reused cannot be detected, so never use a handle after freeing it.
@@ -56,6 +56,7 @@ typedef int32_t jc_status;
 /* Opaque handles. */
 typedef struct jc_robot jc_robot; /* a robot, its joint-error model and (optionally) its drives */
 typedef struct jc_plant jc_plant; /* a simulated flexible-joint robot, integrated by CVODE */
+typedef struct jc_report jc_report; /* the report of an identification, a calibration or a discovery */
 
 /* ---- Library ---------------------------------------------------------------------------------------- */
 
@@ -93,6 +94,11 @@ JOINTCOMP_API jc_status jc_robot_joint_limits(jc_robot* robot, double* lower, in
 JOINTCOMP_API jc_status jc_robot_has_drives(jc_robot* robot, int32_t* has_drives);
 /* The joint-error parameters (and drives) as parameter-file JSON; buffer as for jc_robot_name. */
 JOINTCOMP_API jc_status jc_robot_parameters_json(jc_robot* robot, char* buffer, int32_t capacity, int32_t* length);
+
+/* Writes the robot's URDF (its geometry, as calibrated when it came from jc_calibrate or jc_discover) and
+   its parameter file (joint-error effects and drives), each whole or not at all (temporary file and
+   rename). Either path may be NULL to skip that file. */
+JOINTCOMP_API jc_status jc_robot_save(jc_robot* robot, const char* urdf_path, const char* parameter_path);
 
 /* Conditions of the robot handle, used by jc_predict_joint_errors and jc_compensate_* (not by the spiral):
    a payload of `mass` kg whose centre of mass is com (3, m, tool frame), and a wrench (6: force in N,
@@ -202,8 +208,8 @@ JOINTCOMP_API jc_status jc_plant_link_velocities(jc_plant* plant, double* values
 JOINTCOMP_API jc_status jc_plant_motor_positions(jc_plant* plant, double* values, int32_t values_len);
 JOINTCOMP_API jc_status jc_plant_motor_velocities(jc_plant* plant, double* values, int32_t values_len);
 JOINTCOMP_API jc_status jc_plant_motor_torques(jc_plant* plant, double* values, int32_t values_len);
-/* The integrator's state y (5 n). Like jc_plant_save, reading it restarts the integrator's step-size
-   history at the current time: what follows equals, bit for bit, what follows a save and restore there. */
+/* The integrator's state y (5 n): link positions, link velocities, motor positions, motor velocities and
+   the controller's integral of the motor position error, n each. Reading it changes nothing in the run. */
 JOINTCOMP_API jc_status jc_plant_state(jc_plant* plant, double* state, int32_t state_len);
 /* Integrator counts (5): steps, right-hand sides, Jacobians, error-test failures, convergence failures. */
 JOINTCOMP_API jc_status jc_plant_statistics(jc_plant* plant, int64_t* counts, int32_t counts_len);
@@ -223,6 +229,58 @@ JOINTCOMP_API jc_status jc_accuracy_metrics(const double* errors, int32_t errors
 /* Ra = mean |z_k| and Rz = max z_k - min z_k of Z deviations z (at least 1). */
 JOINTCOMP_API jc_status jc_average_absolute_deviation(const double* z, int32_t z_len, double* ra);
 JOINTCOMP_API jc_status jc_peak_to_peak_deviation(const double* z, int32_t z_len, double* rz);
+
+/* ---- Identification, calibration and discovery from measurement campaigns --------------------------- */
+/* Campaign files are in jointcomp's measurement-campaign format (see docs in model/io and
+   jointcomp import-ipa for the IPA UR10 data). A list of files is one string with the paths separated
+   by newlines ('\n'). options_json is a JSON object (NULL or "{}" for the defaults) with the keys listed
+   at each function; an unknown key or a value of the wrong type or range is JC_ERROR_INVALID_ARGUMENT
+   naming the key. A malformed campaign is JC_ERROR_FILE naming the file, line and column.
+   The input robot is never changed: results come as a new robot handle (free it with jc_robot_free) and a
+   report handle (jc_report_json, jc_report_summary, jc_report_free); either output pointer may be NULL
+   when not wanted. These calls hold the input robot's lock while they run (seconds for a calibration or
+   a discovery), so other calls on that handle wait; other handles are not held up. */
+
+/* Simulates a measurement campaign with `truth` as the real robot (its geometry, effects and, for the
+   plant, drives), with laser-tracker and level noise, and writes it to campaign_path (whole or not at
+   all). options: "protocol" (required): "stiffness", "joint-sweep", "joint2-sweep", "back-and-forth",
+   "spiral" or "random"; "seed" (integer >= 0, default 1); "noise" (default true); "plant" (default false:
+   sweeps and the spiral run on the flexible-joint plant; needs drives); sweeps: "joint" (1-based, default
+   2), "from_deg", "to_deg", "step_deg", "settle_s", "cycles"; "count" (random poses); "pose_deg" (n joint
+   angles of the stiffness pose and of the sweep's other joints). */
+JOINTCOMP_API jc_status jc_simulate_campaign(jc_robot* truth, const char* options_json, const char* campaign_path);
+/* Joint stiffness from a stiffness campaign, by the local (axis by axis) and the global (Cartesian)
+   methods. *identified: `nominal` with the stiffness of the method chosen by "method": "local" (default)
+   or "global". */
+JOINTCOMP_API jc_status jc_identify_stiffness(jc_robot* nominal, const char* campaign_path, const char* options_json,
+                                              jc_robot** identified, jc_report** report);
+/* Harmonics of the transmission error of one joint from a sweep of that joint. options: "joint" (1-based,
+   default 2), "stage" (1 = motor, k = input of gear stage k, stages + 1 = output; default 2), "orders"
+   (candidate orders, cycles per revolution of that stage; default [1, 2, 3, 4, 5, 6]). *identified:
+   `nominal` with the significant harmonics in its transmission-error effect. */
+JOINTCOMP_API jc_status jc_identify_transmission_error(jc_robot* nominal, const char* campaign_path,
+                                                       const char* options_json, jc_robot** identified,
+                                                       jc_report** report);
+/* Kinematic calibration: instrument frame, target, joint offsets, joint placements and compliance (the
+   identifiable subset) from one campaign; held-out campaigns (holdout_paths, may be NULL) are checked
+   with only their instrument frame re-fitted. options: "loss": "huber" (default), "cauchy" or "none";
+   "loss_scale_mm" (> 0; default: from the residuals); "pivot_threshold" (default 1e-4); "fixed" (names of
+   parameters held at nominal, as the report names them). *calibrated: the corrected robot. */
+JOINTCOMP_API jc_status jc_calibrate(jc_robot* nominal, const char* campaign_path, const char* holdout_paths,
+                                     const char* options_json, jc_robot** calibrated, jc_report** report);
+/* Residual discovery: the effects the model misses, added one at a time while they lower the time-blocked
+   cross-validated error and the BIC (see model/identify/discovery.hpp). campaign_paths: the fitted
+   campaigns (at least one); holdout_paths: NULL or the held-out ones. options: "base": "frame" (default)
+   or "textbook"; "max_steps" (default 8); "max_harmonic_order" (default 4); "folds" (default 5);
+   "min_cv_gain" (default 0.02); "noise_floor_mm" (default: from the campaigns); "types" (effect types to
+   try, default all); "loss" as for jc_calibrate. *extended: the robot with the discovered effects. */
+JOINTCOMP_API jc_status jc_discover(jc_robot* nominal, const char* campaign_paths, const char* holdout_paths,
+                                    const char* options_json, jc_robot** extended, jc_report** report);
+/* The report as JSON (the same document the command-line tool writes as report.json) and as a readable
+   summary; buffer as for jc_robot_name. */
+JOINTCOMP_API jc_status jc_report_json(jc_report* report, char* buffer, int32_t capacity, int32_t* length);
+JOINTCOMP_API jc_status jc_report_summary(jc_report* report, char* buffer, int32_t capacity, int32_t* length);
+JOINTCOMP_API jc_status jc_report_free(jc_report* report);
 
 #ifdef __cplusplus
 }

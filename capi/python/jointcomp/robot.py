@@ -79,6 +79,20 @@ class Robot:
         """The robot with its parameters given as JSON text."""
         return cls(urdf_path, parameters_json=parameters_json)
 
+    @classmethod
+    def _adopt(cls, handle):
+        """A Robot owning a handle the library has just made (identification results)."""
+        robot = cls.__new__(cls)
+        robot._handle = handle
+        robot._dof = robot._int32(_native.lib.jc_robot_dof)
+        return robot
+
+    def save(self, urdf_path=None, parameters_path=None):
+        """Writes the robot's URDF (its geometry, as calibrated) and/or its parameter file, each whole or
+        not at all."""
+        _native.check(_native.lib.jc_robot_save(self.handle, _native.text(urdf_path, "urdf_path"),
+                                                _native.text(parameters_path, "parameters_path")))
+
     def close(self):
         """Releases the library's handle; the Robot cannot be used afterwards."""
         if self._handle is not None:

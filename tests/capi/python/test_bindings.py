@@ -25,6 +25,8 @@ C_TO_CTYPES = {
     "jc_plant*": ctypes.c_void_p,
     "jc_robot**": ctypes.POINTER(ctypes.c_void_p),
     "jc_plant**": ctypes.POINTER(ctypes.c_void_p),
+    "jc_report*": ctypes.c_void_p,
+    "jc_report**": ctypes.POINTER(ctypes.c_void_p),
 }
 
 
