@@ -1,4 +1,6 @@
 // Plant handles: the flexible-joint plant, its inputs, outputs, state and snapshots.
+#include <algorithm>
+
 #include "api_support.hpp"
 
 using namespace jointcomp;
@@ -148,13 +150,8 @@ jc_status jc_plant_state(jc_plant* plant, double* state, int32_t state_len) {
     const int n = handle.plant->dof();
     requireOutput(state, state_len, 5 * n, "state", "5 x the robot's number of joints");
     const std::lock_guard<std::mutex> lock(handle.mutex);
-    const JointVector parts[4] = {handle.plant->linkPositions(), handle.plant->linkVelocities(),
-                                  handle.plant->motorPositions(), handle.plant->motorVelocities()};
-    for (int i = 0; i < 4; ++i) copyJoints(parts[i], state + i * n);
-    // FlexibleJointPlant shows the integral states only through saveState(), which also restarts the
-    // integrator's history (documented in the header until the plant offers a read-only accessor).
-    const PlantState saved = handle.plant->saveState();
-    for (int j = 0; j < n; ++j) state[4 * n + j] = saved.y[4 * n + j];
+    const double* y = handle.plant->state();
+    std::copy(y, y + 5 * n, state);
   });
 }
 

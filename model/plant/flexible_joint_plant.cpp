@@ -428,6 +428,8 @@ double FlexibleJointPlant::mechanicalEnergy() {
   return energy;
 }
 
+const double* FlexibleJointPlant::state() const { return N_VGetArrayPointer(solver_->y); }
+
 PlantState FlexibleJointPlant::saveState() {
   PlantState state;
   state.time = time_;

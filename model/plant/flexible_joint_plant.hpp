@@ -90,6 +90,9 @@ public:
   // Total mechanical energy (kinetic, gravity, spring balancer, payload, joint springs), for tests.
   double mechanicalEnergy();
 
+  // The integrator's state y now (stateSize() values, laid out as above); unlike saveState() it leaves
+  // the integrator's step-size history alone, so reading it does not change the run.
+  const double* state() const;
   PlantState saveState();
   void restoreState(const PlantState& state);
   PlantStatistics statistics() const { return statistics_; }

@@ -2,6 +2,7 @@
 // bit-identical outputs (two plants, run one after the other or interleaved step by step); a state saved
 // mid-motion and restored, into the same plant or into a fresh one, must continue bit for bit as the run
 // that went on from the save.
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <memory>
@@ -130,6 +131,23 @@ TEST(PlantState, SavedStateIsTheState) {
   }
   EXPECT_EQ(saved.time, plant->time());
   EXPECT_DOUBLE_EQ(saved.time, 10 * kPeriod);
+}
+
+TEST(PlantState, ReadingTheStateIsTheSavedStateAndChangesNothing) {
+  auto reader = makePlant();
+  auto quiet = makePlant();
+  std::vector<Sample> read_run, quiet_run;
+  for (int k = 0; k < 2 * kHalf; ++k) {
+    read_run.push_back(runPeriods(*reader, k, k + 1).front());
+    const double* y = reader->state();
+    const JointVector q = reader->linkPositions();
+    for (int j = 0; j < 6; ++j) ASSERT_EQ(y[j], q[j]);
+    quiet_run.push_back(runPeriods(*quiet, k, k + 1).front());
+  }
+  // Saving restarts the integrator's history; reading must not, or the runs would part.
+  expectIdentical(quiet_run, read_run, "state read every period");
+  const PlantState saved = reader->saveState();
+  EXPECT_TRUE(std::equal(saved.y.begin(), saved.y.end(), reader->state()));
 }
 
 TEST(PlantState, TwoPlantsWithTheSameInputsAgreeBitForBit) {
