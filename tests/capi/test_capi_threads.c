@@ -1,5 +1,5 @@
 /* Two handles in two threads give the same results, bit for bit, as one after the other; and one handle
- * shared by two threads stays consistent (its lock serialises the calls). Built with
+ * shared by two threads stays consistent (its lock serialises the calls; calibration needs no lock). Built with
  * -DJOINTCOMP_SANITIZE=thread, ThreadSanitizer checks that nothing is shared without synchronisation. */
 #define _POSIX_C_SOURCE 200809L
 
@@ -9,6 +9,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #define POSTURES 4
 #define PLANT_PERIODS 50
@@ -24,6 +25,7 @@ typedef struct {
   double metrics[15];
   double plant_q[6];
   double plant_state[30];
+  double calibrated_pose[16];    /* of the robot calibrated on the shared campaign */
   double* trajectory_references; /* 6 m */
   int failed;                    /* a call returned an error */
 } Results;
@@ -35,6 +37,7 @@ typedef struct {
 } Work;
 
 static int32_t sample_count = 0;
+static char campaign_path[64]; /* a simulated campaign every thread calibrates on (read only) */
 static double* spiral_q = NULL;
 static double* spiral_qd = NULL;
 
@@ -72,6 +75,15 @@ static void* work(void* argument) {
   out->trajectory_references = (double*)malloc(sizeof(double) * 6 * (size_t)sample_count);
   CALL(out, jc_compensate_trajectory(robot, NULL, spiral_q, 6 * sample_count, spiral_qd, 6 * sample_count,
                                      out->trajectory_references, 6 * sample_count, NULL, NULL));
+  {
+    /* Calibration reads only the robot's immutable model: two threads may run it on one handle at once. */
+    jc_robot* calibrated = NULL;
+    double q[6];
+    posture(2, q);
+    CALL(out, jc_calibrate(robot, campaign_path, NULL, "{\"loss\": \"huber\"}", &calibrated, NULL));
+    CALL(out, jc_forward_kinematics(calibrated, q, 6, out->calibrated_pose, 16));
+    CALL(out, jc_robot_free(calibrated));
+  }
   if (work_item->with_experiment) {
     jc_plant* plant = NULL;
     double start[6], velocity[6] = {0.05, -0.03, 0.04, 0.1, -0.1, 0.2};
@@ -98,7 +110,8 @@ static int same_results(const Results* a, const Results* b, int with_experiment)
   if (a->failed || b->failed) return 0;
   if (memcmp(a->pose, b->pose, sizeof a->pose) || memcmp(a->jacobian, b->jacobian, sizeof a->jacobian) ||
       memcmp(a->gravity, b->gravity, sizeof a->gravity) || memcmp(a->ik, b->ik, sizeof a->ik) ||
-      memcmp(a->errors, b->errors, sizeof a->errors) || memcmp(a->reference, b->reference, sizeof a->reference)) {
+      memcmp(a->errors, b->errors, sizeof a->errors) || memcmp(a->reference, b->reference, sizeof a->reference) ||
+      memcmp(a->calibrated_pose, b->calibrated_pose, sizeof a->calibrated_pose)) {
     return 0;
   }
   if (memcmp(a->trajectory_references, b->trajectory_references, sizeof(double) * 6 * (size_t)sample_count)) return 0;
@@ -132,6 +145,14 @@ int main(void) {
   if (jc_spiral_plan(plan_robot, NULL, 0, NULL, 0, spiral_q, 6 * sample_count, spiral_qd, 6 * sample_count) != JC_OK) {
     return 1;
   }
+  strcpy(campaign_path, "/tmp/jointcomp_threads_XXXXXX");
+  i = mkstemp(campaign_path);
+  if (i < 0 || jc_simulate_campaign(plan_robot, "{\"protocol\": \"random\", \"seed\": 3, \"count\": 60}",
+                                    campaign_path) != JC_OK) {
+    fprintf(stderr, "cannot simulate the campaign: %s\n", jc_last_error());
+    return 1;
+  }
+  close(i);
   jc_robot_free(plan_robot);
 
   /* One after the other, each with a handle of its own. */
@@ -181,6 +202,7 @@ int main(void) {
     free(shared[i].results.trajectory_references);
   }
   jc_robot_free(shared_robot);
+  remove(campaign_path);
   free(spiral_q);
   free(spiral_qd);
   printf("test_capi_threads: %d samples, 2 sequential, 2 parallel and 2 shared-handle runs, %d differ\n", sample_count,

@@ -238,8 +238,8 @@ JOINTCOMP_API jc_status jc_peak_to_peak_deviation(const double* z, int32_t z_len
    naming the key. A malformed campaign is JC_ERROR_FILE naming the file, line and column.
    The input robot is never changed: results come as a new robot handle (free it with jc_robot_free) and a
    report handle (jc_report_json, jc_report_summary, jc_report_free); either output pointer may be NULL
-   when not wanted. These calls hold the input robot's lock while they run (seconds for a calibration or
-   a discovery), so other calls on that handle wait; other handles are not held up. */
+   when not wanted. These calls read only the input robot's model, which never changes, so they neither
+   wait for nor hold up other calls on that handle, even while a discovery runs for seconds. */
 
 /* Simulates a measurement campaign with `truth` as the real robot (its geometry, effects and, for the
    plant, drives), with laser-tracker and level noise, and writes it to campaign_path (whole or not at
