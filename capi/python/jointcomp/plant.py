@@ -6,18 +6,14 @@ import ctypes
 import numpy as np
 
 from . import _native
-from .errors import InvalidArgumentError
+from ._handle import OwnedHandle, float_array as _array
 
 PlantStatistics = collections.namedtuple(
     "PlantStatistics", "steps rhs_evaluations jacobian_evaluations error_test_failures convergence_failures")
 PlantStatistics.__doc__ = """CVODE's counts since the plant was created."""
 
 
-def _array(values):
-    return np.ascontiguousarray(values, dtype=np.float64).reshape(-1)
-
-
-class Plant:
+class Plant(OwnedHandle):
     """The robot as a flexible-joint plant: per joint a motor under a PID position controller drives the
     link through the gear train and the joint spring; the links follow the rigid-body dynamics.
 
@@ -35,29 +31,9 @@ class Plant:
         _native.check(_native.lib.jc_plant_dof(self._handle, ctypes.byref(dof)))
         self._dof = dof.value
 
-    def close(self):
-        """Releases the library's handle; the Plant cannot be used afterwards."""
-        if self._handle is not None:
-            handle, self._handle = self._handle, None
-            _native.check(_native.lib.jc_plant_free(handle))
-
-    def __enter__(self):
-        return self
-
-    def __exit__(self, *exception):
-        self.close()
-
-    def __del__(self):
-        if getattr(self, "_handle", None) is not None and _native is not None and _native.lib is not None:
-            _native.lib.jc_plant_free(self._handle)
-            self._handle = None
-
-    @property
-    def handle(self):
-        """The C handle (a jc_plant*)."""
-        if self._handle is None:
-            raise InvalidArgumentError("this Plant was closed")
-        return self._handle
+    @staticmethod
+    def _release(handle):
+        return _native.lib.jc_plant_free(handle)
 
     @property
     def dof(self):

@@ -6,7 +6,7 @@ import ctypes
 import numpy as np
 
 from . import _native
-from .errors import InvalidArgumentError
+from ._handle import OwnedHandle, float_array as _array
 from .metrics import Metrics
 
 RUN_NAMES = ("without correction", "stiffness correction", "stiffness and kinematic correction")
@@ -22,11 +22,6 @@ simulated robot was the flexible-joint plant."""
 TrajectoryCompensation = collections.namedtuple("TrajectoryCompensation", "references max_iterations max_correction")
 TrajectoryCompensation.__doc__ = """Compensated joint references (m, n) in rad, the largest fixed-point
 iteration count, and the largest |planned - reference| in rad."""
-
-
-def _array(values):
-    """Values as a contiguous float64 array, flattened row by row (the C API's row-major order)."""
-    return np.ascontiguousarray(values, dtype=np.float64).reshape(-1)
 
 
 def _optional_array(values):
@@ -46,7 +41,7 @@ def _effects(effects):
     return ",".join(effects).encode("utf-8")
 
 
-class Robot:
+class Robot(OwnedHandle):
     """A robot loaded from a URDF file with its joint-error parameters.
 
     ``Robot(urdf_path, parameters_path)`` reads the parameters from a file (see model/io/parameter_file.hpp),
@@ -93,34 +88,14 @@ class Robot:
         _native.check(_native.lib.jc_robot_save(self.handle, _native.text(urdf_path, "urdf_path"),
                                                 _native.text(parameters_path, "parameters_path")))
 
-    def close(self):
-        """Releases the library's handle; the Robot cannot be used afterwards."""
-        if self._handle is not None:
-            handle, self._handle = self._handle, None
-            _native.check(_native.lib.jc_robot_free(handle))
-
-    def __enter__(self):
-        return self
-
-    def __exit__(self, *exception):
-        self.close()
-
-    def __del__(self):
-        if getattr(self, "_handle", None) is not None and _native is not None and _native.lib is not None:
-            _native.lib.jc_robot_free(self._handle)
-            self._handle = None
+    @staticmethod
+    def _release(handle):
+        return _native.lib.jc_robot_free(handle)
 
     def __repr__(self):
         if self._handle is None:
             return "<jointcomp.Robot (closed)>"
         return "<jointcomp.Robot %r, %d joints>" % (self.name, self.dof)
-
-    @property
-    def handle(self):
-        """The C handle (a jc_robot*), for calls not wrapped here."""
-        if self._handle is None:
-            raise InvalidArgumentError("this Robot was closed")
-        return self._handle
 
     def _int32(self, function):
         value = ctypes.c_int32()

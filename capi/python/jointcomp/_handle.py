@@ -1,0 +1,45 @@
+"""What the classes owning a library handle share: release on close, ``with`` and garbage collection."""
+
+import numpy as np
+
+from . import _native
+from .errors import InvalidArgumentError
+
+
+def float_array(values):
+    """Values as a contiguous float64 array, flattened row by row (the C API's row-major order)."""
+    return np.ascontiguousarray(values, dtype=np.float64).reshape(-1)
+
+
+class OwnedHandle:
+    """A handle from the library, released exactly once by the subclass's ``_release`` (its jc_*_free)."""
+
+    _handle = None
+
+    @staticmethod
+    def _release(handle):
+        raise NotImplementedError
+
+    def close(self):
+        """Releases the library's handle; the object cannot be used afterwards."""
+        if self._handle is not None:
+            handle, self._handle = self._handle, None
+            _native.check(self._release(handle))
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exception):
+        self.close()
+
+    def __del__(self):
+        if getattr(self, "_handle", None) is not None and _native is not None and _native.lib is not None:
+            self._release(self._handle)
+            self._handle = None
+
+    @property
+    def handle(self):
+        """The C handle, for calls not wrapped here."""
+        if self._handle is None:
+            raise InvalidArgumentError("this %s was closed" % type(self).__name__)
+        return self._handle
