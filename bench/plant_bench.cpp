@@ -16,7 +16,7 @@
 // velocity limits, springs stretched by up to 1 mrad); the torques for forward dynamics come from inverse
 // dynamics of seeded accelerations. Before timing, ours and KDL's forward dynamics are compared on every
 // state (exit 2 if they differ by more than 1e-9 relative). "allocs_per_call" counts heap allocations in
-// the timed loop (glibc's malloc family interposed below; libstdc++'s operator new goes through malloc).
+// the timed loop (bench/support/allocation_counting.cpp).
 #include <algorithm>
 #include <atomic>
 #include <cerrno>
@@ -37,57 +37,13 @@
 #include <kdl/tree.hpp>
 #include <kdl_parser/kdl_parser.hpp>
 
+#include "bench/support/allocation_counting.hpp"
 #include "model/compensation/spiral_experiment.hpp"
 #include "model/io/parameter_file.hpp"
 #include "model/plant/flexible_joint_plant.hpp"
 #include "model/robot/dynamics.hpp"
 #include "model/robot/load_urdf.hpp"
 
-// ---------------------------------------------------------------------------------------------------
-// Allocation counting.
-
-namespace {
-std::atomic<std::uint64_t> g_allocations{0};
-inline void countAllocation() { g_allocations.fetch_add(1, std::memory_order_relaxed); }
-}  // namespace
-
-extern "C" {
-void* __libc_malloc(std::size_t size);
-void* __libc_calloc(std::size_t count, std::size_t size);
-void* __libc_realloc(void* pointer, std::size_t size);
-void* __libc_memalign(std::size_t alignment, std::size_t size);
-void __libc_free(void* pointer);
-
-void* malloc(std::size_t size) {
-  countAllocation();
-  return __libc_malloc(size);
-}
-void* calloc(std::size_t count, std::size_t size) {
-  countAllocation();
-  return __libc_calloc(count, size);
-}
-void* realloc(void* pointer, std::size_t size) {
-  countAllocation();
-  return __libc_realloc(pointer, size);
-}
-void* memalign(std::size_t alignment, std::size_t size) {
-  countAllocation();
-  return __libc_memalign(alignment, size);
-}
-void* aligned_alloc(std::size_t alignment, std::size_t size) {
-  countAllocation();
-  return __libc_memalign(alignment, size);
-}
-int posix_memalign(void** result, std::size_t alignment, std::size_t size) {
-  if (alignment % sizeof(void*) != 0 || (alignment & (alignment - 1)) != 0) return EINVAL;
-  countAllocation();
-  void* pointer = __libc_memalign(alignment, size);
-  if (pointer == nullptr && size != 0) return ENOMEM;
-  *result = pointer;
-  return 0;
-}
-void free(void* pointer) { __libc_free(pointer); }
-}  // extern "C"
 
 namespace {
 
@@ -98,13 +54,7 @@ constexpr std::uint64_t kSeed = 20240611;
 const char* const kUrdf = JOINTCOMP_DATA_DIR "/robots/rx170.urdf";
 const char* const kParameters = JOINTCOMP_DATA_DIR "/params/rx170.json";
 
-struct AllocationCounter {
-  std::uint64_t start = g_allocations.load(std::memory_order_relaxed);
-  void report(benchmark::State& state) const {
-    const double count = static_cast<double>(g_allocations.load(std::memory_order_relaxed) - start);
-    state.counters["allocs_per_call"] = count / static_cast<double>(std::max<benchmark::IterationCount>(state.iterations(), 1));
-  }
-};
+using jointcomp::bench::AllocationCounter;
 
 struct Sample {
   std::vector<double> y;           // plant state [q, qd, p, pd, integral]

@@ -47,130 +47,13 @@
 #include <kdl/tree.hpp>
 #include <kdl_parser/kdl_parser.hpp>
 
+#include "bench/support/allocation_counting.hpp"
 #include "model/robot/dynamics.hpp"
 #include "model/robot/kinematics.hpp"
 #include "model/robot/load_urdf.hpp"
 #include "model/robot/robot.hpp"
 #include "model/robot/workspace.hpp"
 
-// ---------------------------------------------------------------------------------------------------
-// Allocation counting.
-
-namespace {
-std::atomic<std::uint64_t> g_allocations{0};  // constant-initialised: safe before any constructor runs
-inline void countAllocation() { g_allocations.fetch_add(1, std::memory_order_relaxed); }
-}  // namespace
-
-extern "C" {
-void* __libc_malloc(std::size_t size);
-void* __libc_calloc(std::size_t count, std::size_t size);
-void* __libc_realloc(void* pointer, std::size_t size);
-void* __libc_memalign(std::size_t alignment, std::size_t size);
-void* __libc_valloc(std::size_t size);
-void* __libc_pvalloc(std::size_t size);
-void __libc_free(void* pointer);
-
-// The malloc family, forwarded to glibc's allocator (so that memory from either side may be freed by the
-// other) and counted.
-void* malloc(std::size_t size) {
-  countAllocation();
-  return __libc_malloc(size);
-}
-void* calloc(std::size_t count, std::size_t size) {
-  countAllocation();
-  return __libc_calloc(count, size);
-}
-void* realloc(void* pointer, std::size_t size) {
-  countAllocation();
-  return __libc_realloc(pointer, size);
-}
-void* memalign(std::size_t alignment, std::size_t size) {
-  countAllocation();
-  return __libc_memalign(alignment, size);
-}
-void* aligned_alloc(std::size_t alignment, std::size_t size) {
-  countAllocation();
-  return __libc_memalign(alignment, size);
-}
-int posix_memalign(void** result, std::size_t alignment, std::size_t size) {
-  if (alignment % sizeof(void*) != 0 || (alignment & (alignment - 1)) != 0) return EINVAL;
-  countAllocation();
-  void* pointer = __libc_memalign(alignment, size);
-  if (pointer == nullptr && size != 0) return ENOMEM;
-  *result = pointer;
-  return 0;
-}
-void* valloc(std::size_t size) {
-  countAllocation();
-  return __libc_valloc(size);
-}
-void* pvalloc(std::size_t size) {
-  countAllocation();
-  return __libc_pvalloc(size);
-}
-void free(void* pointer) { __libc_free(pointer); }
-}  // extern "C"
-
-namespace {
-// operator new goes to glibc directly so that one allocation counts once.
-void* countedNew(std::size_t size) {
-  countAllocation();
-  if (size == 0) size = 1;
-  if (void* pointer = __libc_malloc(size)) return pointer;
-  throw std::bad_alloc();
-}
-void* countedAlignedNew(std::size_t size, std::align_val_t alignment) {
-  countAllocation();
-  if (size == 0) size = 1;
-  if (void* pointer = __libc_memalign(static_cast<std::size_t>(alignment), size)) return pointer;
-  throw std::bad_alloc();
-}
-}  // namespace
-
-void* operator new(std::size_t size) { return countedNew(size); }
-void* operator new[](std::size_t size) { return countedNew(size); }
-void* operator new(std::size_t size, const std::nothrow_t&) noexcept {
-  try {
-    return countedNew(size);
-  } catch (...) {
-    return nullptr;
-  }
-}
-void* operator new[](std::size_t size, const std::nothrow_t&) noexcept {
-  try {
-    return countedNew(size);
-  } catch (...) {
-    return nullptr;
-  }
-}
-void* operator new(std::size_t size, std::align_val_t alignment) { return countedAlignedNew(size, alignment); }
-void* operator new[](std::size_t size, std::align_val_t alignment) { return countedAlignedNew(size, alignment); }
-void* operator new(std::size_t size, std::align_val_t alignment, const std::nothrow_t&) noexcept {
-  try {
-    return countedAlignedNew(size, alignment);
-  } catch (...) {
-    return nullptr;
-  }
-}
-void* operator new[](std::size_t size, std::align_val_t alignment, const std::nothrow_t&) noexcept {
-  try {
-    return countedAlignedNew(size, alignment);
-  } catch (...) {
-    return nullptr;
-  }
-}
-void operator delete(void* pointer) noexcept { __libc_free(pointer); }
-void operator delete[](void* pointer) noexcept { __libc_free(pointer); }
-void operator delete(void* pointer, std::size_t) noexcept { __libc_free(pointer); }
-void operator delete[](void* pointer, std::size_t) noexcept { __libc_free(pointer); }
-void operator delete(void* pointer, const std::nothrow_t&) noexcept { __libc_free(pointer); }
-void operator delete[](void* pointer, const std::nothrow_t&) noexcept { __libc_free(pointer); }
-void operator delete(void* pointer, std::align_val_t) noexcept { __libc_free(pointer); }
-void operator delete[](void* pointer, std::align_val_t) noexcept { __libc_free(pointer); }
-void operator delete(void* pointer, std::size_t, std::align_val_t) noexcept { __libc_free(pointer); }
-void operator delete[](void* pointer, std::size_t, std::align_val_t) noexcept { __libc_free(pointer); }
-void operator delete(void* pointer, std::align_val_t, const std::nothrow_t&) noexcept { __libc_free(pointer); }
-void operator delete[](void* pointer, std::align_val_t, const std::nothrow_t&) noexcept { __libc_free(pointer); }
 
 namespace {
 
@@ -513,14 +396,7 @@ void crossCheck(const std::string& label, Fixture& f) {
 // ---------------------------------------------------------------------------------------------------
 // Benchmarks. Allocations are counted over the whole timed loop.
 
-struct AllocationCounter {
-  std::uint64_t start = g_allocations.load(std::memory_order_relaxed);
-  void report(benchmark::State& state) const {
-    const std::uint64_t made = g_allocations.load(std::memory_order_relaxed) - start;
-    state.counters["allocs_per_call"] =
-        benchmark::Counter(state.iterations() > 0 ? static_cast<double>(made) / state.iterations() : 0.0);
-  }
-};
+using jointcomp::bench::AllocationCounter;
 
 #define BENCH_PROLOGUE                              \
   Fixture& f = *g_fixture;                          \
@@ -787,14 +663,14 @@ private:
 
 // The counting must see both kinds of allocation, or a 0 would mean nothing.
 void checkAllocationCounting() {
-  const std::uint64_t before_new = g_allocations.load();
+  const std::uint64_t before_new = jointcomp::bench::allocationCount();
   auto* boxed = new std::vector<double>(16, 1.0);  // operator new, twice
   benchmark::DoNotOptimize(boxed->data());
   delete boxed;
-  const std::uint64_t before_malloc = g_allocations.load();
+  const std::uint64_t before_malloc = jointcomp::bench::allocationCount();
   Eigen::VectorXd heap = Eigen::VectorXd::Ones(64);  // Eigen's malloc
   benchmark::DoNotOptimize(heap.data());
-  const std::uint64_t after = g_allocations.load();
+  const std::uint64_t after = jointcomp::bench::allocationCount();
   if (before_malloc - before_new < 2 || after - before_malloc < 1) {
     fail("the allocation counter does not see operator new or malloc; allocs_per_call would be meaningless");
   }
