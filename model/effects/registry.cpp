@@ -8,8 +8,10 @@
 #include "model/common/errors.hpp"
 #include "model/effects/backlash.hpp"
 #include "model/effects/compliance.hpp"
+#include "model/effects/hysteresis.hpp"
 #include "model/effects/joint_offset.hpp"
 #include "model/effects/nonlinear_compliance.hpp"
+#include "model/effects/payload.hpp"
 #include "model/effects/spring_balancer.hpp"
 #include "model/effects/thermal_drift.hpp"
 #include "model/effects/transmission_error.hpp"
@@ -35,6 +37,8 @@ const std::map<std::string, Factory>& factories() {
       {BacklashEffect::kType, &BacklashEffect::fromJson},
       {NonlinearComplianceEffect::kType, &NonlinearComplianceEffect::fromJson},
       {ThermalDriftEffect::kType, &ThermalDriftEffect::fromJson},
+      {HysteresisEffect::kType, &HysteresisEffect::fromJson},
+      {PayloadEffect::kType, &PayloadEffect::fromJson},
   };
   return table;
 }

@@ -46,6 +46,11 @@ public:
       throw InvalidArgument("simulation: tracker noise model must be non-negative and finite");
     }
     if (!(spec.level.sigma_rad >= 0.0)) throw InvalidArgument("simulation: level sigma must be non-negative");
+    if (spec.temperature.enabled &&
+        !(std::isfinite(spec.temperature.start_degc) && std::isfinite(spec.temperature.rise_degc) &&
+          spec.temperature.time_constant_s > 0.0 && std::isfinite(spec.temperature.time_constant_s))) {
+      throw InvalidArgument("simulation: the temperature profile needs a finite start and rise and a positive time constant");
+    }
     campaign_.source = "simulated " + protocolName(spec.protocol) + " campaign";
     campaign_.robot = robot_.name;
     campaign_.frame = MeasurementFrame::Base;
@@ -72,8 +77,10 @@ public:
 
   // The quasi-static robot at `command` under a wrench at the target and a payload: the link angles.
   JointVector settle(const JointVector& command, const JointVector& velocity, const Vector6& wrench_at_target,
-                     double payload) {
+                     double payload, double t) {
     ctx_.command = command;
+    ctx_.time = t;
+    ctx_.temperature = spec_.temperature.enabled ? spec_.temperature.at(t) : JointContext().temperature;
     ctx_.velocity = velocity;
     ctx_.payload_mass = payload;
     ctx_.payload_com = spec_.target_in_flange;
@@ -111,7 +118,7 @@ public:
     campaign_.time.push_back(t);
     campaign_.command.push_back(command);
     campaign_.position.push_back(measureTarget(q));
-    campaign_.temperature.push_back(kNaN);
+    campaign_.temperature.push_back(spec_.temperature.enabled && !plant_ ? spec_.temperature.at(t) : kNaN);
     campaign_.wrench.push_back(wrench);
     campaign_.payload.push_back(payload);
     if (measured_angles.size() > 0) {
@@ -144,7 +151,10 @@ public:
     return std::move(campaign_);
   }
 
-  void setSimulatedRobot(const std::string& what) { simulated_robot_ = what; }
+  void setSimulatedRobot(const std::string& what) {
+    simulated_robot_ = what;
+    plant_ = true;
+  }
 
   // Reading of an electronic level fixed to the body of joint `body` (-1: the base), set up at the
   // commanded pose to read 0 and to sense rotation about `axis`: the rotation of a link-fixed horizontal
@@ -173,6 +183,7 @@ private:
   double sigma_sum2_ = 0.0;
   long sigma_count_ = 0;
   std::string simulated_robot_ = "quasi-static robot";
+  bool plant_ = false;  // rows from the plant: no temperature column
 };
 
 void checkPose(const Robot& robot, const JointVector& pose, const std::string& what) {
@@ -297,7 +308,7 @@ void simulateStiffness(Simulator& sim, const CampaignSimulationSpec& spec,
     const double scale = loadScaleLimit(robot, sim.stiffness(), tau, p.max_deflection_rad, p.effort_fraction);
     for (double level : ladder) {
       const Vector6 wrench = (unit_wrench * (scale * level)).array() + 0.0;  // + 0.0: no negative zeros
-      const JointVector q = sim.settle(pose, rest, wrench, 0.0);
+      const JointVector q = sim.settle(pose, rest, wrench, 0.0, t);
       JointVector measured;
       if (by_levels) {
         // Two levels: on the link before the joint and on the link after it; each reading has its noise.
@@ -343,7 +354,7 @@ void simulateStiffness(Simulator& sim, const CampaignSimulationSpec& spec,
       }
     }
     for (const Vector6& wrench : wrenches) {
-      const JointVector q = sim.settle(q_pose, rest, wrench, 0.0);
+      const JointVector q = sim.settle(q_pose, rest, wrench, 0.0, t);
       sim.addRow(t, q_pose, q, wrench, 0.0);
       t += p.row_period_s;
     }
@@ -423,7 +434,7 @@ void simulateSweep(Simulator& sim, const CampaignSimulationSpec& spec, bool back
     } else {
       // The settled robot is at rest; it is given the velocity of its last move so that effects which
       // depend on the direction of approach see it.
-      const JointVector q = sim.settle(command, velocity, Vector6::Zero(), 0.0);
+      const JointVector q = sim.settle(command, velocity, Vector6::Zero(), 0.0, t);
       sim.addRow(t, command, q, Vector6::Zero(), 0.0);
       t += move_time + s.settle_s;
     }
@@ -457,7 +468,7 @@ void simulateRandom(Simulator& sim, const CampaignSimulationSpec& spec, const st
     // The robot arrives from the previous pose: its velocity (the mean of the move) gives each joint's
     // direction of approach, which direction-dependent effects (backlash) need; the first pose: at rest.
     const JointVector velocity = previous.size() == q_pose.size() ? JointVector((q_pose - previous) / r.row_period_s) : rest;
-    sim.addRow(t, q_pose, sim.settle(q_pose, velocity, Vector6::Zero(), 0.0), Vector6::Zero(), 0.0);
+    sim.addRow(t, q_pose, sim.settle(q_pose, velocity, Vector6::Zero(), 0.0, t), Vector6::Zero(), 0.0);
     previous = q_pose;
     t += r.row_period_s;
   }
@@ -496,13 +507,17 @@ void simulateSpiral(Simulator& sim, const CampaignSimulationSpec& spec, const Jo
     }
   } else {
     for (std::size_t k = 0; k < planned.size(); k += static_cast<std::size_t>(every)) {
-      sim.addRow(planned.time[k], planned.q[k], sim.settle(planned.q[k], planned.qd[k], Vector6::Zero(), 0.0),
+      sim.addRow(planned.time[k], planned.q[k], sim.settle(planned.q[k], planned.qd[k], Vector6::Zero(), 0.0, planned.time[k]),
                  Vector6::Zero(), 0.0);
     }
   }
 }
 
 }  // namespace
+
+double TemperatureProfile::at(double t) const {
+  return start_degc + rise_degc * (1.0 - std::exp(-t / time_constant_s));
+}
 
 SpiralCampaignSpec::SpiralCampaignSpec() : spiral(SpiralExperimentSpec::defaultSpiral()) {}
 

@@ -89,6 +89,18 @@ struct SpiralCampaignSpec {
   SpiralCampaignSpec();
 };
 
+// The robot's temperature during the campaign: a warm-up from start towards start + rise,
+//   T(t) = start + rise (1 - exp(-t / time_constant)),
+// written into the temperature column and seen by the truth's effects (with the row's time). Off by
+// default: no temperature column, and the effects see JointContext's 20 degC.
+struct TemperatureProfile {
+  bool enabled = false;
+  double start_degc = 20.0;
+  double rise_degc = 10.0;
+  double time_constant_s = 1800.0;
+  double at(double t) const;
+};
+
 struct CampaignSimulationSpec {
   CampaignProtocol protocol = CampaignProtocol::Stiffness;
   std::uint64_t seed = 1;
@@ -101,6 +113,7 @@ struct CampaignSimulationSpec {
   JointSweepSpec sweep;
   RandomPosesSpec random;
   SpiralCampaignSpec spiral;
+  TemperatureProfile temperature;  // quasi-static protocols only (the plant runs at 20 degC)
   // Non-empty: sweeps and the spiral run on the flexible-joint plant. Other protocols stay quasi-static.
   std::vector<DriveParameters> drives;
   PlantOptions plant;

@@ -9,10 +9,14 @@
 #include "model/common/errors.hpp"
 #include "model/effects/backlash.hpp"
 #include "model/effects/compliance.hpp"
+#include "model/effects/hysteresis.hpp"
 #include "model/effects/joint_offset.hpp"
 #include "model/effects/nonlinear_compliance.hpp"
+#include "model/effects/payload.hpp"
 #include "model/effects/thermal_drift.hpp"
 #include "model/effects/transmission_error.hpp"
+#include "model/compensation/metrics.hpp"
+#include "model/robot/kinematics.hpp"
 
 namespace jointcomp {
 namespace {
@@ -25,10 +29,17 @@ struct Candidate {
   int stage = 0;
   std::string part;
   double cycles = 0.0;
-  std::vector<int> geometric;  // layout indices (offset, compliance, geometric)
+  // Layout indices (offset, compliance, geometric) the candidate releases; with feature columns too
+  // (thermal), those come first.
+  std::vector<int> geometric;
   int feature = -1;            // first feature column (effect candidates)
   int features = 0;
+  // false: feature k is one column, the error of `joint` per unit parameter. true (payload): feature k is
+  // a block of dof columns, the load torque of every joint per unit parameter, which enters through the
+  // current compliances (dq_j = -compliance_j * tau_j).
+  bool through_compliance = false;
   std::string label() const {
+    if (through_compliance) return type + " (tool)";
     std::string s = type + " joint " + std::to_string(joint + 1);
     if (type == "harmonic") s += " " + part + " order " + std::to_string(static_cast<int>(cycles));
     if (type == "thermal") s += " (" + part + ")";
@@ -111,15 +122,23 @@ Features buildFeatures(const JointErrorModel& prior, const MeasurementCampaign& 
       for (int i = 0; i < rows; ++i) c[i] = BacklashEffect::feature(velocity[i][j], options.velocity_scale);
       f.candidates.push_back({"backlash", j, 0, "", 0.0, {}, addColumn(std::move(c)), 1});
     }
+    if (wanted(options, "hysteresis") && data.torque_known) {
+      std::vector<double> c(static_cast<std::size_t>(rows));
+      for (int i = 0; i < rows; ++i) c[i] = HysteresisEffect::feature(velocity[i][j], data.load_torque[i][j], options.velocity_scale);
+      f.candidates.push_back({"hysteresis", j, 0, "", 0.0, {}, addColumn(std::move(c)), 1});
+    }
     if (wanted(options, "thermal")) {
+      // With the joint's offset (when it is not free yet): a drift is known up to the zero it drifts
+      // from, and the reference temperature or time of the feature is only the campaign's mean or start,
+      // so the two variants compete on the shape of the drift alone.
       if (have_temperature) {
         std::vector<double> c(static_cast<std::size_t>(rows));
         for (int i = 0; i < rows; ++i) c[i] = campaign.temperature[static_cast<std::size_t>(data.row[i])] - f.temperature0;
-        f.candidates.push_back({"thermal", j, 0, "temperature", 0.0, {}, addColumn(std::move(c)), 1});
+        f.candidates.push_back({"thermal", j, 0, "temperature", 0.0, {layout.offset(j)}, addColumn(std::move(c)), 1});
       }
       std::vector<double> c(static_cast<std::size_t>(rows));
       for (int i = 0; i < rows; ++i) c[i] = campaign.time[static_cast<std::size_t>(data.row[i])] - f.t0;
-      f.candidates.push_back({"thermal", j, 0, "time", 0.0, {}, addColumn(std::move(c)), 1});
+      f.candidates.push_back({"thermal", j, 0, "time", 0.0, {layout.offset(j)}, addColumn(std::move(c)), 1});
     }
     if (wanted(options, "harmonic")) {
       std::vector<double> frequencies;  // cycles per joint revolution already offered
@@ -156,6 +175,34 @@ Features buildFeatures(const JointErrorModel& prior, const MeasurementCampaign& 
       }
     }
   }
+  if (wanted(options, "payload") && data.torque_known) {
+    // An undeclared mass m at c (tool frame): tau = -J_c^T (m g), linear in m and in m c, since
+    // J_c = J_o - [R c]x J_w. Feature block k: d tau / d(m, m c_x, m c_y, m c_z) at the commanded pose.
+    RobotWorkspace ws(robot);
+    std::vector<std::vector<double>> block(static_cast<std::size_t>(4 * n), std::vector<double>(static_cast<std::size_t>(rows)));
+    JointVector at_origin(n), at_unit(n);
+    for (int i = 0; i < rows; ++i) {
+      forwardKinematics(robot, ws, data.command[i]);
+      at_origin.setZero();
+      PayloadEffect::addTorque(robot, ws, 1.0, Eigen::Vector3d::Zero(), at_origin);
+      for (int j = 0; j < n; ++j) block[static_cast<std::size_t>(j)][static_cast<std::size_t>(i)] = at_origin[j];
+      for (int k = 0; k < 3; ++k) {
+        at_unit.setZero();
+        PayloadEffect::addTorque(robot, ws, 1.0, Eigen::Vector3d::Unit(k), at_unit);
+        for (int j = 0; j < n; ++j) {
+          block[static_cast<std::size_t>((k + 1) * n + j)][static_cast<std::size_t>(i)] = at_unit[j] - at_origin[j];
+        }
+      }
+    }
+    int first = -1;
+    for (auto& c : block) {
+      const int index = addColumn(std::move(c));
+      if (first < 0) first = index;
+    }
+    Candidate c{"payload", -1, 0, "", 0.0, {}, first, 4};
+    c.through_compliance = true;
+    f.candidates.push_back(c);
+  }
   f.values.resize(rows, static_cast<int>(columns.size()));
   for (std::size_t c = 0; c < columns.size(); ++c) {
     for (int i = 0; i < rows; ++i) f.values(i, static_cast<int>(c)) = columns[c][i];
@@ -168,13 +215,20 @@ JointErrorModel buildModel(const JointErrorModel& prior, const std::vector<Activ
                            const DiscoveryOptions& options) {
   const Robot& robot = prior.robot();
   const std::size_t n = static_cast<std::size_t>(robot.dof());
-  std::vector<double> backlash(n, 0.0), cubic(n, 0.0), thermal(n, 0.0), drift(n, 0.0);
-  bool has_backlash = false, has_cubic = false, has_thermal = false;
+  std::vector<double> backlash(n, 0.0), hysteresis(n, 0.0), cubic(n, 0.0), thermal(n, 0.0), drift(n, 0.0);
+  bool has_backlash = false, has_hysteresis = false, has_cubic = false, has_thermal = false, has_payload = false;
+  Eigen::Vector4d payload = Eigen::Vector4d::Zero();  // m, m c
   std::vector<Harmonic> harmonics;
   for (const Active& a : active) {
-    const std::size_t j = static_cast<std::size_t>(a.candidate.joint);
     const std::string& t = a.candidate.type;
+    if (t == "payload") {
+      payload += a.theta.head<4>();
+      has_payload = true;
+      continue;
+    }
+    const std::size_t j = static_cast<std::size_t>(a.candidate.joint);
     if (t == "backlash") { backlash[j] += a.theta[0]; has_backlash = true; }
+    else if (t == "hysteresis") { hysteresis[j] += a.theta[0]; has_hysteresis = true; }
     else if (t == "nonlinear_compliance") { cubic[j] += a.theta[0]; has_cubic = true; }
     else if (t == "thermal") {
       (a.candidate.part == "time" ? drift : thermal)[j] += a.theta[0];
@@ -194,6 +248,18 @@ JointErrorModel buildModel(const JointErrorModel& prior, const std::vector<Activ
   const std::string note = "found by jointcomp discover";
   if (has_backlash) {
     auto e = std::make_unique<BacklashEffect>(robot, backlash, options.velocity_scale);
+    e->estimate_note = note;
+    model.addEffect(std::move(e));
+  }
+  if (has_hysteresis) {
+    auto e = std::make_unique<HysteresisEffect>(robot, hysteresis, options.velocity_scale);
+    e->estimate_note = note;
+    model.addEffect(std::move(e));
+  }
+  if (has_payload) {
+    // c = (m c) / m; a mass too small to carry a centre is put at the tool origin.
+    const Eigen::Vector3d com = std::abs(payload[0]) > 1e-9 ? Eigen::Vector3d(payload.tail<3>() / payload[0]) : Eigen::Vector3d::Zero();
+    auto e = std::make_unique<PayloadEffect>(robot, payload[0], com);
     e->estimate_note = note;
     model.addEffect(std::move(e));
   }
@@ -244,7 +310,9 @@ Linearised linearise(const JointErrorModel& model, const MeasurementCampaign& ca
   Linearised lin;
   std::set<int> free(cal.free.begin(), cal.free.end());
   // Column plan.
-  struct Source { int kind; int index; int joint; };  // kind 0: layout column, 1: feature column times dm/dq_j
+  // kind 0: layout column; 1: feature column times dm/dq_j; 2: block of dof feature columns (load torques)
+  // times -compliance_j dm/dq_j, summed over the joints.
+  struct Source { int kind; int index; int joint; };
   std::vector<Source> plan;
   for (int idx : cal.free) { lin.base_columns.push_back(static_cast<int>(plan.size())); plan.push_back({0, idx, 0}); }
   for (const Active& a : active) {
@@ -252,7 +320,8 @@ Linearised linearise(const JointErrorModel& model, const MeasurementCampaign& ca
     for (int c = 0; c < a.candidate.features; ++c) {
       cols.push_back(static_cast<int>(plan.size()));
       lin.active_columns.push_back(static_cast<int>(plan.size()));
-      plan.push_back({1, a.candidate.feature + c, a.candidate.joint});
+      if (a.candidate.through_compliance) plan.push_back({2, a.candidate.feature + c * n, -1});
+      else plan.push_back({1, a.candidate.feature + c, a.candidate.joint});
     }
     lin.active_of.push_back(cols);
   }
@@ -260,17 +329,15 @@ Linearised linearise(const JointErrorModel& model, const MeasurementCampaign& ca
   for (std::size_t c = 0; c < f.candidates.size(); ++c) {
     if (!offered[c]) continue;
     const Candidate& cand = f.candidates[c];
-    if (cand.features > 0) {
-      for (int k = 0; k < cand.features; ++k) {
-        lin.candidate_columns[c].push_back(static_cast<int>(plan.size()));
-        plan.push_back({1, cand.feature + k, cand.joint});
-      }
-    } else {
-      for (int idx : cand.geometric) {
-        if (free.count(idx)) continue;
-        lin.candidate_columns[c].push_back(static_cast<int>(plan.size()));
-        plan.push_back({0, idx, 0});
-      }
+    for (int k = 0; k < cand.features; ++k) {
+      lin.candidate_columns[c].push_back(static_cast<int>(plan.size()));
+      if (cand.through_compliance) plan.push_back({2, cand.feature + k * n, -1});
+      else plan.push_back({1, cand.feature + k, cand.joint});
+    }
+    for (int idx : cand.geometric) {
+      if (free.count(idx)) continue;
+      lin.candidate_columns[c].push_back(static_cast<int>(plan.size()));
+      plan.push_back({0, idx, 0});
     }
   }
   const int cols = static_cast<int>(plan.size());
@@ -287,7 +354,12 @@ Linearised linearise(const JointErrorModel& model, const MeasurementCampaign& ca
     for (int c = 0; c < cols; ++c) {
       const Source& s = plan[static_cast<std::size_t>(c)];
       if (s.kind == 0) lin.X.block<3, 1>(3 * i, c) = w * J.col(s.index);
-      else lin.X.block<3, 1>(3 * i, c) = w * f.values(i, s.index) * J.col(layout.offset(s.joint));
+      else if (s.kind == 1) lin.X.block<3, 1>(3 * i, c) = w * f.values(i, s.index) * J.col(layout.offset(s.joint));
+      else {
+        Eigen::Vector3d column = Eigen::Vector3d::Zero();
+        for (int j = 0; j < n; ++j) column -= cal.estimate.compliance[j] * f.values(i, s.index + j) * J.col(layout.offset(j));
+        lin.X.block<3, 1>(3 * i, c) = w * column;
+      }
     }
     lin.fold[static_cast<std::size_t>(i)] = std::min(folds - 1, static_cast<int>(static_cast<long>(i) * folds / rows));
     if (map_joints) {
@@ -382,6 +454,34 @@ std::vector<std::string> fixedNames(const std::vector<std::string>& names, const
   return fixed;
 }
 
+// Z errors (base frame, measured - predicted) of the rows of a campaign under given parameters, with the
+// campaign row of each.
+std::vector<double> zErrors(const JointErrorModel& model, const GeometricParameters& parameters,
+                            const MeasurementCampaign& campaign, std::vector<int>& rows) {
+  const CalibrationData data = prepareCalibrationData(model, campaign);
+  const Eigen::Matrix3d base_from_instrument = parameters.instrumentFromBase().linear().transpose();
+  std::vector<double> z;
+  rows = data.row;
+  for (std::size_t i = 0; i < data.size(); ++i) {
+    const Eigen::Vector3d m =
+        predictMeasurement(model.robot(), parameters, data.command[i], data.load_torque[i], data.other_error[i]);
+    z.push_back((base_from_instrument * (data.measured[i] - m)).z());
+  }
+  return z;
+}
+
+PathRoughness roughness(const std::vector<double>& z, bool held_out, int campaign) {
+  PathRoughness p;
+  p.held_out = held_out;
+  p.campaign = campaign;
+  p.rows = static_cast<int>(z.size());
+  if (!z.empty()) {
+    p.ra = averageAbsoluteDeviation(z);
+    p.rz = peakToPeakDeviation(z);
+  }
+  return p;
+}
+
 std::vector<double> jointRms(const Linearised& lin) {
   std::vector<double> out;
   for (const auto& v : lin.joint_residual) {
@@ -393,6 +493,17 @@ std::vector<double> jointRms(const Linearised& lin) {
 }
 
 }  // namespace
+
+bool isPathCampaign(const MeasurementCampaign& campaign) {
+  const auto protocol = campaign.metadata.find("protocol");
+  if (protocol != campaign.metadata.end() && protocol->second == "spiral") return true;
+  if (campaign.time.size() < 20) return false;
+  std::vector<double> steps;
+  for (std::size_t k = 1; k < campaign.time.size(); ++k) steps.push_back(campaign.time[k] - campaign.time[k - 1]);
+  std::nth_element(steps.begin(), steps.begin() + static_cast<long>(steps.size() / 2), steps.end());
+  const double median = steps[steps.size() / 2];
+  return median > 0.0 && median <= 0.1;
+}
 
 const std::vector<std::string>& discoveryEffectTypes() {
   static const std::vector<std::string> types = {"offset",    "compliance", "nonlinear_compliance", "harmonic",
@@ -455,7 +566,7 @@ DiscoveryResult discoverEffects(const JointErrorModel& prior, const std::vector<
     // The frame and target are the base.
   } else {
     for (std::size_t c = 0; c < features.candidates.size(); ++c) {
-      if (!features.candidates[c].geometric.empty()) offered[c] = false;
+      if (features.candidates[c].features == 0) offered[c] = false;
     }
   }
   std::vector<Active> active;
@@ -465,11 +576,38 @@ DiscoveryResult discoverEffects(const JointErrorModel& prior, const std::vector<
     cal_options.fixed = fixedNames(names, released, options, n);
     return calibrateGeometry(model, campaign, cal_options);
   };
+  // Paths among the fitted campaigns: their rows in the concatenation.
+  std::vector<std::size_t> first_row{0};
+  bool fitted_path = false;
+  for (const auto& c : fitted) {
+    first_row.push_back(first_row.back() + c.size());
+    fitted_path = fitted_path || isPathCampaign(c);
+  }
   auto evaluate = [&](const JointErrorModel& model, const GeometricCalibrationResult& cal, double cv_sse,
                       int residuals) {
     DiscoveryState state;
     state.fitted = cal.after;
-    for (const auto& h : heldout) state.heldout.push_back(evaluateOnCampaign(model, cal.estimate, h, true, cal_options).statistics);
+    if (fitted_path) {
+      std::vector<int> rows;
+      const std::vector<double> z = zErrors(model, cal.estimate, campaign, rows);
+      for (std::size_t c = 0; c < fitted.size(); ++c) {
+        if (!isPathCampaign(fitted[c])) continue;
+        std::vector<double> part;
+        for (std::size_t i = 0; i < z.size(); ++i) {
+          const std::size_t row = static_cast<std::size_t>(rows[i]);
+          if (row >= first_row[c] && row < first_row[c + 1]) part.push_back(z[i]);
+        }
+        state.paths.push_back(roughness(part, false, static_cast<int>(c)));
+      }
+    }
+    for (std::size_t k = 0; k < heldout.size(); ++k) {
+      const HoldoutEvaluation e = evaluateOnCampaign(model, cal.estimate, heldout[k], true, cal_options);
+      state.heldout.push_back(e.statistics);
+      if (isPathCampaign(heldout[k])) {
+        std::vector<int> rows;
+        state.paths.push_back(roughness(zErrors(model, e.parameters, heldout[k], rows), true, static_cast<int>(k)));
+      }
+    }
     state.cv_rms = std::sqrt(cv_sse / std::max(1, residuals));
     return state;
   };
@@ -553,7 +691,7 @@ DiscoveryResult discoverEffects(const JointErrorModel& prior, const std::vector<
     DiscoveryStep record;
     record.type = chosen.type;
     record.joint = chosen.joint;
-    record.joint_name = robot.joints[static_cast<std::size_t>(chosen.joint)].name;
+    record.joint_name = chosen.joint >= 0 ? robot.joints[static_cast<std::size_t>(chosen.joint)].name : std::string();
     record.stage = chosen.stage;
     record.part = chosen.part;
     record.cycles = chosen.cycles;
@@ -564,10 +702,17 @@ DiscoveryResult discoverEffects(const JointErrorModel& prior, const std::vector<
     record.runner_up = runner_up;
     record.before = state;
 
-    if (!chosen.geometric.empty()) {
-      for (int idx : chosen.geometric) released.insert(idx);
-    } else {
-      // The step of the joint fit for the new and the active features.
+    std::vector<int> newly_released;  // geometry this step frees (a thermal step's offset)
+    {
+      const std::set<int> free_before(cal.free.begin(), cal.free.end());
+      for (int idx : chosen.geometric) {
+        if (!free_before.count(idx)) newly_released.push_back(idx);
+        released.insert(idx);
+      }
+    }
+    if (chosen.features > 0) {
+      // The step of the joint fit for the new and the active features (the released geometry is refitted
+      // by the calibration below).
       std::vector<int> s = current;
       s.insert(s.end(), lin.candidate_columns[static_cast<std::size_t>(best)].begin(),
                lin.candidate_columns[static_cast<std::size_t>(best)].end());
@@ -612,7 +757,7 @@ DiscoveryResult discoverEffects(const JointErrorModel& prior, const std::vector<
     state = evaluate(model, cal, base_fit.cv, residuals);
     record.after = state;
     // Parameters of the accepted effect.
-    if (!chosen.geometric.empty()) {
+    if (chosen.features == 0) {
       for (int idx : chosen.geometric) {
         for (const ParameterEstimate& p : cal.parameters) {
           if (p.name == names[static_cast<std::size_t>(idx)] && p.identified) record.parameters.push_back({p.name, p.value, p.sigma});
@@ -622,9 +767,29 @@ DiscoveryResult discoverEffects(const JointErrorModel& prior, const std::vector<
       const Active& a = active.back();
       const std::string& jn = record.joint_name;
       if (chosen.type == "backlash") record.parameters.push_back({jn + ".backlash_width_rad", a.theta[0], a.sigma[0]});
+      else if (chosen.type == "hysteresis") record.parameters.push_back({jn + ".hysteresis_width_rad_per_nm", a.theta[0], a.sigma[0]});
+      else if (chosen.type == "payload") {
+        // The model's payload (every accepted payload step adds to it): m and c = (m c) / m, with the
+        // first-order sigma of the ratio (the covariance of m and m c left out).
+        const int index = model.findEffect(PayloadEffect::kType);
+        const auto& effect = static_cast<const PayloadEffect&>(model.effect(index));
+        const double m = effect.mass();
+        record.parameters.push_back({"payload.mass_kg", m, a.sigma[0]});
+        const char* axes[3] = {"x", "y", "z"};
+        for (int k = 0; k < 3; ++k) {
+          const double c = effect.centreOfMass()[k];
+          const double sigma = std::abs(m) > 1e-9 ? std::hypot(a.sigma[k + 1], c * a.sigma[0]) / std::abs(m) : 0.0;
+          record.parameters.push_back({std::string("payload.com_") + axes[k] + "_m", c, sigma});
+        }
+      }
       else if (chosen.type == "nonlinear_compliance") record.parameters.push_back({jn + ".cubic_compliance_rad_per_nm3", a.theta[0], a.sigma[0]});
       else if (chosen.type == "thermal") {
         record.parameters.push_back({jn + (chosen.part == "time" ? ".drift_rad_per_s" : ".thermal_rad_per_degc"), a.theta[0], a.sigma[0]});
+        for (int idx : newly_released) {
+          for (const ParameterEstimate& p : cal.parameters) {
+            if (p.name == names[static_cast<std::size_t>(idx)] && p.identified) record.parameters.push_back({p.name, p.value, p.sigma});
+          }
+        }
       } else if (chosen.type == "harmonic") {
         const double amp = std::hypot(a.theta[0], a.theta[1]);
         const double amp_sigma = amp > 0.0 ? std::hypot(a.theta[0] * a.sigma[0], a.theta[1] * a.sigma[1]) / amp : a.sigma[0];

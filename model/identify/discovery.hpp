@@ -19,8 +19,19 @@
 //                         or of the output of joint j (distinct parts only), k = 1..max_harmonic_order;
 //                         written as a transmission_error harmonic (amplitude, phase)
 //   backlash              dq_j = -b/2 tanh(v_j / v_s), v_j from the command sequence (direction of approach)
-//   thermal               dq_j = a (T - T0) (when the campaign has temperatures) or d (t - t0) (time drift)
-// payload and hysteresis are not candidates yet.
+//   hysteresis            dq_j = -h/2 |tau_j| tanh(v_j / v_s): load-dependent lost motion (hysteresis.hpp)
+//   thermal               dq_j = a (T - T0) (when the campaign has temperatures) or d (t - t0) (time drift),
+//                         each with the joint's offset when that is not free yet (a drift is known only up
+//                         to the zero it drifts from; T0 and t0 are the campaign's mean and start)
+// and one for the whole robot:
+//   payload               an undeclared mass m at c (tool frame): tau += -J_c^T (m g), through the current
+//                         compliances dq = -C tau; linear in m and m c (4 columns); written as a "payload"
+//                         load effect (payload.hpp) with mass_kg = m, com_m = (m c) / m
+//
+// Ra and Rz on paths: for every fitted or held-out campaign that is a path (isPathCampaign), each state
+// gives Ra = mean |z_k| and Rz = max z_k - min z_k (metrics.hpp) of the Z component, in the robot's base
+// frame, of the error measured - predicted of its rows (all rows, not robustly weighted), as the paper
+// scores its spiral.
 //
 // Library code: never prints; throws InvalidArgument for unusable inputs, with the campaign's name.
 #pragma once
@@ -56,16 +67,29 @@ struct DiscoveredParameter {
   double sigma = 0.0;
 };
 
+struct PathRoughness {
+  bool held_out = false;
+  int campaign = 0;        // index among the fitted (held_out false) or held-out campaigns
+  int rows = 0;
+  double ra = 0.0, rz = 0.0;  // m, of the Z error
+};
+
+// A campaign is a path when its metadata says "protocol: spiral" (jointcomp simulate) or its rows were
+// taken while moving: at least 20 rows, the median time step between consecutive rows at most 0.1 s
+// (a tracker sampling at 10 Hz or faster), as opposed to poses settled one by one.
+bool isPathCampaign(const MeasurementCampaign& campaign);
+
 struct DiscoveryState {
   ErrorStatistics fitted;                  // on the fitted rows (calibration's "after")
   std::vector<ErrorStatistics> heldout;    // one per held-out campaign, frame re-fitted
   double cv_rms = 0.0;                     // m per axis, time-blocked CV of the linearised model
+  std::vector<PathRoughness> paths;        // fitted paths first, then held-out ones; empty: no path
 };
 
 struct DiscoveryStep {
   std::string type;
-  int joint = -1;
-  std::string joint_name;
+  int joint = -1;           // -1 for payload (the whole robot)
+  std::string joint_name;   // "" for payload
   int stage = 0;            // harmonic: 1 = motor ... stageCount + 1 = output
   std::string part;         // harmonic: "motor", "stage_k", "output"; thermal: "temperature" or "time"
   double cycles = 0.0;      // harmonic order (cycles per revolution of the part)

@@ -8,15 +8,31 @@
 namespace jointcomp {
 namespace {
 
-nlohmann::ordered_json stateJson(const DiscoveryState& s, const std::vector<std::string>& held_out) {
+std::string campaignName(const DiscoverySources& sources, bool held_out, int k) {
+  const std::vector<std::string>& names = held_out ? sources.held_out : sources.campaigns;
+  const std::size_t index = static_cast<std::size_t>(k);
+  if (index < names.size()) return names[index];
+  return (held_out ? "held-out campaign " : "fitted campaign ") + std::to_string(k + 1);
+}
+
+nlohmann::ordered_json stateJson(const DiscoveryState& s, const DiscoverySources& sources) {
   nlohmann::ordered_json held = nlohmann::ordered_json::array();
   for (std::size_t k = 0; k < s.heldout.size(); ++k) {
     nlohmann::ordered_json entry = errorStatisticsJson(s.heldout[k]);
-    entry["campaign"] = k < held_out.size() ? held_out[k] : "held-out campaign " + std::to_string(k + 1);
+    entry["campaign"] = campaignName(sources, true, static_cast<int>(k));
     held.push_back(entry);
   }
+  // Ra and Rz of the Z error on every campaign that is a path (isPathCampaign); [] when none is.
+  nlohmann::ordered_json paths = nlohmann::ordered_json::array();
+  for (const PathRoughness& p : s.paths) {
+    paths.push_back({{"campaign", campaignName(sources, p.held_out, p.campaign)},
+                     {"set", p.held_out ? "held_out" : "fitted"},
+                     {"rows", p.rows},
+                     {"ra_mm", p.ra * 1e3},
+                     {"rz_mm", p.rz * 1e3}});
+  }
   return {{"fitted", errorStatisticsJson(s.fitted)}, {"held_out", held}, {"cv_rms_per_axis_mm", s.cv_rms * 1e3},
-          {"ra_rz_on_paths", nullptr}};
+          {"ra_rz_on_paths", paths}};
 }
 
 // The first held-out campaign's RMS in mm, "-" without one.
@@ -32,6 +48,7 @@ std::string baseName(const DiscoveryOptions& options) { return options.base_geom
 }  // namespace
 
 std::string discoveryStepLabel(const DiscoveryStep& step) {
+  if (step.joint < 0) return step.type + " (tool)";
   std::string label = step.type + " " + step.joint_name;
   if (step.type == "harmonic") label += " " + step.part + " order " + std::to_string(static_cast<int>(step.cycles));
   if (step.type == "thermal") label += " (" + step.part + ")";
@@ -57,12 +74,16 @@ nlohmann::ordered_json discoveryReportJson(const DiscoveryResult& result, const 
                          {"max_harmonic_order", options.max_harmonic_order},
                          {"candidates", result.candidates}};
   report["fitted_rows"] = result.fitted_rows;
-  report["initial"] = stateJson(result.initial, sources.held_out);
+  report["initial"] = stateJson(result.initial, sources);
   report["initial"]["joint_residual_rms_rad"] = result.joint_residual_rms_initial;
   nlohmann::ordered_json steps = nlohmann::ordered_json::array();
   int index = 0;
   for (const DiscoveryStep& s : result.steps) {
-    nlohmann::ordered_json entry = {{"step", ++index}, {"type", s.type}, {"joint", s.joint_name}, {"joint_index", s.joint + 1}};
+    // payload belongs to no joint: joint and joint_index null.
+    nlohmann::ordered_json entry = {{"step", ++index},
+                                    {"type", s.type},
+                                    {"joint", s.joint >= 0 ? nlohmann::ordered_json(s.joint_name) : nlohmann::ordered_json(nullptr)},
+                                    {"joint_index", s.joint >= 0 ? nlohmann::ordered_json(s.joint + 1) : nlohmann::ordered_json(nullptr)}};
     if (s.type == "harmonic") {
       entry["part"] = s.part;
       entry["stage"] = s.stage;
@@ -77,26 +98,26 @@ nlohmann::ordered_json discoveryReportJson(const DiscoveryResult& result, const 
                          {"delta_bic", s.delta_bic},
                          {"candidates_tried", s.candidates_tried},
                          {"runner_up", s.runner_up}};
-    entry["before"] = stateJson(s.before, sources.held_out);
-    entry["after"] = stateJson(s.after, sources.held_out);
+    entry["before"] = stateJson(s.before, sources);
+    entry["after"] = stateJson(s.after, sources);
     steps.push_back(entry);
   }
   report["steps"] = steps;
-  report["final"] = stateJson(result.final_state, sources.held_out);
+  report["final"] = stateJson(result.final_state, sources);
   report["final"]["joint_residual_rms_rad"] = result.joint_residual_rms_final;
   report["stop_reason"] = result.stop_reason;
   const double final_held = result.final_state.heldout.empty() ? result.final_state.fitted.rms : result.final_state.heldout[0].rms;
   report["noise_floor"] = {{"rms_3d_mm", result.noise_floor * 1e3},
                            {"final_over_floor", result.noise_floor > 0.0 ? nlohmann::ordered_json(final_held / result.noise_floor)
                                                                           : nlohmann::ordered_json(nullptr)}};
-  report["not_candidates"] = {"payload", "hysteresis"};
+  report["not_candidates"] = nlohmann::ordered_json::array();
   report["seconds"] = seconds;
   report["outputs"] = sources.outputs;
   return report;
 }
 
 std::string discoverySummary(const DiscoveryResult& result, const DiscoveryOptions& options,
-                             const DiscoverySources& /*sources*/) {
+                             const DiscoverySources& sources) {
   std::ostringstream summary;
   summary << "jointcomp discover: " << result.model.robot().name << ", " << result.fitted_rows << " fitted rows, "
           << result.candidates << " candidates, base " << baseName(options) << "\n";
@@ -120,6 +141,15 @@ std::string discoverySummary(const DiscoveryResult& result, const DiscoveryOptio
                 result.stop_reason.c_str(), result.final_state.fitted.rms * 1e3, heldRms(result.final_state).c_str(),
                 result.noise_floor * 1e3, result.noise_floor > 0.0 ? "" : " (not known: give the noise floor)");
   summary << line;
+  // Paths: Ra and Rz of the Z error, base model -> final model.
+  for (std::size_t k = 0; k < result.final_state.paths.size() && k < result.initial.paths.size(); ++k) {
+    const PathRoughness& a = result.initial.paths[k];
+    const PathRoughness& b = result.final_state.paths[k];
+    std::snprintf(line, sizeof(line), "path %s (%s, %d rows): Ra %.4f -> %.4f mm, Rz %.4f -> %.4f mm\n",
+                  campaignName(sources, b.held_out, b.campaign).c_str(), b.held_out ? "held out" : "fitted", b.rows,
+                  a.ra * 1e3, b.ra * 1e3, a.rz * 1e3, b.rz * 1e3);
+    summary << line;
+  }
   return summary.str();
 }
 

@@ -1,0 +1,68 @@
+#include "model/effects/hysteresis.hpp"
+
+#include <cmath>
+
+#include <nlohmann/json.hpp>
+
+#include "model/common/errors.hpp"
+#include "model/common/json_fields.hpp"
+
+namespace jointcomp {
+
+HysteresisEffect::HysteresisEffect(const Robot& robot, std::vector<double> width_rad_per_nm, double velocity_scale)
+    : velocity_scale_(velocity_scale) {
+  for (const Joint& joint : robot.joints) joint_names_.push_back(joint.name);
+  if (!(std::isfinite(velocity_scale) && velocity_scale > 0.0)) {
+    throw ParameterError("hysteresis: velocity_scale_rad_per_s must be finite and positive");
+  }
+  setParameters(width_rad_per_nm);
+}
+
+std::unique_ptr<Effect> HysteresisEffect::fromJson(const nlohmann::json& json, const Robot& robot, const GearTrain&,
+                                                   const std::string& path) {
+  JsonFields fields(json, path);
+  fields.text("type");
+  const std::vector<double> width = fields.numbers("width_rad_per_nm", robot.dof());
+  const double scale = fields.numberOr("velocity_scale_rad_per_s", kDefaultVelocityScale);
+  const std::string note = fields.textOr("estimate", "");
+  fields.rejectUnknownKeys();
+  if (!(scale > 0.0)) throw ParameterError(path + ".velocity_scale_rad_per_s: must be positive");
+  auto effect = std::make_unique<HysteresisEffect>(robot, width, scale);
+  effect->estimate_note = note;
+  return effect;
+}
+
+void HysteresisEffect::addJointError(const Robot&, const JointContext& ctx, JointVector& dq) const {
+  if (ctx.velocity.size() != dq.size() || ctx.load_torque.size() != dq.size()) return;  // no motion or load known
+  for (std::size_t i = 0; i < width_.size(); ++i) {
+    const int j = static_cast<int>(i);
+    dq[j] += width_[i] * feature(ctx.velocity[j], ctx.load_torque[j], velocity_scale_);
+  }
+}
+
+std::vector<std::string> HysteresisEffect::parameterNames() const {
+  std::vector<std::string> names;
+  for (const auto& joint : joint_names_) names.push_back(joint + ".hysteresis_width_rad_per_nm");
+  return names;
+}
+
+void HysteresisEffect::setParameters(const std::vector<double>& values) {
+  if (values.size() != joint_names_.size()) {
+    throw ParameterError("hysteresis: expected " + std::to_string(joint_names_.size()) + " widths, found " +
+                         std::to_string(values.size()));
+  }
+  for (std::size_t i = 0; i < values.size(); ++i) {
+    if (!std::isfinite(values[i])) {
+      throw ParameterError("hysteresis: " + joint_names_[i] + ".hysteresis_width_rad_per_nm must be finite");
+    }
+  }
+  width_ = values;
+}
+
+nlohmann::json HysteresisEffect::toJson() const {
+  nlohmann::json json = {{"type", kType}, {"width_rad_per_nm", width_}, {"velocity_scale_rad_per_s", velocity_scale_}};
+  if (!estimate_note.empty()) json["estimate"] = estimate_note;
+  return json;
+}
+
+}  // namespace jointcomp

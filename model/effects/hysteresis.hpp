@@ -1,0 +1,60 @@
+// Load-dependent hysteresis (friction lost motion of the transmission): the link lags the command, in the
+// direction it was approached, by half a lost motion that grows with the torque the joint carries,
+//   dq_j = -h_j / 2 * |tau_j| * tanh(v_j / v_s)
+// with h_j the width of the loop per N m (rad / (N m)), tau_j the joint's load torque
+// (JointContext::load_torque), v_j the direction of approach (JointContext::velocity, as backlash) and v_s
+// the same small velocity scale as backlash.
+//
+// Why this model: in a gear transmission under load (harmonic drives in particular) the teeth, the wave
+// generator and the flexspline slide under a normal force proportional to the transmitted torque, so the
+// friction that holds the link when it stops is a fraction of |tau| (Coulomb: mu N). Approached from
+// below, the link stops short by that friction over the joint stiffness; approached from above it stops
+// beyond: the torque-deflection curve has a loop whose width is proportional to the load (the "hysteresis
+// loss" of gear catalogues, specified as a fraction of rated torque), and it flips with the direction of
+// motion. Backlash (backlash.hpp) is the part of the lost motion that does not depend on the load (play
+// between teeth): b/2 for every pose; hysteresis is zero for an unloaded joint and largest where gravity
+// loads it most, so the two are told apart by how the lag varies with the pose. The model is linear in h_j,
+// which discovery fits; it is memoryless (no Dahl or Bouc-Wen internal state), so a joint at rest (v = 0)
+// gets no error, as with backlash. Parameter file:
+//   {"type": "hysteresis", "width_rad_per_nm": [n values], "velocity_scale_rad_per_s": 0.001}
+// A negative width (the link leads) is accepted: discovery fits the sign.
+#pragma once
+
+#include <cmath>
+
+#include "model/effects/effect.hpp"
+#include "model/effects/gear_train.hpp"
+
+namespace jointcomp {
+
+class HysteresisEffect : public Effect {
+public:
+  static constexpr const char* kType = "hysteresis";
+  static constexpr double kDefaultVelocityScale = 1e-3;  // rad/s, as backlash
+  // Throws ParameterError for the wrong number of widths, a width that is not finite or a scale <= 0.
+  HysteresisEffect(const Robot& robot, std::vector<double> width_rad_per_nm, double velocity_scale = kDefaultVelocityScale);
+  static std::unique_ptr<Effect> fromJson(const nlohmann::json& json, const Robot& robot, const GearTrain& gears,
+                                          const std::string& path);
+
+  std::string type() const override { return kType; }
+  EffectRole role() const override { return EffectRole::JointError; }
+  void addJointError(const Robot& robot, const JointContext& ctx, JointVector& dq) const override;
+  std::vector<std::string> parameterNames() const override;  // "<joint>.hysteresis_width_rad_per_nm"
+  std::vector<double> parameters() const override { return width_; }
+  void setParameters(const std::vector<double>& values) override;
+  nlohmann::json toJson() const override;
+  std::unique_ptr<Effect> clone() const override { return std::make_unique<HysteresisEffect>(*this); }
+
+  double velocityScale() const { return velocity_scale_; }
+  // The factor of h_j in dq_j: -|tau| tanh(v / v_s) / 2.
+  static double feature(double velocity, double torque, double velocity_scale) {
+    return -0.5 * std::abs(torque) * std::tanh(velocity / velocity_scale);
+  }
+
+private:
+  std::vector<std::string> joint_names_;
+  std::vector<double> width_;  // rad / (N m)
+  double velocity_scale_;      // rad/s
+};
+
+}  // namespace jointcomp
