@@ -21,7 +21,9 @@ void printUsage() {
       "  simulate --protocol stiffness|joint2-sweep|spiral|random|back-and-forth --truth PARAMS.json\n"
       "        [--urdf FILE] [--seed N] [--out FILE] [--perturb SEED] [--plant] [--no-noise] [--target x,y,z]\n"
       "        [--pose q1,..] [--joint N] [--from DEG] [--to DEG] [--step DEG] [--settle S] [--cycles N] [--count N]\n"
+      "        [--warm-up RISE_DEGC[,TAU_S[,START_DEGC]]]\n"
       "                             a measurement campaign of a simulated robot with simulated instruments\n"
+      "                             (--warm-up: temperatures rising to START + RISE with time constant TAU)\n"
       "  identify stiffness|transmission --campaign FILE --out DIR [--urdf FILE] [--params NOMINAL.json]\n"
       "        [--joint 2] [--stage 2] [--orders 1,2,..] [--use local|global] [--truth PARAMS.json] [--no-plot]\n"
       "                             joint stiffness or transmission-error harmonics from a campaign\n"
@@ -33,7 +35,9 @@ void printUsage() {
       "        [--base frame|textbook] [--max-steps N] [--orders N] [--folds K] [--types offset,harmonic,..]\n"
       "        [--noise-floor-mm X] [--min-cv-gain X] [--loss huber|cauchy|none] [--no-plot]\n"
       "                             residual discovery: adds the candidate effects the data ask for, one at a\n"
-      "                             time (time-blocked CV + BIC), and writes the extended parameter file\n"
+      "                             time (time-blocked CV + BIC), and writes the extended parameter file;\n"
+      "                             types: offset, compliance, nonlinear_compliance, harmonic, backlash,\n"
+      "                             hysteresis, thermal, geometric, payload\n"
       "  help                       this text\n"
       "With no command, jointcomp runs `paper` on the built-in Staubli RX170.\n");
 }

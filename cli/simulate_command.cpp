@@ -29,7 +29,7 @@ double numberOption(const Options& options, const std::string& name, double fall
 int runSimulate(int argc, char** argv) {
   const Options options(argc, argv,
                         {"protocol", "truth", "urdf", "seed", "out", "perturb", "plant", "target", "joint", "from", "to",
-                         "step", "settle", "cycles", "count", "pose", "no-noise", "global-poses"},
+                         "step", "settle", "cycles", "count", "pose", "no-noise", "global-poses", "warm-up"},
                         {"plant", "no-noise"});
   if (!options.has("protocol") || !options.has("truth")) {
     throw std::invalid_argument(
@@ -78,6 +78,15 @@ int runSimulate(int argc, char** argv) {
   spec.sweep.cycles = static_cast<int>(numberOption(options, "cycles", spec.sweep.cycles));
   spec.random.count = static_cast<int>(numberOption(options, "count", spec.random.count));
   spec.stiffness.global_poses = static_cast<int>(numberOption(options, "global-poses", spec.stiffness.global_poses));
+  if (options.has("warm-up")) {
+    const std::vector<double> warm_up = numberList(options.get("warm-up", ""), "warm-up");
+    if (warm_up.empty() || warm_up.size() > 3) throw std::invalid_argument("--warm-up takes RISE_DEGC[,TAU_S[,START_DEGC]]");
+    spec.temperature.enabled = true;
+    spec.temperature.rise_degc = warm_up[0];
+    if (warm_up.size() > 1) spec.temperature.time_constant_s = warm_up[1];
+    if (warm_up.size() > 2) spec.temperature.start_degc = warm_up[2];
+    if (!(spec.temperature.time_constant_s > 0.0)) throw std::invalid_argument("--warm-up: the time constant must be positive");
+  }
   if (options.has("plant")) spec.drives = loadDriveParameters(truth_path, *robot);
 
   std::printf("jointcomp simulate: %s campaign of robot '%s'\n  truth %s\n", protocolName(spec.protocol).c_str(),

@@ -149,6 +149,15 @@ jc_status jc_simulate_campaign(jc_robot* truth, const char* options_json, const 
       if (fields.has("settle_s")) spec.sweep.settle_s = fields.nonNegativeNumber("settle_s");
       if (fields.has("cycles")) spec.sweep.cycles = positiveInteger(fields, "cycles");
       if (fields.has("count")) spec.random.count = positiveInteger(fields, "count");
+      if (fields.has("warm_up")) {
+        const std::vector<double> warm_up = fields.numbers("warm_up");
+        if (warm_up.empty() || warm_up.size() > 3) fields.fail("warm_up", "takes [rise_degc, time_constant_s, start_degc] (1 to 3 numbers)");
+        spec.temperature.enabled = true;
+        spec.temperature.rise_degc = warm_up[0];
+        if (warm_up.size() > 1) spec.temperature.time_constant_s = warm_up[1];
+        if (warm_up.size() > 2) spec.temperature.start_degc = warm_up[2];
+        if (!(spec.temperature.time_constant_s > 0.0)) fields.fail("warm_up", "the time constant must be positive");
+      }
       if (fields.has("pose_deg")) {
         const std::vector<double> pose = fields.numbers("pose_deg", dof);
         JointVector q(dof);

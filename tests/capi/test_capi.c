@@ -647,6 +647,9 @@ static void test_identification(jc_robot* robot, jc_robot* bare) {
                 jc_simulate_campaign(robot, "{\"protocol\": \"random\", \"seed\": -1}", sweep));
   EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "options_json.pose_deg",
                 jc_simulate_campaign(robot, "{\"protocol\": \"stiffness\", \"pose_deg\": [1, 2]}", sweep));
+  EXPECT_OK(jc_simulate_campaign(robot, "{\"protocol\": \"random\", \"count\": 5, \"warm_up\": [5, 600]}", urdf));
+  EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "options_json.warm_up",
+                jc_simulate_campaign(robot, "{\"protocol\": \"random\", \"warm_up\": [5, -1]}", urdf));
   EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "needs drives",
                 jc_simulate_campaign(bare, "{\"protocol\": \"joint-sweep\", \"plant\": true}", sweep));
 

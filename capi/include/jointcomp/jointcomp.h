@@ -247,7 +247,9 @@ JOINTCOMP_API jc_status jc_peak_to_peak_deviation(const double* z, int32_t z_len
    "spiral" or "random"; "seed" (integer >= 0, default 1); "noise" (default true); "plant" (default false:
    sweeps and the spiral run on the flexible-joint plant; needs drives); sweeps: "joint" (1-based, default
    2), "from_deg", "to_deg", "step_deg", "settle_s", "cycles"; "count" (random poses); "pose_deg" (n joint
-   angles of the stiffness pose and of the sweep's other joints). */
+   angles of the stiffness pose and of the sweep's other joints); "warm_up": [rise_degc, time_constant_s,
+   start_degc] (the last two optional: 1800 s, 20 degC), temperatures of a robot warming up, which the
+   truth's thermal effects follow (quasi-static protocols). */
 JOINTCOMP_API jc_status jc_simulate_campaign(jc_robot* truth, const char* options_json, const char* campaign_path);
 /* Joint stiffness from a stiffness campaign, by the local (axis by axis) and the global (Cartesian)
    methods. *identified: `nominal` with the stiffness of the method chosen by "method": "local" (default)

@@ -88,7 +88,7 @@ def simulate_campaign(truth, campaign_path, *, protocol, **options):
     """Simulates a measurement campaign with ``truth`` (a Robot) as the real robot and writes it to
     ``campaign_path``. ``protocol``: "stiffness", "joint-sweep", "joint2-sweep", "back-and-forth", "spiral"
     or "random"; options: seed, noise, plant, joint (1-based), from_deg, to_deg, step_deg, settle_s, cycles,
-    count, pose_deg. Returns ``campaign_path``."""
+    count, pose_deg, warm_up ([rise_degc, time_constant_s, start_degc]). Returns ``campaign_path``."""
     options["protocol"] = protocol
     _native.check(_native.lib.jc_simulate_campaign(truth.handle, _options(options),
                                                    _native.text(campaign_path, "campaign_path")))

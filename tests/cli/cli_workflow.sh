@@ -1,0 +1,98 @@
+#!/usr/bin/env bash
+# The command-line tool end to end, as a user drives it: simulate campaigns from a truth the nominal model
+# lacks (a joint-3 offset), identify, calibrate and discover on them, and check what the written reports
+# say against that truth; then the errors a user makes, each refused with a message that names it.
+# usage: cli_workflow.sh JOINTCOMP_BINARY DATA_DIR (model/) SCRATCH_DIR
+set -euo pipefail
+jointcomp="$1"
+data="$2"
+work="$3"
+python=/usr/bin/python3
+rm -rf "$work"
+mkdir -p "$work"
+urdf="$data/robots/rx170.urdf"
+params="$data/params/rx170.json"
+fail() { echo "cli_workflow: $*" >&2; exit 1; }
+
+"$jointcomp" help | grep -q "hysteresis, thermal, geometric, payload" || fail "help does not list the discovery types"
+
+# A joint-2 sweep while the robot warms up: the temperature column rises.
+"$jointcomp" simulate --protocol joint2-sweep --truth "$params" --seed 3 --step 0.2 --warm-up 5,600 \
+  --out "$work/sweep.csv" >/dev/null
+"$python" - "$work/sweep.csv" <<'PY'
+import sys
+rows = [l.strip().split(",") for l in open(sys.argv[1]) if not l.startswith("#")]
+column = rows[0].index("temp")
+temps = [float(r[column]) for r in rows[1:]]
+assert temps[-1] > temps[0] + 1.0, (temps[0], temps[-1])
+assert all(b >= a for a, b in zip(temps, temps[1:])), "the warm-up is monotonic"
+PY
+
+"$jointcomp" identify transmission --campaign "$work/sweep.csv" --params "$params" --out "$work/transmission" \
+  --no-plot >/dev/null
+"$python" - "$work/transmission/report.json" "$params" <<'PY'
+import json, sys
+report = json.load(open(sys.argv[1]))
+truth = json.load(open(sys.argv[2]))
+found = {h["cycles_per_revolution"]: h for h in report["harmonics"] if h["significant"]}
+true = {h["cycles_per_revolution"]: h for e in truth["effects"] if e["type"] == "transmission_error"
+        for h in e["harmonics"] if h["joint"] == "joint_2" and h["of"] == "stage_2"}
+assert set(found) == set(true), (sorted(found), sorted(true))
+for order, h in found.items():
+    assert abs(h["amplitude_deg"] - true[order]["amplitude_deg"]) < 4 * h["amplitude_se_deg"], order
+PY
+
+# The truth carries a joint-3 offset of 1 mrad that rx170.json does not know.
+"$python" - "$params" "$work/truth.json" <<'PY'
+import json, sys
+document = json.load(open(sys.argv[1]))
+document["effects"].append({"type": "offset", "offset_rad": [0, 0, 1e-3, 0, 0, 0]})
+json.dump(document, open(sys.argv[2], "w"), indent=2)
+PY
+"$jointcomp" simulate --protocol random --truth "$work/truth.json" --seed 5 --count 150 --out "$work/fit.csv" >/dev/null
+"$jointcomp" simulate --protocol random --truth "$work/truth.json" --seed 6 --count 60 --out "$work/held.csv" >/dev/null
+cp "$work/fit.csv" "$work/fit.before"
+
+"$jointcomp" discover --urdf "$urdf" --params "$params" --campaign "$work/fit.csv" --holdout "$work/held.csv" \
+  --types offset,harmonic,hysteresis,payload --max-steps 3 --out "$work/discover" --no-plot >/dev/null
+"$python" - "$work/discover" <<'PY'
+import json, sys
+report = json.load(open(sys.argv[1] + "/report.json"))
+first = report["steps"][0]
+assert first["type"] == "offset" and first["joint_index"] == 3, first
+assert report["final"]["held_out"][0]["rms_mm"] < 0.5 * report["initial"]["held_out"][0]["rms_mm"]
+assert report["noise_floor"]["final_over_floor"] < 1.3, report["noise_floor"]
+parameters = json.load(open(sys.argv[1] + "/parameters.json"))
+offset = next(e for e in parameters["effects"] if e["type"] == "offset")
+assert abs(offset["offset_rad"][2] - 1e-3) < 1e-4, offset
+assert "plant" in parameters, "the drives of the nominal file are kept"
+PY
+cmp -s "$work/fit.csv" "$work/fit.before" || fail "discover modified its input campaign"
+
+"$jointcomp" calibrate --urdf "$urdf" --params "$params" --campaign "$work/fit.csv" --holdout "$work/held.csv" \
+  --out "$work/calibrate" --no-plot >/dev/null
+"$python" - "$work/calibrate/report.json" <<'PY'
+import json, sys
+report = json.load(open(sys.argv[1]))
+held = report["campaigns"][1]
+assert held["role"].startswith("holdout") and held["after"]["rms_mm"] < 0.5 * held["before"]["rms_mm"], held
+PY
+test -s "$work/calibrate/rx170_calibrated.urdf" || fail "calibrate wrote no URDF"
+
+# Mistakes: a non-zero exit and a message naming what is wrong.
+expect_error() {  # expect_error FRAGMENT ARGS...
+  local fragment="$1"
+  shift
+  local output status=0
+  output="$("$jointcomp" "$@" 2>&1)" || status=$?
+  [ "$status" -ne 0 ] || fail "'jointcomp $*' succeeded"
+  grep -qF -- "$fragment" <<<"$output" || fail "'jointcomp $*' said '$output', not '$fragment'"
+}
+expect_error "unknown protocol 'circle'" simulate --protocol circle --truth "$params" --out "$work/x.csv"
+expect_error "--warm-up takes" simulate --protocol random --truth "$params" --warm-up 1,2,3,4 --out "$work/x.csv"
+expect_error "time constant must be positive" simulate --protocol random --truth "$params" --warm-up 5,0 --out "$work/x.csv"
+expect_error "missing.csv" discover --campaign "$work/missing.csv" --out "$work/x"
+expect_error "unknown effect type 'gremlin'" discover --campaign "$work/fit.csv" --types gremlin --out "$work/x"
+expect_error "identify: unknown kind 'speed'" identify speed --campaign "$work/fit.csv" --out "$work/x"
+test ! -e "$work/x.csv" || fail "a refused simulate wrote its output"
+echo "cli_workflow: every step gave what the truth says"
