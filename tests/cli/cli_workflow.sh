@@ -2,11 +2,12 @@
 # The command-line tool end to end, as a user drives it: simulate campaigns from a truth the nominal model
 # lacks (a joint-3 offset), identify, calibrate and discover on them, and check what the written reports
 # say against that truth; then the errors a user makes, each refused with a message that names it.
-# usage: cli_workflow.sh JOINTCOMP_BINARY DATA_DIR (model/) SCRATCH_DIR
+# usage: cli_workflow.sh JOINTCOMP_BINARY DATA_DIR (model/) SCRATCH_DIR [LIBJOINTCOMP]
 set -euo pipefail
 jointcomp="$1"
 data="$2"
 work="$3"
+library="${4:-}"
 python=/usr/bin/python3
 rm -rf "$work"
 mkdir -p "$work"
@@ -78,6 +79,21 @@ held = report["campaigns"][1]
 assert held["role"].startswith("holdout") and held["after"]["rms_mm"] < 0.5 * held["before"]["rms_mm"], held
 PY
 test -s "$work/calibrate/rx170_calibrated.urdf" || fail "calibrate wrote no URDF"
+
+# What the calibration leaves is the tracker's noise here: its neighbours in joint space must not predict
+# it (examples/python/residual_neighbours.py, the analysis quoted in the README for the UR10).
+if [ -n "$library" ]; then
+  JOINTCOMP_LIBRARY="$library" "$python" "$(dirname "$0")/../../examples/python/residual_neighbours.py" \
+    "$work/calibrate" "$work/fit.csv" --neighbours 3,10 >"$work/neighbours.txt"
+  "$python" - "$work/neighbours.txt" <<'PY'
+import re, sys
+text = open(sys.argv[1]).read()
+rms = float(re.search(r"residual RMS ([0-9.]+) mm", text).group(1))
+left = [float(x) for x in re.findall(r"nearest poses: ([0-9.]+) mm", text)]
+assert 0.005 < rms < 0.1, rms  # the simulated tracker's noise, in mm
+assert len(left) == 2 and all(x > 0.95 * rms for x in left), (rms, left)
+PY
+fi
 
 # Mistakes: a non-zero exit and a message naming what is wrong.
 expect_error() {  # expect_error FRAGMENT ARGS...
