@@ -1,13 +1,20 @@
-// Shared helpers of the identification tests: the shipped RX170 and its parameter file, the true
-// stiffness of a model, and a temporary directory.
+// Shared helpers of the identification tests: the shipped RX170 and its parameter file, a seeded "true"
+// robot, the true stiffness of a model, the check of a measurement error's message, and a temporary
+// directory.
 #pragma once
 
+#include <cstdint>
 #include <filesystem>
 #include <memory>
 #include <string>
 
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "model/common/errors.hpp"
 #include "model/effects/compliance.hpp"
 #include "model/effects/joint_error_model.hpp"
+#include "model/effects/perturbation.hpp"
 #include "model/io/parameter_file.hpp"
 #include "model/robot/load_urdf.hpp"
 
@@ -25,6 +32,24 @@ inline std::shared_ptr<const Robot> rx170() {
 
 inline JointErrorModel rx170Model() {
   return loadParameterFile(std::string(JOINTCOMP_DATA_DIR) + "/params/rx170.json", rx170());
+}
+
+// The RX170 as it "really" is: the nominal parameters moved by a seeded perturbation.
+inline JointErrorModel truthModel(std::uint64_t seed) {
+  PerturbationSpec perturbation;
+  perturbation.seed = seed;
+  return perturbedModel(rx170Model(), perturbation);
+}
+
+// `call` must throw a MeasurementError whose message contains `fragment`.
+template <typename Call>
+void expectMeasurementError(Call call, const std::string& fragment) {
+  try {
+    call();
+    ADD_FAILURE() << "no error; expected one with '" << fragment << "'";
+  } catch (const MeasurementError& error) {
+    EXPECT_THAT(error.what(), ::testing::HasSubstr(fragment));
+  }
 }
 
 inline double stiffnessOf(const JointErrorModel& model, int joint) {

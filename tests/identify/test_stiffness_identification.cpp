@@ -26,22 +26,6 @@ namespace {
 using namespace identify_test;
 using ::testing::HasSubstr;
 
-JointErrorModel truthModel(std::uint64_t seed) {
-  PerturbationSpec perturbation;
-  perturbation.seed = seed;
-  return perturbedModel(rx170Model(), perturbation);
-}
-
-template <typename Call>
-void expectMeasurementError(Call call, const std::string& fragment) {
-  try {
-    call();
-    ADD_FAILURE() << "no error; expected one with '" << fragment << "'";
-  } catch (const MeasurementError& error) {
-    EXPECT_THAT(error.what(), HasSubstr(fragment));
-  }
-}
-
 // ---- the statistics underneath -----------------------------------------------------------------------
 
 TEST(IdentificationStatistics, StudentTQuantilesMatchTables) {

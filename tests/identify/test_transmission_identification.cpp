@@ -26,12 +26,6 @@ namespace {
 using namespace identify_test;
 using ::testing::HasSubstr;
 
-JointErrorModel truthModel(std::uint64_t seed) {
-  PerturbationSpec perturbation;
-  perturbation.seed = seed;
-  return perturbedModel(rx170Model(), perturbation);
-}
-
 MeasurementCampaign sweep(const JointErrorModel& truth, std::uint64_t seed = 1, bool noise = true) {
   CampaignSimulationSpec spec;
   spec.protocol = CampaignProtocol::JointSweep;
@@ -45,16 +39,6 @@ const HarmonicEstimate* find(const std::vector<HarmonicEstimate>& list, double o
     if (h.order == order) return &h;
   }
   return nullptr;
-}
-
-template <typename Call>
-void expectMeasurementError(Call call, const std::string& fragment) {
-  try {
-    call();
-    ADD_FAILURE() << "no error; expected one with '" << fragment << "'";
-  } catch (const MeasurementError& error) {
-    EXPECT_THAT(error.what(), HasSubstr(fragment));
-  }
 }
 
 TEST(TransmissionIdentification, Joint2SweepRecoversTheTwoCycleHarmonic) {
