@@ -9,6 +9,8 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from atomic_png import save_figure  # noqa: E402  (a sibling of this script)
+
 
 def read(csv_path):
     data = np.genfromtxt(csv_path, delimiter=",", names=True, dtype=None, encoding="utf-8")
@@ -50,7 +52,7 @@ def main(csv_path, png_path):
     figure.suptitle("Kinematic calibration: before = nominal robot with the instrument frame fitted; "
                     "after = calibrated robot (held-out campaigns: frame re-fitted)", fontsize=10)
     figure.tight_layout()
-    figure.savefig(png_path, dpi=110)
+    save_figure(figure, png_path, dpi=110)
 
 
 if __name__ == "__main__":

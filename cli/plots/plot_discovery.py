@@ -8,6 +8,8 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
+from atomic_png import save_figure  # noqa: E402  (a sibling of this script)
+
 
 def main():
     rows = list(csv.DictReader(open(sys.argv[1])))
@@ -28,7 +30,7 @@ def main():
     ax.grid(True, alpha=0.3)
     ax.legend()
     fig.tight_layout()
-    fig.savefig(sys.argv[2], dpi=120)
+    save_figure(fig, sys.argv[2], dpi=120)
 
 
 if __name__ == "__main__":

@@ -14,6 +14,8 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from atomic_png import save_figure  # noqa: E402  (a sibling of this script)
+
 
 def plot_stiffness(report, png_path):
     joints = report["joints"]
@@ -69,7 +71,7 @@ def plot_stiffness(report, png_path):
     compare.legend(fontsize=8)
     figure.suptitle("joint stiffness identification: " + report["sources"]["campaign"], fontsize=11)
     figure.tight_layout()
-    figure.savefig(png_path, dpi=110)
+    save_figure(figure, png_path, dpi=110)
 
 
 def plot_transmission(report, png_path):
@@ -103,7 +105,7 @@ def plot_transmission(report, png_path):
     spectrum.set_title("spectrum of the kinematic error (red: significant harmonics with their intervals; x: truth)")
     spectrum.legend(fontsize=8)
     figure.tight_layout()
-    figure.savefig(png_path, dpi=110)
+    save_figure(figure, png_path, dpi=110)
 
 
 def main(report_path, png_path):

@@ -9,6 +9,8 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from atomic_png import save_figure  # noqa: E402  (a sibling of this script)
+
 NAMES = ["without correction", "stiffness correction", "stiffness and kinematic correction"]
 
 
@@ -32,7 +34,7 @@ def main(csv_path, png_path):
     plan.set_ylabel("Y [mm]")
     plan.set_title("spiral in the XY plane")
     figure.tight_layout()
-    figure.savefig(png_path, dpi=110)
+    save_figure(figure, png_path, dpi=110)
 
 
 if __name__ == "__main__":
