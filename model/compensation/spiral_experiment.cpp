@@ -104,7 +104,13 @@ SpiralExperimentResult runSpiralExperiment(const JointErrorModel& nominal, const
       const Eigen::Vector3d position = ws.robot.tool_pose.translation();
       const double sigma =
           spec.noise.constant_m + spec.noise.per_metre * (position - spec.noise.tracker_position).norm();
-      const Eigen::Vector3d measured = position + sigma * Eigen::Vector3d(noise.normal(), noise.normal(), noise.normal());
+      // One draw per statement: the order of a constructor's arguments is unspecified (GCC evaluates them
+      // last to first, clang first to last), so three draws in one call gave each compiler other noise.
+      // z, y, x is the order of the GCC build the stored results come from.
+      const double noise_z = noise.normal();
+      const double noise_y = noise.normal();
+      const double noise_x = noise.normal();
+      const Eigen::Vector3d measured = position + sigma * Eigen::Vector3d(noise_x, noise_y, noise_z);
       run.measured[k] = measured;
       run.error[k] = measured - result.planned.tool_position[k];
     }
