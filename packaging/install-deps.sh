@@ -16,6 +16,7 @@ packages=(
   python3-numpy python3-matplotlib python3-pytest python3-pycparser  # bindings, plots, binding tests
   zip unzip                # packs and unpacks the FMU
   clang libclang-rt-14-dev # sanitizers and libFuzzer
+  valgrind                 # memcheck of the FMU importer test (test.sh, tests/load/run-load.sh)
 )
 
 SUDO=""

@@ -525,7 +525,6 @@ CampaignSimulationSpec defaultCampaignSpec(CampaignProtocol protocol) {
   CampaignSimulationSpec spec;
   spec.protocol = protocol;
   if (protocol == CampaignProtocol::BackAndForth) {
-    constexpr double kDegree = 3.14159265358979323846 / 180.0;
     spec.sweep.from_rad = -20.0 * kDegree;
     spec.sweep.to_rad = 20.0 * kDegree;
     spec.sweep.step_rad = 0.5 * kDegree;

@@ -48,7 +48,7 @@
 namespace jointcomp {
 namespace {
 
-constexpr int kOK = 0, kWarning = 1, kDiscard = 2, kError = 3;
+constexpr int kOK = 0, kDiscard = 2, kError = 3;  // FMI status values (fmi2Status, fmi3Status)
 constexpr int kDof = 6;
 constexpr double kDegree = 3.14159265358979323846 / 180.0;
 
