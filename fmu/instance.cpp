@@ -504,7 +504,9 @@ void Instance::ensureCompensator() {
   if (m.compensator && m.compensator_mode == mode) return;
   EffectMask mask = 0;
   if (mode == 1) mask = m.nominal->loadsAnd({"compliance"});
-  if (mode == 2) mask = m.nominal->loadsAnd({"compliance", "transmission_error"});
+  // Mode 2 corrects every effect of the parameter file: for the shipped RX170 that is the paper's
+  // compliance and transmission error; a file extended by discovery brings its effects along.
+  if (mode == 2) mask = m.nominal->allEffects();
   m.compensator = std::make_unique<Compensator>(*m.nominal, mask);
   m.compensator_mode = mode;
   reference_valid_ = false;

@@ -26,6 +26,7 @@
 #include <sys/stat.h>
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #ifdef JOINTCOMP_TEST_WITH_CAPI
 #include "jointcomp/jointcomp.h"
@@ -612,7 +613,7 @@ Record runDirectly(long mode, const JointErrorModel& truth, std::size_t to, bool
   FlexibleJointPlant plant(truth, drives, PlantOptions{});
   EffectMask mask = 0;
   if (mode == 1) mask = nominal.loadsAnd({"compliance"});
-  if (mode == 2) mask = nominal.loadsAnd({"compliance", "transmission_error"});
+  if (mode == 2) mask = nominal.allEffects();
   Compensator compensator(nominal, mask);
   JointContext ctx(kDof);
   auto reference = [&](const JointVector& q, const JointVector& v, double t) {
@@ -1097,6 +1098,46 @@ TEST_P(FmuTest, AFailingIntegrationIsDiscardedWithCvodesReason) {
   EXPECT_EQ(m->doStep(0.0, 0.01), kDiscard);  // still too few steps allowed
   EXPECT_EQ(m->terminate(), kOK);
   EXPECT_EQ(m->freeState(&before), kOK);
+}
+
+// A parameter file extended by discovery (payload, hysteresis, joint offset) drives the FMU: it
+// instantiates with it, and its predicted joint errors are the C++ model's for that file, not the
+// shipped file's.
+TEST_P(FmuTest, AParameterFileExtendedByDiscoveryDrivesTheFmu) {
+  const std::string scratch = JOINTCOMP_FMU_SCRATCH_DIR;
+  ::mkdir(scratch.c_str(), 0755);
+  const std::string folder = scratch + "/extended parameters " + std::to_string(GetParam());
+  ::mkdir(folder.c_str(), 0755);
+  writeFileAtomically(folder + "/robot.json", readFile(unzipped(2) + "/resources/robot.json"));
+  nlohmann::json parameters = nlohmann::json::parse(readFile(unzipped(2) + "/resources/parameters.json"));
+  parameters["effects"].push_back({{"type", "payload"}, {"mass_kg", 20.0}, {"com_m", {0.0, 0.0, 0.1}}});
+  parameters["effects"].push_back({{"type", "hysteresis"}, {"width_rad_per_nm", {0.0, 1e-6, 0.0, 0.0, 0.0, 0.0}}});
+  parameters["effects"].push_back({{"type", "offset"}, {"offset_rad", {0.0, 0.0, 1e-3, 0.0, 0.0, 0.0}}});
+  writeFileAtomically(folder + "/parameters.json", parameters.dump(2));
+  const std::string location = GetParam() == 2 ? "file://" + percentEncoded(folder) : folder + "/";
+
+  auto m = makeMaster(GetParam());
+  ASSERT_TRUE(m->instantiate("robot", location)) << m->log();
+  ASSERT_EQ(m->enterInitialization(spiral().time[0]), kOK) << m->log();
+  ASSERT_EQ(m->setReals(m->vrs("q_desired_", kDof), values(spiral().q[0])), kOK) << m->log();
+  ASSERT_EQ(m->exitInitialization(), kOK) << m->log();
+  std::vector<double> q_link, q_motor, dq_predicted;
+  ASSERT_EQ(m->getReals(m->vrs("q_link_", kDof), q_link), kOK);
+  ASSERT_EQ(m->getReals(m->vrs("q_motor_", kDof), q_motor), kOK);
+  ASSERT_EQ(m->getReals(m->vrs("dq_predicted_", kDof), dq_predicted), kOK);
+  // The plant carries the payload and the offset; the compensation (mode 2: every effect of the file)
+  // knows them, so the links still stand where planned, and the prediction is the plant's own error.
+  for (int j = 0; j < kDof; ++j) {
+    EXPECT_NEAR(q_link[j], spiral().q[0][j], 1e-9) << "joint " << j + 1;
+    EXPECT_NEAR(dq_predicted[j], q_link[j] - q_motor[j], 1e-9) << "joint " << j + 1;
+  }
+  // The same start with the shipped file: the extended file's errors differ by the offset and payload.
+  auto shipped = makeMaster(GetParam());
+  start(*shipped, 2);
+  std::vector<double> dq_shipped;
+  ASSERT_EQ(shipped->getReals(shipped->vrs("dq_predicted_", kDof), dq_shipped), kOK);
+  EXPECT_GT(std::abs(dq_predicted[1] - dq_shipped[1]), 1e-5);  // 20 kg at the flange bends joint 2
+  EXPECT_GT(std::abs(dq_predicted[2] - dq_shipped[2]), 5e-4);  // the 1 mrad joint-3 offset
 }
 
 TEST_P(FmuTest, MissingOrWrongResourcesFailInstantiationWithTheReason) {
