@@ -2,6 +2,7 @@
 // report handle out. The work is the model's (model/identify); this file reads the options, runs it, and
 // builds the reports with the same functions as the command-line tool, so both give the same documents.
 #include <chrono>
+#include <filesystem>
 #include <memory>
 #include <string>
 #include <utility>
@@ -166,6 +167,12 @@ jc_status jc_simulate_campaign(jc_robot* truth, const char* options_json, const 
         spec.sweep.pose = q;
       }
     });
+    // Refused before a simulation that may take minutes: a campaign file the call could not write.
+    const std::filesystem::path folder = std::filesystem::path(path).parent_path();
+    std::error_code ignored;
+    if (!folder.empty() && !std::filesystem::is_directory(folder, ignored)) {
+      throw ApiError(JC_ERROR_FILE, "campaign_path: the folder '" + folder.string() + "' does not exist");
+    }
     spec.metadata["truth"] = robotSource(handle) + ", through jc_simulate_campaign";
     writeCampaignFile(simulateCampaign(handle.model, spec), path);
   });

@@ -650,6 +650,8 @@ static void test_identification(jc_robot* robot, jc_robot* bare) {
   EXPECT_OK(jc_simulate_campaign(robot, "{\"protocol\": \"random\", \"count\": 5, \"warm_up\": [5, 600]}", urdf));
   EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "options_json.warm_up",
                 jc_simulate_campaign(robot, "{\"protocol\": \"random\", \"warm_up\": [5, -1]}", urdf));
+  EXPECT_STATUS(JC_ERROR_FILE, "does not exist",
+                jc_simulate_campaign(robot, "{\"protocol\": \"spiral\"}", "/nonexistent/folder/spiral.csv"));
   EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "needs drives",
                 jc_simulate_campaign(bare, "{\"protocol\": \"joint-sweep\", \"plant\": true}", sweep));
 

@@ -3,7 +3,10 @@
 // - as the parameters of jc_robot_load_json (RX170 URDF); a robot that loads gives its parameters back as
 //   JSON, and that JSON loads again and gives the same JSON;
 // - as the `effects` selection of jc_predict_joint_errors, jc_compensate_point and jc_compensate_trajectory
-//   on the shipped RX170 model.
+//   on the shipped RX170 model;
+// - as the options_json of every identification call and as the newline-separated campaign lists of
+//   jc_calibrate and jc_discover (the campaigns named do not exist, so every call ends at the first file
+//   it reads: options are checked before any file is opened); a failure leaves the outputs untouched.
 // The text is the input up to its first NUL byte, as a C caller would pass it.
 #include <cmath>
 #include <cstddef>
@@ -84,6 +87,28 @@ void fuzzEffects(jc_robot* robot, const char* effects) {
   }
 }
 
+void expectUntouched(jc_status status, jc_robot* robot, jc_report* report) {
+  expectFailureExplained(status);
+  if (status == JC_OK) die("an identification call succeeded on a campaign that does not exist");
+  if (robot || report) die("a failed identification call returned a handle");
+}
+
+void fuzzIdentificationText(jc_robot* robot, const char* text) {
+  const char* missing = "/nonexistent/jointcomp-fuzz/campaign.csv";
+  jc_robot* out = nullptr;
+  jc_report* report = nullptr;
+  expectUntouched(jc_identify_stiffness(robot, missing, text, &out, &report), out, report);
+  expectUntouched(jc_identify_transmission_error(robot, missing, text, &out, &report), out, report);
+  expectUntouched(jc_calibrate(robot, missing, text, text, &out, &report), out, report);
+  expectUntouched(jc_discover(robot, text, nullptr, nullptr, &out, &report), out, report);
+  expectUntouched(jc_discover(robot, missing, text, text, &out, &report), out, report);
+  // Simulation writes a file when its options are valid: only invalid options reach it here, so that
+  // the fuzzer never writes anywhere (a valid protocol is caught before: the path's folder is missing).
+  const jc_status simulated = jc_simulate_campaign(robot, text, missing);
+  expectFailureExplained(simulated);
+  if (simulated == JC_OK) die("jc_simulate_campaign wrote into a folder that does not exist");
+}
+
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
@@ -95,5 +120,6 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   const std::string text(reinterpret_cast<const char*>(data), size);
   fuzzParameters(text.c_str());
   fuzzEffects(shipped, text.c_str());
+  fuzzIdentificationText(shipped, text.c_str());
   return 0;
 }
