@@ -90,7 +90,17 @@ struct Buffers {
 struct RobotCall {
   const char* name;
   std::function<jc_status(jc_robot*, Buffers&)> call;
+  const char* handle = "robot";  // the robot parameter's name in the header
 };
+
+// An identification call with its outputs: a handle must never come out of a failed call.
+jc_status identification(Buffers& b, const std::function<jc_status(jc_robot**, jc_report**)>& call) {
+  jc_robot* robot = nullptr;
+  jc_report* report = nullptr;
+  const jc_status status = call(&robot, &report);
+  if (robot || report) b.integer = -1;
+  return status;
+}
 struct PlantCall {
   const char* name;
   std::function<jc_status(jc_plant*, Buffers&)> call;
@@ -152,6 +162,31 @@ std::vector<RobotCall> everyRobotCall() {
          if (plant) b.integer = -1;  // a handle must never come out of a failed call
          return status;
        }},
+      {"jc_robot_save", [](jc_robot* r, Buffers&) { return jc_robot_save(r, nullptr, "/nonexistent/p.json"); }},
+      {"jc_simulate_campaign",
+       [](jc_robot* r, Buffers&) { return jc_simulate_campaign(r, R"({"protocol": "random"})", "/nonexistent/c.csv"); },
+       "truth"},
+      {"jc_identify_stiffness",
+       [](jc_robot* r, Buffers& b) {
+         return identification(b, [r](jc_robot** o, jc_report** p) { return jc_identify_stiffness(r, "c.csv", nullptr, o, p); });
+       },
+       "nominal"},
+      {"jc_identify_transmission_error",
+       [](jc_robot* r, Buffers& b) {
+         return identification(
+             b, [r](jc_robot** o, jc_report** p) { return jc_identify_transmission_error(r, "c.csv", nullptr, o, p); });
+       },
+       "nominal"},
+      {"jc_calibrate",
+       [](jc_robot* r, Buffers& b) {
+         return identification(b, [r](jc_robot** o, jc_report** p) { return jc_calibrate(r, "c.csv", nullptr, nullptr, o, p); });
+       },
+       "nominal"},
+      {"jc_discover",
+       [](jc_robot* r, Buffers& b) {
+         return identification(b, [r](jc_robot** o, jc_report** p) { return jc_discover(r, "c.csv", nullptr, nullptr, o, p); });
+       },
+       "nominal"},
       {"jc_robot_free", [](jc_robot* r, Buffers&) { return jc_robot_free(r); }},
   };
 }
@@ -246,7 +281,7 @@ TEST_F(CapiMisuse, NullHandlesAreInvalidArguments) {
       EXPECT_EQ(jc_robot_free(nullptr), JC_OK) << "freeing NULL is a no-op";
       continue;
     }
-    EXPECT_INVALID(c.name, "robot is NULL", c.call(nullptr, buffers));
+    EXPECT_INVALID(c.name, (std::string(c.handle) + " is NULL").c_str(), c.call(nullptr, buffers));
     EXPECT_TRUE(buffers.untouched()) << c.name << " wrote an output although it failed";
   }
   for (const PlantCall& c : everyPlantCall()) {
