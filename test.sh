@@ -68,7 +68,12 @@ stage "build ($asan_dir)"
 #   threads, and the FMI 2 twin of two slow FMU tests whose FMI 3 version runs here (the versions share
 #   the instance). The FMU state is fuzzed here too (fmu_state).
 slow_under_sanitizers='DiscoverySweep\.|DiscoveryIpaUr10\.|IpaUr10Calibration\.|IntervalsCoverTheTruth|OverSeeds|SpiralAt1ms|FmuRegression\.|VaryingCommunicationSteps|RegressionThroughTheFmuEqualsTheCApi|PlantEnergy\.ConservedWithoutLossesOrControl|CapiMatchesCore\.SpiralPlanTrajectoryCompensationAndExperiment|Discovery\.RaRzOnHeldOutSpiral|TwoInstancesInTwoThreads|SpiralExperiment\.(ADifferentNoiseSeed|RunsAreCompleteAndNamed|DefaultSpecReproduces)|PlantSpiralRegression\.(MetricsFollowFromTheErrors|CorrectionRemovesMostOfRa)|PlantMisuse\.AbsurdGains|(RestoringAStateMidRunContinuesIdentically|BadStepsAreRefused)/fmi2'
-not_under_sanitizers="^fmu_binary_fmi[23]$|^io_kill_during_write$|^capi_threads$|^cli_workflow$|$slow_under_sanitizers"
+# JOINTCOMP_ASAN_ALL=1 runs the slow ones under the sanitizers too (each takes 10 s to 5 min there).
+if [ "${JOINTCOMP_ASAN_ALL:-0}" = 1 ]; then
+  not_under_sanitizers="^fmu_binary_fmi[23]$|^io_kill_during_write$|^capi_threads$|^cli_workflow$"
+else
+  not_under_sanitizers="^fmu_binary_fmi[23]$|^io_kill_during_write$|^capi_threads$|^cli_workflow$|$slow_under_sanitizers"
+fi
 export ASAN_OPTIONS="detect_leaks=1:strict_string_checks=1"
 export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
 export LSAN_OPTIONS="suppressions=$PWD/tests/fuzz/lsan.supp:print_suppressions=0"
