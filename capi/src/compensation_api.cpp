@@ -7,8 +7,6 @@ using namespace jointcomp::capi;
 
 namespace {
 
-constexpr double kDegree = 3.14159265358979323846 / 180.0;
-
 // A joint context carrying the handle's payload and tool wrench.
 JointContext contextWithConditions(const jc_robot& handle) {
   JointContext ctx(handle.robot->dof());
@@ -18,19 +16,10 @@ JointContext contextWithConditions(const jc_robot& handle) {
   return ctx;
 }
 
-// The joint trajectory runSpiralExperiment plans for the default spec. The seed posture repeats
-// runSpiralExperiment's (model/compensation/spiral_experiment.cpp); tests/capi/test_capi_matches_core.cpp
-// checks that both plans agree bit for bit.
+// The joint trajectory runSpiralExperiment plans for the default spec.
 JointTrajectory planDefaultSpiral(const Robot& robot) {
   const SpiralExperimentSpec spec;
-  const std::vector<FeedRateSample> samples = planFeedRate(logarithmicSpiral(spec.spiral), spec.feed_rate);
-  JointVector seed = JointVector::Zero(robot.dof());
-  if (robot.dof() >= 5) {
-    seed[1] = 60 * kDegree;
-    seed[2] = 60 * kDegree;
-    seed[4] = 60 * kDegree;
-  }
-  return planJointTrajectory(robot, samples, toolPointingDown(), seed);
+  return planSpiralTrajectory(robot, spec.spiral, spec.feed_rate, spec.seed_posture);
 }
 
 // m points of n joints from a flat array of planned_len values.

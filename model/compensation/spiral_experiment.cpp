@@ -23,6 +23,20 @@ SpiralSpec SpiralExperimentSpec::defaultSpiral() {
   return spiral;
 }
 
+JointTrajectory planSpiralTrajectory(const Robot& robot, const SpiralSpec& spiral, const FeedRateSpec& feed_rate,
+                                     JointVector seed_posture) {
+  const std::vector<FeedRateSample> samples = planFeedRate(logarithmicSpiral(spiral), feed_rate);
+  if (seed_posture.size() == 0) {
+    seed_posture = JointVector::Zero(robot.dof());
+    if (robot.dof() >= 5) {
+      seed_posture[1] = 60 * kDegree;
+      seed_posture[2] = 60 * kDegree;
+      seed_posture[4] = 60 * kDegree;
+    }
+  }
+  return planJointTrajectory(robot, samples, toolPointingDown(), seed_posture);
+}
+
 SpiralExperimentResult runSpiralExperiment(const JointErrorModel& nominal, const SpiralExperimentSpec& spec,
                                            const std::function<void(const std::string&)>& progress) {
   const Robot& robot = nominal.robot();
@@ -34,18 +48,7 @@ SpiralExperimentResult runSpiralExperiment(const JointErrorModel& nominal, const
   }
   SpiralExperimentResult result;
   tell(progress, "planning the spiral (feed rate, inverse kinematics)");
-  const Path path = logarithmicSpiral(spec.spiral);
-  const std::vector<FeedRateSample> samples = planFeedRate(path, spec.feed_rate);
-  JointVector seed = spec.seed_posture;
-  if (seed.size() == 0) {
-    seed = JointVector::Zero(robot.dof());
-    if (robot.dof() >= 5) {
-      seed[1] = 60 * kDegree;
-      seed[2] = 60 * kDegree;
-      seed[4] = 60 * kDegree;
-    }
-  }
-  result.planned = planJointTrajectory(robot, samples, toolPointingDown(), seed);
+  result.planned = planSpiralTrajectory(robot, spec.spiral, spec.feed_rate, spec.seed_posture);
 
   const JointErrorModel truth = perturbedModel(nominal, spec.truth);
   const EffectMask truth_mask = truth.allEffects();

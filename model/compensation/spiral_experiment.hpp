@@ -63,6 +63,12 @@ struct SpiralExperimentResult {
   std::array<SpiralRun, 3> runs;
 };
 
+// The spiral as a joint trajectory: feed-rate planned, tool pointing down, inverse kinematics from
+// `seed_posture` (empty: forward and elbow-up, joints 2, 3 and 5 at 60 deg when the robot has them).
+// Throws UnreachableError naming the sample when a point is out of reach.
+JointTrajectory planSpiralTrajectory(const Robot& robot, const SpiralSpec& spiral, const FeedRateSpec& feed_rate,
+                                     JointVector seed_posture = {});
+
 // `progress` (may be empty) is told what is being done, for tools that show it.
 SpiralExperimentResult runSpiralExperiment(const JointErrorModel& nominal, const SpiralExperimentSpec& spec,
                                            const std::function<void(const std::string&)>& progress = {});

@@ -480,18 +480,7 @@ void simulateSpiral(Simulator& sim, const CampaignSimulationSpec& spec, const Jo
   const SpiralCampaignSpec& s = spec.spiral;
   if (!(s.sample_period_s > 0.0)) throw InvalidArgument("spiral: sample_period_s must be positive");
   tell(progress, "planning the spiral");
-  const Path path = logarithmicSpiral(s.spiral);
-  const std::vector<FeedRateSample> samples = planFeedRate(path, s.feed_rate);
-  JointVector seed = s.seed_posture;
-  if (seed.size() == 0) {
-    seed = JointVector::Zero(robot.dof());
-    if (robot.dof() >= 5) {
-      seed[1] = 60 * kDegree;
-      seed[2] = 60 * kDegree;
-      seed[4] = 60 * kDegree;
-    }
-  }
-  const JointTrajectory planned = planJointTrajectory(robot, samples, toolPointingDown(), seed);
+  const JointTrajectory planned = planSpiralTrajectory(robot, s.spiral, s.feed_rate, s.seed_posture);
   const long every = std::max(1L, std::lround(s.sample_period_s / s.feed_rate.controller_period));
   tell(progress, "following the spiral (" + std::to_string(planned.size()) + " controller samples)");
   if (!spec.drives.empty()) {
