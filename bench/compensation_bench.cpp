@@ -9,7 +9,7 @@
 #include <stdexcept>
 
 #include "model/compensation/compensator.hpp"
-#include "model/compensation/spiral_experiment.hpp"
+#include "model/experiment/spiral_experiment.hpp"
 #include "model/io/parameter_file.hpp"
 #include "model/robot/load_urdf.hpp"
 

@@ -38,7 +38,7 @@
 #include <kdl_parser/kdl_parser.hpp>
 
 #include "bench/support/allocation_counting.hpp"
-#include "model/compensation/spiral_experiment.hpp"
+#include "model/experiment/spiral_experiment.hpp"
 #include "model/io/parameter_file.hpp"
 #include "model/plant/flexible_joint_plant.hpp"
 #include "model/robot/dynamics.hpp"

@@ -11,7 +11,7 @@
 
 #include "cli/commands.hpp"
 #include "cli/options.hpp"
-#include "model/compensation/spiral_experiment.hpp"
+#include "model/experiment/spiral_experiment.hpp"
 #include "model/io/atomic_file.hpp"
 #include "model/io/parameter_file.hpp"
 #include "model/robot/load_urdf.hpp"

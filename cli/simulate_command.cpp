@@ -8,7 +8,7 @@
 #include "cli/commands.hpp"
 #include "cli/options.hpp"
 #include "model/effects/perturbation.hpp"
-#include "model/identify/campaign_simulation.hpp"
+#include "model/experiment/campaign_simulation.hpp"
 #include "model/io/parameter_file.hpp"
 #include "model/robot/load_urdf.hpp"
 

@@ -1,6 +1,6 @@
 // Joint-error prediction, compensation and the paper's spiral experiment.
 #include "api_support.hpp"
-#include "model/compensation/spiral_experiment.hpp"
+#include "model/experiment/spiral_experiment.hpp"
 
 using namespace jointcomp;
 using namespace jointcomp::capi;

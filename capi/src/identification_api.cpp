@@ -13,7 +13,7 @@
 #include "api_support.hpp"
 #include "model/common/json_fields.hpp"
 #include "model/identify/calibration_report.hpp"
-#include "model/identify/campaign_simulation.hpp"
+#include "model/experiment/campaign_simulation.hpp"
 #include "model/identify/discovery_report.hpp"
 #include "model/identify/identification_report.hpp"
 #include "model/io/measurement_campaign.hpp"

@@ -5,6 +5,7 @@
 #include <nlohmann/json.hpp>
 
 #include "model/common/errors.hpp"
+#include "model/effects/joint_error_model.hpp"
 #include "model/common/json_fields.hpp"
 
 namespace jointcomp {
@@ -61,6 +62,27 @@ nlohmann::json BacklashEffect::toJson() const {
   nlohmann::json json = {{"type", kType}, {"width_rad", width_}, {"velocity_scale_rad_per_s", velocity_scale_}};
   if (!estimate_note.empty()) json["estimate"] = estimate_note;
   return json;
+}
+
+void BacklashDiscovery::offer(const DiscoveryData& data, int joint, std::vector<DiscoveryCandidate>& candidates) const {
+  if (joint < 0) return;
+  DiscoveryCandidate candidate;
+  candidate.type = name();
+  candidate.joint = joint;
+  candidate.columns = featureColumn(data, [&](int i) { return BacklashEffect::feature(data.velocity[i][joint], data.velocity_scale); });
+  candidates.push_back(std::move(candidate));
+}
+
+std::unique_ptr<Effect> BacklashDiscovery::makeEffect(const DiscoveryData& data,
+                                                      const std::vector<FittedCandidate>& accepted) const {
+  std::vector<double> width(static_cast<std::size_t>(data.robot->dof()), 0.0);
+  for (const FittedCandidate& a : accepted) width[static_cast<std::size_t>(a.candidate->joint)] += a.theta[0];
+  return std::make_unique<BacklashEffect>(*data.robot, width, data.velocity_scale);
+}
+
+std::vector<NamedEstimate> BacklashDiscovery::describe(const FittedCandidate& fitted, const JointErrorModel& model) const {
+  const std::string& joint = model.robot().joints[static_cast<std::size_t>(fitted.candidate->joint)].name;
+  return {{joint + ".backlash_width_rad", fitted.theta[0], fitted.sigma[0]}};
 }
 
 }  // namespace jointcomp

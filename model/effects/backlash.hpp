@@ -12,6 +12,7 @@
 
 #include <cmath>
 
+#include "model/effects/discovery_family.hpp"
 #include "model/effects/effect.hpp"
 #include "model/effects/gear_train.hpp"
 
@@ -43,6 +44,15 @@ private:
   std::vector<std::string> joint_names_;
   std::vector<double> width_;  // rad
   double velocity_scale_;      // rad/s
+};
+
+// Discovery: "backlash", one column per joint, -tanh(v_j / v_s) / 2 with v_j from the command sequence.
+class BacklashDiscovery : public DiscoveryFamily {
+public:
+  std::string name() const override { return "backlash"; }
+  void offer(const DiscoveryData& data, int joint, std::vector<DiscoveryCandidate>& candidates) const override;
+  std::unique_ptr<Effect> makeEffect(const DiscoveryData& data, const std::vector<FittedCandidate>& accepted) const override;
+  std::vector<NamedEstimate> describe(const FittedCandidate& fitted, const JointErrorModel& model) const override;
 };
 
 }  // namespace jointcomp

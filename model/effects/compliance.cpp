@@ -80,4 +80,13 @@ nlohmann::json ComplianceEffect::toJson() const {
   return json;
 }
 
+void ComplianceDiscovery::offer(const DiscoveryData& data, int joint, std::vector<DiscoveryCandidate>& candidates) const {
+  if (joint < 0 || !data.torque_known) return;
+  DiscoveryCandidate candidate;
+  candidate.type = name();
+  candidate.joint = joint;
+  candidate.releases = {CalibrationParameter::Compliance};
+  candidates.push_back(std::move(candidate));
+}
+
 }  // namespace jointcomp

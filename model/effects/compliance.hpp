@@ -4,6 +4,7 @@
 // compliance is not known or cannot be identified.
 #pragma once
 
+#include "model/effects/discovery_family.hpp"
 #include "model/effects/effect.hpp"
 
 namespace jointcomp {
@@ -24,11 +25,21 @@ public:
   std::unique_ptr<Effect> clone() const override { return std::make_unique<ComplianceEffect>(*this); }
 
   double stiffness(int joint) const { return stiffness_[joint]; }
+  std::optional<CalibrationParameter> calibrationParameter() const override { return CalibrationParameter::Compliance; }
+  double calibrationValue(int joint) const override { return compliance_[joint]; }
 
 private:
   std::vector<std::string> joint_names_;
   std::vector<double> stiffness_;  // N m / rad
   JointVector compliance_;         // rad / (N m), 1 / stiffness
+};
+
+// Discovery: "compliance", a joint's linear compliance under its load torque, freed in the kinematic
+// calibration (offered when the robot has inertials, so that the torque is known).
+class ComplianceDiscovery : public DiscoveryFamily {
+public:
+  std::string name() const override { return "compliance"; }
+  void offer(const DiscoveryData& data, int joint, std::vector<DiscoveryCandidate>& candidates) const override;
 };
 
 }  // namespace jointcomp

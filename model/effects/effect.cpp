@@ -13,4 +13,6 @@ void Effect::addLoadTorque(const Robot&, const RobotWorkspace&, JointContext&) c
 
 void Effect::addJointError(const Robot&, const JointContext&, JointVector&) const {}
 
+double Effect::calibrationValue(int) const { return 0.0; }
+
 }  // namespace jointcomp

@@ -7,6 +7,7 @@
 #pragma once
 
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -35,6 +36,13 @@ struct JointContext {
   explicit JointContext(int dof = 0);
 };
 
+// Parameters of one joint that the kinematic calibration (model/identify) fits itself.
+enum class CalibrationParameter {
+  Offset,      // the joint's zero (rad)
+  Compliance,  // the joint's linear compliance under its load torque (rad/(N m))
+  Placement,   // the six corrections of the joint's placement
+};
+
 enum class EffectRole {
   Load,        // contributes to load_torque (acts in parallel with the transmission)
   JointError,  // predicts a joint-angle error
@@ -53,6 +61,11 @@ public:
   virtual void addJointError(const Robot& robot, const JointContext& ctx, JointVector& dq) const;
   // True when the error depends on ctx.command or ctx.motor (so compensation must iterate on it).
   virtual bool dependsOnCommand() const { return false; }
+
+  // An effect whose per-joint values are one of the calibration's own parameters says which, and gives
+  // them in the calibration's units, so that calibration starts from them and writes them back.
+  virtual std::optional<CalibrationParameter> calibrationParameter() const { return std::nullopt; }
+  virtual double calibrationValue(int joint) const;
 
   // Named parameters for identification, SI units, names with the unit ("joint_2.stiffness_nm_per_rad").
   virtual std::vector<std::string> parameterNames() const = 0;

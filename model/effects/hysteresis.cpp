@@ -5,6 +5,7 @@
 #include <nlohmann/json.hpp>
 
 #include "model/common/errors.hpp"
+#include "model/effects/joint_error_model.hpp"
 #include "model/common/json_fields.hpp"
 
 namespace jointcomp {
@@ -63,6 +64,29 @@ nlohmann::json HysteresisEffect::toJson() const {
   nlohmann::json json = {{"type", kType}, {"width_rad_per_nm", width_}, {"velocity_scale_rad_per_s", velocity_scale_}};
   if (!estimate_note.empty()) json["estimate"] = estimate_note;
   return json;
+}
+
+void HysteresisDiscovery::offer(const DiscoveryData& data, int joint, std::vector<DiscoveryCandidate>& candidates) const {
+  if (joint < 0 || !data.torque_known) return;
+  DiscoveryCandidate candidate;
+  candidate.type = name();
+  candidate.joint = joint;
+  candidate.columns = featureColumn(data, [&](int i) {
+    return HysteresisEffect::feature(data.velocity[i][joint], data.load_torque[i][joint], data.velocity_scale);
+  });
+  candidates.push_back(std::move(candidate));
+}
+
+std::unique_ptr<Effect> HysteresisDiscovery::makeEffect(const DiscoveryData& data,
+                                                        const std::vector<FittedCandidate>& accepted) const {
+  std::vector<double> width(static_cast<std::size_t>(data.robot->dof()), 0.0);
+  for (const FittedCandidate& a : accepted) width[static_cast<std::size_t>(a.candidate->joint)] += a.theta[0];
+  return std::make_unique<HysteresisEffect>(*data.robot, width, data.velocity_scale);
+}
+
+std::vector<NamedEstimate> HysteresisDiscovery::describe(const FittedCandidate& fitted, const JointErrorModel& model) const {
+  const std::string& joint = model.robot().joints[static_cast<std::size_t>(fitted.candidate->joint)].name;
+  return {{joint + ".hysteresis_width_rad_per_nm", fitted.theta[0], fitted.sigma[0]}};
 }
 
 }  // namespace jointcomp

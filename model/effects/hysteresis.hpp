@@ -22,6 +22,7 @@
 
 #include <cmath>
 
+#include "model/effects/discovery_family.hpp"
 #include "model/effects/effect.hpp"
 #include "model/effects/gear_train.hpp"
 
@@ -55,6 +56,15 @@ private:
   std::vector<std::string> joint_names_;
   std::vector<double> width_;  // rad / (N m)
   double velocity_scale_;      // rad/s
+};
+
+// Discovery: "hysteresis", one column per joint, -|tau_j| tanh(v_j / v_s) / 2 (needs the load torque).
+class HysteresisDiscovery : public DiscoveryFamily {
+public:
+  std::string name() const override { return "hysteresis"; }
+  void offer(const DiscoveryData& data, int joint, std::vector<DiscoveryCandidate>& candidates) const override;
+  std::unique_ptr<Effect> makeEffect(const DiscoveryData& data, const std::vector<FittedCandidate>& accepted) const override;
+  std::vector<NamedEstimate> describe(const FittedCandidate& fitted, const JointErrorModel& model) const override;
 };
 
 }  // namespace jointcomp

@@ -58,4 +58,13 @@ nlohmann::json JointOffsetEffect::toJson() const {
   return json;
 }
 
+void JointOffsetDiscovery::offer(const DiscoveryData&, int joint, std::vector<DiscoveryCandidate>& candidates) const {
+  if (joint < 0) return;
+  DiscoveryCandidate candidate;
+  candidate.type = name();
+  candidate.joint = joint;
+  candidate.releases = {CalibrationParameter::Offset};
+  candidates.push_back(std::move(candidate));
+}
+
 }  // namespace jointcomp

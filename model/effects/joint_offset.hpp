@@ -3,6 +3,7 @@
 //   {"type": "offset", "offset_rad": [n values]}
 #pragma once
 
+#include "model/effects/discovery_family.hpp"
 #include "model/effects/effect.hpp"
 #include "model/effects/gear_train.hpp"
 
@@ -27,10 +28,19 @@ public:
   std::unique_ptr<Effect> clone() const override { return std::make_unique<JointOffsetEffect>(*this); }
 
   double offset(int joint) const { return offsets_[joint]; }
+  std::optional<CalibrationParameter> calibrationParameter() const override { return CalibrationParameter::Offset; }
+  double calibrationValue(int joint) const override { return offsets_[static_cast<std::size_t>(joint)]; }
 
 private:
   std::vector<std::string> joint_names_;
   std::vector<double> offsets_;  // rad
+};
+
+// Discovery: "offset", a joint's zero, freed in the kinematic calibration.
+class JointOffsetDiscovery : public DiscoveryFamily {
+public:
+  std::string name() const override { return "offset"; }
+  void offer(const DiscoveryData& data, int joint, std::vector<DiscoveryCandidate>& candidates) const override;
 };
 
 }  // namespace jointcomp

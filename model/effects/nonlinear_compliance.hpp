@@ -4,6 +4,7 @@
 //   {"type": "nonlinear_compliance", "cubic_compliance_rad_per_nm3": [n values]}
 #pragma once
 
+#include "model/effects/discovery_family.hpp"
 #include "model/effects/effect.hpp"
 #include "model/effects/gear_train.hpp"
 
@@ -31,6 +32,15 @@ public:
 private:
   std::vector<std::string> joint_names_;
   std::vector<double> cubic_;  // rad / (N m)^3
+};
+
+// Discovery: "nonlinear_compliance", one column per joint, tau_j^3 (needs the load torque).
+class NonlinearComplianceDiscovery : public DiscoveryFamily {
+public:
+  std::string name() const override { return "nonlinear_compliance"; }
+  void offer(const DiscoveryData& data, int joint, std::vector<DiscoveryCandidate>& candidates) const override;
+  std::unique_ptr<Effect> makeEffect(const DiscoveryData& data, const std::vector<FittedCandidate>& accepted) const override;
+  std::vector<NamedEstimate> describe(const FittedCandidate& fitted, const JointErrorModel& model) const override;
 };
 
 }  // namespace jointcomp

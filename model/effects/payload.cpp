@@ -5,6 +5,7 @@
 #include <nlohmann/json.hpp>
 
 #include "model/common/errors.hpp"
+#include "model/effects/joint_error_model.hpp"
 #include "model/common/json_fields.hpp"
 #include "model/robot/kinematics.hpp"
 
@@ -61,6 +62,54 @@ nlohmann::json PayloadEffect::toJson() const {
   nlohmann::json json = {{"type", kType}, {"mass_kg", mass_}, {"com_m", {com_.x(), com_.y(), com_.z()}}};
   if (!estimate_note.empty()) json["estimate"] = estimate_note;
   return json;
+}
+
+void PayloadDiscovery::offer(const DiscoveryData& data, int joint, std::vector<DiscoveryCandidate>& candidates) const {
+  if (joint >= 0 || !data.torque_known) return;
+  const Robot& robot = *data.robot;
+  const int n = robot.dof();
+  const int rows = data.rows();
+  DiscoveryCandidate candidate;
+  candidate.type = name();
+  candidate.through_compliance = true;
+  candidate.columns.resize(rows, 4 * n);
+  RobotWorkspace ws(robot);
+  JointVector at_origin(n), at_unit(n);
+  for (int i = 0; i < rows; ++i) {
+    forwardKinematics(robot, ws, data.command[i]);
+    at_origin.setZero();
+    PayloadEffect::addTorque(robot, ws, 1.0, Eigen::Vector3d::Zero(), at_origin);
+    for (int j = 0; j < n; ++j) candidate.columns(i, j) = at_origin[j];
+    for (int k = 0; k < 3; ++k) {
+      at_unit.setZero();
+      PayloadEffect::addTorque(robot, ws, 1.0, Eigen::Vector3d::Unit(k), at_unit);
+      for (int j = 0; j < n; ++j) candidate.columns(i, (k + 1) * n + j) = at_unit[j] - at_origin[j];
+    }
+  }
+  candidates.push_back(std::move(candidate));
+}
+
+std::unique_ptr<Effect> PayloadDiscovery::makeEffect(const DiscoveryData& data,
+                                                     const std::vector<FittedCandidate>& accepted) const {
+  Eigen::Vector4d payload = Eigen::Vector4d::Zero();  // m, m c
+  for (const FittedCandidate& a : accepted) payload += a.theta.head<4>();
+  // c = (m c) / m; a mass too small to carry a centre is put at the tool origin.
+  const Eigen::Vector3d com =
+      std::abs(payload[0]) > 1e-9 ? Eigen::Vector3d(payload.tail<3>() / payload[0]) : Eigen::Vector3d::Zero();
+  return std::make_unique<PayloadEffect>(*data.robot, payload[0], com);
+}
+
+std::vector<NamedEstimate> PayloadDiscovery::describe(const FittedCandidate& fitted, const JointErrorModel& model) const {
+  const auto& effect = static_cast<const PayloadEffect&>(model.effect(model.findEffect(PayloadEffect::kType)));
+  const double m = effect.mass();
+  std::vector<NamedEstimate> estimates{{"payload.mass_kg", m, fitted.sigma[0]}};
+  const char* axes[3] = {"x", "y", "z"};
+  for (int k = 0; k < 3; ++k) {
+    const double c = effect.centreOfMass()[k];
+    const double sigma = std::abs(m) > 1e-9 ? std::hypot(fitted.sigma[k + 1], c * fitted.sigma[0]) / std::abs(m) : 0.0;
+    estimates.push_back({std::string("payload.com_") + axes[k] + "_m", c, sigma});
+  }
+  return estimates;
 }
 
 }  // namespace jointcomp

@@ -9,6 +9,7 @@
 // A negative mass is accepted (a correction: the links are lighter than their inertials say).
 #pragma once
 
+#include "model/effects/discovery_family.hpp"
 #include "model/effects/effect.hpp"
 #include "model/effects/gear_train.hpp"
 
@@ -43,6 +44,20 @@ public:
 private:
   double mass_;
   Eigen::Vector3d com_;
+};
+
+// Discovery: "payload", for the whole robot: an undeclared mass m at c (tool frame) loads every joint,
+// tau = -J_c^T (m g), linear in m and in m c since J_c = J_o - [R c]x J_w; four blocks of load-torque
+// columns (d tau / d(m, m c_x, m c_y, m c_z) at the commanded pose), moving the joints through their
+// compliances. Written as one payload with c = (m c) / m.
+class PayloadDiscovery : public DiscoveryFamily {
+public:
+  std::string name() const override { return "payload"; }
+  void offer(const DiscoveryData& data, int joint, std::vector<DiscoveryCandidate>& candidates) const override;
+  std::unique_ptr<Effect> makeEffect(const DiscoveryData& data, const std::vector<FittedCandidate>& accepted) const override;
+  // The model's payload (every accepted payload candidate adds to it): m and c = (m c) / m, with the
+  // first-order sigma of the ratio (the covariance of m and m c left out).
+  std::vector<NamedEstimate> describe(const FittedCandidate& fitted, const JointErrorModel& model) const override;
 };
 
 }  // namespace jointcomp

@@ -5,6 +5,7 @@
 #include <nlohmann/json.hpp>
 
 #include "model/common/errors.hpp"
+#include "model/effects/joint_error_model.hpp"
 #include "model/common/json_fields.hpp"
 
 namespace jointcomp {
@@ -85,6 +86,40 @@ nlohmann::json ThermalDriftEffect::toJson() const {
                          {"reference_time_s", t0_s_}};
   if (!estimate_note.empty()) json["estimate"] = estimate_note;
   return json;
+}
+
+void ThermalDriftDiscovery::offer(const DiscoveryData& data, int joint, std::vector<DiscoveryCandidate>& candidates) const {
+  if (joint < 0) return;
+  DiscoveryCandidate candidate;
+  candidate.type = name();
+  candidate.joint = joint;
+  candidate.releases = {CalibrationParameter::Offset};
+  if (data.have_temperature) {
+    candidate.part = "temperature";
+    candidate.detail = " (temperature)";
+    candidate.columns = featureColumn(data, [&](int i) { return data.temperature[i] - data.temperature0; });
+    candidates.push_back(candidate);
+  }
+  candidate.part = "time";
+  candidate.detail = " (time)";
+  candidate.columns = featureColumn(data, [&](int i) { return data.time[i] - data.time0; });
+  candidates.push_back(std::move(candidate));
+}
+
+std::unique_ptr<Effect> ThermalDriftDiscovery::makeEffect(const DiscoveryData& data,
+                                                          const std::vector<FittedCandidate>& accepted) const {
+  const std::size_t n = static_cast<std::size_t>(data.robot->dof());
+  std::vector<double> thermal(n, 0.0), drift(n, 0.0);
+  for (const FittedCandidate& a : accepted) {
+    (a.candidate->part == "time" ? drift : thermal)[static_cast<std::size_t>(a.candidate->joint)] += a.theta[0];
+  }
+  return std::make_unique<ThermalDriftEffect>(*data.robot, thermal, data.temperature0, drift, data.time0);
+}
+
+std::vector<NamedEstimate> ThermalDriftDiscovery::describe(const FittedCandidate& fitted, const JointErrorModel& model) const {
+  const std::string& joint = model.robot().joints[static_cast<std::size_t>(fitted.candidate->joint)].name;
+  const char* suffix = fitted.candidate->part == "time" ? ".drift_rad_per_s" : ".thermal_rad_per_degc";
+  return {{joint + suffix, fitted.theta[0], fitted.sigma[0]}};
 }
 
 }  // namespace jointcomp

@@ -5,6 +5,7 @@
 //    "drift_rad_per_s": [n], "reference_time_s": t0}
 #pragma once
 
+#include "model/effects/discovery_family.hpp"
 #include "model/effects/effect.hpp"
 #include "model/effects/gear_train.hpp"
 
@@ -38,6 +39,18 @@ private:
   std::vector<double> drift_;        // rad / s
   double t0_degc_;
   double t0_s_;
+};
+
+// Discovery: "thermal", per joint a temperature drift (when every row has a temperature) and a time
+// drift, each with the joint's offset: a drift is known up to the zero it drifts from, and the reference
+// temperature or time of the column is only the rows' mean or the campaign's start, so the two variants
+// compete on the shape of the drift alone.
+class ThermalDriftDiscovery : public DiscoveryFamily {
+public:
+  std::string name() const override { return "thermal"; }
+  void offer(const DiscoveryData& data, int joint, std::vector<DiscoveryCandidate>& candidates) const override;
+  std::unique_ptr<Effect> makeEffect(const DiscoveryData& data, const std::vector<FittedCandidate>& accepted) const override;
+  std::vector<NamedEstimate> describe(const FittedCandidate& fitted, const JointErrorModel& model) const override;
 };
 
 }  // namespace jointcomp

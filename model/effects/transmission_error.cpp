@@ -1,10 +1,12 @@
 #include "model/effects/transmission_error.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 #include <nlohmann/json.hpp>
 
 #include "model/common/errors.hpp"
+#include "model/effects/joint_error_model.hpp"
 #include "model/common/json_fields.hpp"
 
 namespace jointcomp {
@@ -131,6 +133,77 @@ nlohmann::json TransmissionErrorEffect::toJson() const {
   nlohmann::json json = {{"type", kType}, {"harmonics", list}};
   if (!estimate_note.empty()) json["estimate"] = estimate_note;
   return json;
+}
+
+void HarmonicDiscovery::offer(const DiscoveryData& data, int joint, std::vector<DiscoveryCandidate>& candidates) const {
+  if (joint < 0) return;
+  const GearTrain& gears = *data.gears;
+  const int n = data.robot->dof();
+  const int rows = data.rows();
+  std::vector<double> frequencies;  // cycles per joint revolution already offered
+  std::vector<double> ratios;       // distinct parts only: the angle of a part is motor_j / ratio
+  const int stages = gears.stageCount(joint);
+  for (int s = 1; s <= stages + 1; ++s) {
+    // Ratio of the part's angle to the joint angle, from a unit joint move.
+    JointVector unit = JointVector::Zero(n), m(n);
+    unit[joint] = 1.0;
+    gears.motorAngles(unit, m);
+    const double ratio = gears.stageInputAngle(joint, s, m);
+    bool seen = false;
+    for (double r : ratios) seen = seen || std::abs(r - ratio) <= 1e-9 * std::max(1.0, std::abs(r));
+    if (seen) continue;
+    ratios.push_back(ratio);
+    const std::string part = s == 1 ? "motor" : s == stages + 1 ? "output" : "stage_" + std::to_string(s);
+    for (int order = 1; order <= data.max_harmonic_order; ++order) {
+      const double frequency = std::abs(ratio) * order;
+      bool duplicate = false;
+      for (double fr : frequencies) duplicate = duplicate || std::abs(fr - frequency) <= 1e-9 * std::max(1.0, fr);
+      if (duplicate) continue;
+      frequencies.push_back(frequency);
+      DiscoveryCandidate candidate;
+      candidate.type = name();
+      candidate.joint = joint;
+      candidate.stage = s;
+      candidate.part = part;
+      candidate.cycles = order;
+      candidate.detail = " " + part + " order " + std::to_string(order);
+      candidate.columns.resize(rows, 2);
+      for (int i = 0; i < rows; ++i) {
+        const double x = order * gears.stageInputAngle(joint, s, data.motor[i]);
+        candidate.columns(i, 0) = std::sin(x);
+        candidate.columns(i, 1) = std::cos(x);
+      }
+      candidates.push_back(std::move(candidate));
+    }
+  }
+}
+
+std::unique_ptr<Effect> HarmonicDiscovery::makeEffect(const DiscoveryData& data,
+                                                      const std::vector<FittedCandidate>& accepted) const {
+  std::vector<Harmonic> harmonics;
+  for (const FittedCandidate& a : accepted) {
+    Harmonic h;
+    h.joint = a.candidate->joint;
+    h.stage = a.candidate->stage;
+    h.cycles_per_revolution = a.candidate->cycles;
+    // a sin x + b cos x = A sin(x + phi), A cos phi = a, A sin phi = b.
+    h.amplitude_rad = std::hypot(a.theta[0], a.theta[1]);
+    h.phase_rad = std::atan2(a.theta[1], a.theta[0]);
+    harmonics.push_back(h);
+  }
+  return std::make_unique<TransmissionErrorEffect>(*data.robot, *data.gears, harmonics);
+}
+
+std::vector<NamedEstimate> HarmonicDiscovery::describe(const FittedCandidate& fitted, const JointErrorModel& model) const {
+  const DiscoveryCandidate& c = *fitted.candidate;
+  const Eigen::VectorXd& a = fitted.theta;
+  const Eigen::VectorXd& s = fitted.sigma;
+  const double amp = std::hypot(a[0], a[1]);
+  const double amp_sigma = amp > 0.0 ? std::hypot(a[0] * s[0], a[1] * s[1]) / amp : s[0];
+  const std::string stem = model.robot().joints[static_cast<std::size_t>(c.joint)].name + "." + c.part + ".harmonic_" +
+                           std::to_string(static_cast<int>(c.cycles));
+  constexpr double kPi = 3.14159265358979323846;
+  return {{stem + ".amplitude_rad", amp, amp_sigma}, {stem + ".phase_rad", std::atan2(a[1], a[0]), amp > 0.0 ? amp_sigma / amp : kPi}};
 }
 
 }  // namespace jointcomp

@@ -5,6 +5,7 @@
 // The harmonic-drive signature of the paper is 2 cycles per input revolution of the second stage.
 #pragma once
 
+#include "model/effects/discovery_family.hpp"
 #include "model/effects/effect.hpp"
 #include "model/effects/gear_train.hpp"
 
@@ -43,6 +44,18 @@ private:
   std::vector<std::string> joint_names_;
   GearTrain gears_;
   std::vector<Harmonic> harmonics_;
+};
+
+// Discovery: "harmonic", per joint a sine and a cosine column, a sin(k x) + b cos(k x), x the angle of
+// the motor, of each stage's input or of the output (distinct parts only), k = 1 .. max_harmonic_order; a
+// part's order at the frequency of an earlier part's order is the same column and is not offered twice.
+// Written as the harmonics (amplitude, phase) of one transmission_error effect.
+class HarmonicDiscovery : public DiscoveryFamily {
+public:
+  std::string name() const override { return "harmonic"; }
+  void offer(const DiscoveryData& data, int joint, std::vector<DiscoveryCandidate>& candidates) const override;
+  std::unique_ptr<Effect> makeEffect(const DiscoveryData& data, const std::vector<FittedCandidate>& accepted) const override;
+  std::vector<NamedEstimate> describe(const FittedCandidate& fitted, const JointErrorModel& model) const override;
 };
 
 }  // namespace jointcomp

@@ -7,276 +7,131 @@
 #include <set>
 
 #include "model/common/errors.hpp"
-#include "model/effects/backlash.hpp"
-#include "model/effects/compliance.hpp"
-#include "model/effects/hysteresis.hpp"
-#include "model/effects/joint_offset.hpp"
-#include "model/effects/nonlinear_compliance.hpp"
-#include "model/effects/payload.hpp"
-#include "model/effects/thermal_drift.hpp"
-#include "model/effects/transmission_error.hpp"
 #include "model/compensation/metrics.hpp"
+#include "model/effects/registry.hpp"
 #include "model/robot/kinematics.hpp"
 
 namespace jointcomp {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-
-struct Candidate {
-  std::string type;
-  int joint = 0;
-  int stage = 0;
-  std::string part;
-  double cycles = 0.0;
-  // Layout indices (offset, compliance, geometric) the candidate releases; with feature columns too
-  // (thermal), those come first.
-  std::vector<int> geometric;
-  int feature = -1;            // first feature column (effect candidates)
-  int features = 0;
-  // false: feature k is one column, the error of `joint` per unit parameter. true (payload): feature k is
-  // a block of dof columns, the load torque of every joint per unit parameter, which enters through the
-  // current compliances (dq_j = -compliance_j * tau_j).
-  bool through_compliance = false;
-  std::string label() const {
-    if (through_compliance) return type + " (tool)";
-    std::string s = type + " joint " + std::to_string(joint + 1);
-    if (type == "harmonic") s += " " + part + " order " + std::to_string(static_cast<int>(cycles));
-    if (type == "thermal") s += " (" + part + ")";
-    return s;
-  }
-};
-
+// An accepted candidate: its index among the offered ones, its coefficients and their sigmas.
 struct Active {
-  Candidate candidate;
+  int candidate = 0;
   Eigen::VectorXd theta;
   Eigen::VectorXd sigma;
 };
+
+const EffectRegistry& registryOf(const DiscoveryOptions& options) {
+  return options.registry ? *options.registry : EffectRegistry::builtin();
+}
 
 bool wanted(const DiscoveryOptions& options, const std::string& type) {
   return options.types.empty() || std::find(options.types.begin(), options.types.end(), type) != options.types.end();
 }
 
-// Feature values of every effect candidate for every used row (rows x columns).
-struct Features {
-  Eigen::MatrixXd values;
-  std::vector<Candidate> candidates;
-  double t0 = 0.0, temperature0 = 20.0;
-};
-
-Features buildFeatures(const JointErrorModel& prior, const MeasurementCampaign& campaign, const CalibrationData& data,
-                       const DiscoveryOptions& options) {
-  const Robot& robot = prior.robot();
-  const GearTrain& gears = prior.gears();
-  const int n = robot.dof();
+// The used rows as the families see them: commands, motor angles, the direction of approach from the
+// command sequence (the previous campaign row, used or not), load torques, times and temperatures.
+DiscoveryData discoveryData(const JointErrorModel& prior, const MeasurementCampaign& campaign, const CalibrationData& data,
+                            const DiscoveryOptions& options) {
+  const int n = prior.robot().dof();
   const int rows = static_cast<int>(data.size());
-  Features f;
-  GeometricParameterLayout layout(n);
-  // Temperature present?
+  DiscoveryData d;
+  d.robot = &prior.robot();
+  d.gears = &prior.gears();
+  d.command = data.command;
+  d.load_torque = data.load_torque;
+  d.torque_known = data.torque_known;
+  d.velocity_scale = options.velocity_scale;
+  d.max_harmonic_order = options.max_harmonic_order;
   double tsum = 0.0;
   int tcount = 0;
   for (int i = 0; i < rows; ++i) {
     const std::size_t k = static_cast<std::size_t>(data.row[i]);
-    if (k < campaign.temperature.size() && std::isfinite(campaign.temperature[k])) {
-      tsum += campaign.temperature[k];
+    const double temperature = k < campaign.temperature.size() ? campaign.temperature[k] : std::numeric_limits<double>::quiet_NaN();
+    d.temperature.push_back(temperature);
+    d.time.push_back(campaign.time[k]);
+    if (std::isfinite(temperature)) {
+      tsum += temperature;
       ++tcount;
     }
-  }
-  const bool have_temperature = tcount == rows && rows > 0;
-  f.temperature0 = have_temperature ? tsum / tcount : 20.0;
-  f.t0 = campaign.time.empty() ? 0.0 : campaign.time.front();
-
-  std::vector<std::vector<double>> columns;
-  auto addColumn = [&](std::vector<double> c) {
-    columns.push_back(std::move(c));
-    return static_cast<int>(columns.size()) - 1;
-  };
-  std::vector<JointVector> motor(static_cast<std::size_t>(rows));
-  std::vector<JointVector> velocity(static_cast<std::size_t>(rows));
-  for (int i = 0; i < rows; ++i) {
-    gears.motorAngles(data.command[i], motor[i]);
-    const std::size_t k = static_cast<std::size_t>(data.row[i]);
-    velocity[i] = JointVector::Zero(n);
+    JointVector motor;
+    prior.gears().motorAngles(data.command[i], motor);
+    d.motor.push_back(motor);
+    JointVector velocity = JointVector::Zero(n);
     if (k > 0 && campaign.command[k - 1].allFinite()) {
       const double dt = campaign.time[k] > campaign.time[k - 1] ? campaign.time[k] - campaign.time[k - 1] : 1.0;
-      velocity[i] = (campaign.command[k] - campaign.command[k - 1]) / dt;
+      velocity = (campaign.command[k] - campaign.command[k - 1]) / dt;
+    }
+    d.velocity.push_back(velocity);
+  }
+  d.have_temperature = tcount == rows && rows > 0;
+  d.temperature0 = d.have_temperature ? tsum / tcount : 20.0;
+  d.time0 = campaign.time.empty() ? 0.0 : campaign.time.front();
+  return d;
+}
+
+// Every candidate the wanted families offer: for each joint every family in the registry's order, then
+// each family once for the whole robot. With each, its family and the calibration parameters it frees
+// (indices of GeometricParameterLayout).
+struct Features {
+  std::vector<DiscoveryCandidate> candidates;
+  std::vector<const DiscoveryFamily*> family;
+  std::vector<std::vector<int>> releases;
+};
+
+std::vector<int> layoutIndices(const DiscoveryCandidate& candidate, const GeometricParameterLayout& layout) {
+  std::vector<int> indices;
+  for (CalibrationParameter parameter : candidate.releases) {
+    if (parameter == CalibrationParameter::Offset) indices.push_back(layout.offset(candidate.joint));
+    if (parameter == CalibrationParameter::Compliance) indices.push_back(layout.compliance(candidate.joint));
+    if (parameter == CalibrationParameter::Placement) {
+      for (int k = 0; k < 6; ++k) indices.push_back(layout.placement(candidate.joint, k));
     }
   }
-  for (int j = 0; j < n; ++j) {
-    if (wanted(options, "offset")) f.candidates.push_back({"offset", j, 0, "", 0.0, {layout.offset(j)}, -1, 0});
-    if (wanted(options, "compliance") && data.torque_known) {
-      f.candidates.push_back({"compliance", j, 0, "", 0.0, {layout.compliance(j)}, -1, 0});
-    }
-    if (wanted(options, "geometric")) {
-      Candidate c{"geometric", j, 0, "", 0.0, {}, -1, 0};
-      for (int k = 0; k < 6; ++k) c.geometric.push_back(layout.placement(j, k));
-      f.candidates.push_back(c);
-    }
-    if (wanted(options, "nonlinear_compliance") && data.torque_known) {
-      std::vector<double> c(static_cast<std::size_t>(rows));
-      for (int i = 0; i < rows; ++i) c[i] = NonlinearComplianceEffect::feature(data.load_torque[i][j]);
-      f.candidates.push_back({"nonlinear_compliance", j, 0, "", 0.0, {}, addColumn(std::move(c)), 1});
-    }
-    if (wanted(options, "backlash")) {
-      std::vector<double> c(static_cast<std::size_t>(rows));
-      for (int i = 0; i < rows; ++i) c[i] = BacklashEffect::feature(velocity[i][j], options.velocity_scale);
-      f.candidates.push_back({"backlash", j, 0, "", 0.0, {}, addColumn(std::move(c)), 1});
-    }
-    if (wanted(options, "hysteresis") && data.torque_known) {
-      std::vector<double> c(static_cast<std::size_t>(rows));
-      for (int i = 0; i < rows; ++i) c[i] = HysteresisEffect::feature(velocity[i][j], data.load_torque[i][j], options.velocity_scale);
-      f.candidates.push_back({"hysteresis", j, 0, "", 0.0, {}, addColumn(std::move(c)), 1});
-    }
-    if (wanted(options, "thermal")) {
-      // With the joint's offset (when it is not free yet): a drift is known up to the zero it drifts
-      // from, and the reference temperature or time of the feature is only the campaign's mean or start,
-      // so the two variants compete on the shape of the drift alone.
-      if (have_temperature) {
-        std::vector<double> c(static_cast<std::size_t>(rows));
-        for (int i = 0; i < rows; ++i) c[i] = campaign.temperature[static_cast<std::size_t>(data.row[i])] - f.temperature0;
-        f.candidates.push_back({"thermal", j, 0, "temperature", 0.0, {layout.offset(j)}, addColumn(std::move(c)), 1});
-      }
-      std::vector<double> c(static_cast<std::size_t>(rows));
-      for (int i = 0; i < rows; ++i) c[i] = campaign.time[static_cast<std::size_t>(data.row[i])] - f.t0;
-      f.candidates.push_back({"thermal", j, 0, "time", 0.0, {layout.offset(j)}, addColumn(std::move(c)), 1});
-    }
-    if (wanted(options, "harmonic")) {
-      std::vector<double> frequencies;  // cycles per joint revolution already offered
-      std::vector<double> ratios;  // distinct parts only: the angle of a part is motor_j / ratio
-      const int stages = gears.stageCount(j);
-      for (int s = 1; s <= stages + 1; ++s) {
-        // Ratio of the part's angle to the joint angle, from a unit joint move.
-        JointVector unit = JointVector::Zero(n), m(n);
-        unit[j] = 1.0;
-        gears.motorAngles(unit, m);
-        const double ratio = gears.stageInputAngle(j, s, m);
-        bool seen = false;
-        for (double r : ratios) seen = seen || std::abs(r - ratio) <= 1e-9 * std::max(1.0, std::abs(r));
-        if (seen) continue;
-        ratios.push_back(ratio);
-        const std::string part = s == 1 ? "motor" : s == stages + 1 ? "output" : "stage_" + std::to_string(s);
-        for (int order = 1; order <= options.max_harmonic_order; ++order) {
-          // A part's order k at the frequency of an earlier part's order is the same column: skip it.
-          const double frequency = std::abs(ratio) * order;
-          bool duplicate = false;
-          for (double fr : frequencies) duplicate = duplicate || std::abs(fr - frequency) <= 1e-9 * std::max(1.0, fr);
-          if (duplicate) continue;
-          frequencies.push_back(frequency);
-          std::vector<double> cs(static_cast<std::size_t>(rows)), cc(static_cast<std::size_t>(rows));
-          for (int i = 0; i < rows; ++i) {
-            const double x = order * gears.stageInputAngle(j, s, motor[i]);
-            cs[i] = std::sin(x);
-            cc[i] = std::cos(x);
-          }
-          const int first = addColumn(std::move(cs));
-          addColumn(std::move(cc));
-          f.candidates.push_back({"harmonic", j, s, part, static_cast<double>(order), {}, first, 2});
+  return indices;
+}
+
+Features offerCandidates(const DiscoveryData& data, const DiscoveryOptions& options) {
+  Features f;
+  std::vector<const DiscoveryFamily*> families;
+  for (const auto& family : registryOf(options).discoveryFamilies()) {
+    if (wanted(options, family->name())) families.push_back(family.get());
+  }
+  const int n = data.robot->dof();
+  const GeometricParameterLayout layout(n);
+  for (int joint = 0; joint <= n; ++joint) {
+    for (const DiscoveryFamily* family : families) {
+      const std::size_t first = f.candidates.size();
+      family->offer(data, joint < n ? joint : -1, f.candidates);
+      for (std::size_t c = first; c < f.candidates.size(); ++c) {
+        const DiscoveryCandidate& candidate = f.candidates[c];
+        if (candidate.columns.rows() != data.rows() && candidate.columns.cols() > 0) {
+          throw InvalidArgument("discover: family '" + family->name() + "' offered " +
+                                std::to_string(candidate.columns.rows()) + " rows for " + std::to_string(data.rows()));
         }
+        f.family.push_back(family);
+        f.releases.push_back(candidate.releases.empty() ? std::vector<int>{} : layoutIndices(candidate, layout));
       }
     }
-  }
-  if (wanted(options, "payload") && data.torque_known) {
-    // An undeclared mass m at c (tool frame): tau = -J_c^T (m g), linear in m and in m c, since
-    // J_c = J_o - [R c]x J_w. Feature block k: d tau / d(m, m c_x, m c_y, m c_z) at the commanded pose.
-    RobotWorkspace ws(robot);
-    std::vector<std::vector<double>> block(static_cast<std::size_t>(4 * n), std::vector<double>(static_cast<std::size_t>(rows)));
-    JointVector at_origin(n), at_unit(n);
-    for (int i = 0; i < rows; ++i) {
-      forwardKinematics(robot, ws, data.command[i]);
-      at_origin.setZero();
-      PayloadEffect::addTorque(robot, ws, 1.0, Eigen::Vector3d::Zero(), at_origin);
-      for (int j = 0; j < n; ++j) block[static_cast<std::size_t>(j)][static_cast<std::size_t>(i)] = at_origin[j];
-      for (int k = 0; k < 3; ++k) {
-        at_unit.setZero();
-        PayloadEffect::addTorque(robot, ws, 1.0, Eigen::Vector3d::Unit(k), at_unit);
-        for (int j = 0; j < n; ++j) {
-          block[static_cast<std::size_t>((k + 1) * n + j)][static_cast<std::size_t>(i)] = at_unit[j] - at_origin[j];
-        }
-      }
-    }
-    int first = -1;
-    for (auto& c : block) {
-      const int index = addColumn(std::move(c));
-      if (first < 0) first = index;
-    }
-    Candidate c{"payload", -1, 0, "", 0.0, {}, first, 4};
-    c.through_compliance = true;
-    f.candidates.push_back(c);
-  }
-  f.values.resize(rows, static_cast<int>(columns.size()));
-  for (std::size_t c = 0; c < columns.size(); ++c) {
-    for (int i = 0; i < rows; ++i) f.values(i, static_cast<int>(c)) = columns[c][i];
   }
   return f;
 }
 
-// The model: prior plus the effects built from the active features.
+// The model: prior plus, family by family in the registry's order, the effect of its accepted candidates.
 JointErrorModel buildModel(const JointErrorModel& prior, const std::vector<Active>& active, const Features& f,
-                           const DiscoveryOptions& options) {
-  const Robot& robot = prior.robot();
-  const std::size_t n = static_cast<std::size_t>(robot.dof());
-  std::vector<double> backlash(n, 0.0), hysteresis(n, 0.0), cubic(n, 0.0), thermal(n, 0.0), drift(n, 0.0);
-  bool has_backlash = false, has_hysteresis = false, has_cubic = false, has_thermal = false, has_payload = false;
-  Eigen::Vector4d payload = Eigen::Vector4d::Zero();  // m, m c
-  std::vector<Harmonic> harmonics;
-  for (const Active& a : active) {
-    const std::string& t = a.candidate.type;
-    if (t == "payload") {
-      payload += a.theta.head<4>();
-      has_payload = true;
-      continue;
-    }
-    const std::size_t j = static_cast<std::size_t>(a.candidate.joint);
-    if (t == "backlash") { backlash[j] += a.theta[0]; has_backlash = true; }
-    else if (t == "hysteresis") { hysteresis[j] += a.theta[0]; has_hysteresis = true; }
-    else if (t == "nonlinear_compliance") { cubic[j] += a.theta[0]; has_cubic = true; }
-    else if (t == "thermal") {
-      (a.candidate.part == "time" ? drift : thermal)[j] += a.theta[0];
-      has_thermal = true;
-    } else if (t == "harmonic") {
-      Harmonic h;
-      h.joint = a.candidate.joint;
-      h.stage = a.candidate.stage;
-      h.cycles_per_revolution = a.candidate.cycles;
-      // a sin x + b cos x = A sin(x + phi), A cos phi = a, A sin phi = b.
-      h.amplitude_rad = std::hypot(a.theta[0], a.theta[1]);
-      h.phase_rad = std::atan2(a.theta[1], a.theta[0]);
-      harmonics.push_back(h);
-    }
-  }
+                           const DiscoveryData& data, const DiscoveryOptions& options) {
   JointErrorModel model = prior;
-  const std::string note = "found by jointcomp discover";
-  if (has_backlash) {
-    auto e = std::make_unique<BacklashEffect>(robot, backlash, options.velocity_scale);
-    e->estimate_note = note;
-    model.addEffect(std::move(e));
-  }
-  if (has_hysteresis) {
-    auto e = std::make_unique<HysteresisEffect>(robot, hysteresis, options.velocity_scale);
-    e->estimate_note = note;
-    model.addEffect(std::move(e));
-  }
-  if (has_payload) {
-    // c = (m c) / m; a mass too small to carry a centre is put at the tool origin.
-    const Eigen::Vector3d com = std::abs(payload[0]) > 1e-9 ? Eigen::Vector3d(payload.tail<3>() / payload[0]) : Eigen::Vector3d::Zero();
-    auto e = std::make_unique<PayloadEffect>(robot, payload[0], com);
-    e->estimate_note = note;
-    model.addEffect(std::move(e));
-  }
-  if (has_cubic) {
-    auto e = std::make_unique<NonlinearComplianceEffect>(robot, cubic);
-    e->estimate_note = note;
-    model.addEffect(std::move(e));
-  }
-  if (has_thermal) {
-    auto e = std::make_unique<ThermalDriftEffect>(robot, thermal, f.temperature0, drift, f.t0);
-    e->estimate_note = note;
-    model.addEffect(std::move(e));
-  }
-  if (!harmonics.empty()) {
-    auto e = std::make_unique<TransmissionErrorEffect>(robot, prior.gears(), harmonics);
-    e->estimate_note = note;
-    model.addEffect(std::move(e));
+  for (const auto& family : registryOf(options).discoveryFamilies()) {
+    std::vector<FittedCandidate> accepted;
+    for (const Active& a : active) {
+      if (f.family[static_cast<std::size_t>(a.candidate)] != family.get()) continue;
+      accepted.push_back({&f.candidates[static_cast<std::size_t>(a.candidate)], a.theta, a.sigma});
+    }
+    if (accepted.empty()) continue;
+    std::unique_ptr<Effect> effect = family->makeEffect(data, accepted);
+    if (!effect) continue;
+    effect->estimate_note = "found by jointcomp discover";
+    model.addEffect(std::move(effect));
   }
   return model;
 }
@@ -299,82 +154,10 @@ struct Linearised {
   std::vector<std::vector<double>> joint_residual;          // per joint, per row (pinv mapping)
 };
 
-Linearised linearise(const JointErrorModel& model, const MeasurementCampaign& campaign,
-                     const GeometricCalibrationResult& cal, const Features& f, const std::vector<Active>& active,
-                     const std::vector<bool>& offered, int folds, bool map_joints) {
-  const Robot& robot = model.robot();
-  const int n = robot.dof();
-  GeometricParameterLayout layout(n);
-  const CalibrationData data = prepareCalibrationData(model, campaign);
-  const int rows = static_cast<int>(data.size());
-  Linearised lin;
-  std::set<int> free(cal.free.begin(), cal.free.end());
-  // Column plan.
-  // kind 0: layout column; 1: feature column times dm/dq_j; 2: block of dof feature columns (load torques)
-  // times -compliance_j dm/dq_j, summed over the joints.
-  struct Source { int kind; int index; int joint; };
-  std::vector<Source> plan;
-  for (int idx : cal.free) { lin.base_columns.push_back(static_cast<int>(plan.size())); plan.push_back({0, idx, 0}); }
-  for (const Active& a : active) {
-    std::vector<int> cols;
-    for (int c = 0; c < a.candidate.features; ++c) {
-      cols.push_back(static_cast<int>(plan.size()));
-      lin.active_columns.push_back(static_cast<int>(plan.size()));
-      if (a.candidate.through_compliance) plan.push_back({2, a.candidate.feature + c * n, -1});
-      else plan.push_back({1, a.candidate.feature + c, a.candidate.joint});
-    }
-    lin.active_of.push_back(cols);
-  }
-  lin.candidate_columns.resize(f.candidates.size());
-  for (std::size_t c = 0; c < f.candidates.size(); ++c) {
-    if (!offered[c]) continue;
-    const Candidate& cand = f.candidates[c];
-    for (int k = 0; k < cand.features; ++k) {
-      lin.candidate_columns[c].push_back(static_cast<int>(plan.size()));
-      if (cand.through_compliance) plan.push_back({2, cand.feature + k * n, -1});
-      else plan.push_back({1, cand.feature + k, cand.joint});
-    }
-    for (int idx : cand.geometric) {
-      if (free.count(idx)) continue;
-      lin.candidate_columns[c].push_back(static_cast<int>(plan.size()));
-      plan.push_back({0, idx, 0});
-    }
-  }
-  const int cols = static_cast<int>(plan.size());
-  lin.r.resize(3 * rows);
-  lin.X.resize(3 * rows, cols);
-  lin.fold.resize(static_cast<std::size_t>(rows));
-  if (map_joints) lin.joint_residual.assign(static_cast<std::size_t>(n), std::vector<double>(static_cast<std::size_t>(rows)));
-  Eigen::MatrixXd J;
-  for (int i = 0; i < rows; ++i) {
-    const Eigen::Vector3d m =
-        predictMeasurement(robot, cal.estimate, data.command[i], data.load_torque[i], data.other_error[i], &J);
-    const double w = std::sqrt(i < static_cast<int>(cal.weight.size()) ? cal.weight[i] : 1.0);
-    lin.r.segment<3>(3 * i) = w * (m - data.measured[i]);
-    for (int c = 0; c < cols; ++c) {
-      const Source& s = plan[static_cast<std::size_t>(c)];
-      if (s.kind == 0) lin.X.block<3, 1>(3 * i, c) = w * J.col(s.index);
-      else if (s.kind == 1) lin.X.block<3, 1>(3 * i, c) = w * f.values(i, s.index) * J.col(layout.offset(s.joint));
-      else {
-        Eigen::Vector3d column = Eigen::Vector3d::Zero();
-        for (int j = 0; j < n; ++j) column -= cal.estimate.compliance[j] * f.values(i, s.index + j) * J.col(layout.offset(j));
-        lin.X.block<3, 1>(3 * i, c) = w * column;
-      }
-    }
-    lin.fold[static_cast<std::size_t>(i)] = std::min(folds - 1, static_cast<int>(static_cast<long>(i) * folds / rows));
-    if (map_joints) {
-      Eigen::MatrixXd Jq(3, n);
-      for (int j = 0; j < n; ++j) Jq.col(j) = J.col(layout.offset(j));
-      const Eigen::VectorXd dq = Jq.completeOrthogonalDecomposition().solve(-(m - data.measured[i]));
-      for (int j = 0; j < n; ++j) lin.joint_residual[static_cast<std::size_t>(j)][static_cast<std::size_t>(i)] = dq[j];
-    }
-  }
-  lin.scale.resize(cols);
-  for (int c = 0; c < cols; ++c) {
-    const double norm = lin.X.col(c).norm();
-    lin.scale[c] = norm > 0.0 ? norm : 1.0;
-    lin.X.col(c) /= lin.scale[c];
-  }
+// The per-fold Gram matrices X_f^T X_f, X_f^T r_f and r_f^T r_f, and their totals, for the fast
+// leave-one-fold-out fits of fitColumns.
+void accumulateFolds(Linearised& lin, int folds, int rows) {
+  const int cols = static_cast<int>(lin.X.cols());
   lin.gram.assign(static_cast<std::size_t>(folds), Eigen::MatrixXd::Zero(cols, cols));
   lin.xr.assign(static_cast<std::size_t>(folds), Eigen::VectorXd::Zero(cols));
   lin.rr.assign(static_cast<std::size_t>(folds), 0.0);
@@ -397,6 +180,91 @@ Linearised linearise(const JointErrorModel& model, const MeasurementCampaign& ca
     lin.xr_total += lin.xr[fo];
     lin.rr_total += lin.rr[fo];
   }
+}
+
+Linearised linearise(const JointErrorModel& model, const MeasurementCampaign& campaign,
+                     const GeometricCalibrationResult& cal, const Features& f, const std::vector<Active>& active,
+                     const std::vector<bool>& offered, int folds, bool map_joints) {
+  const Robot& robot = model.robot();
+  const int n = robot.dof();
+  GeometricParameterLayout layout(n);
+  const CalibrationData data = prepareCalibrationData(model, campaign);
+  const int rows = static_cast<int>(data.size());
+  Linearised lin;
+  std::set<int> free(cal.free.begin(), cal.free.end());
+  // Column plan. kind 0: layout column; 1: a candidate's feature column times dm/dq_j; 2: a block of dof
+  // load-torque columns times -compliance_j dm/dq_j, summed over the joints.
+  struct Source {
+    int kind;
+    int index;   // layout index (kind 0) or candidate
+    int column;  // feature column (kind 1) or block (kind 2)
+    int joint;
+  };
+  std::vector<Source> plan;
+  auto planFeatures = [&](int c, std::vector<int>& columns, std::vector<int>* also) {
+    const DiscoveryCandidate& candidate = f.candidates[static_cast<std::size_t>(c)];
+    for (int k = 0; k < candidate.coefficients(n); ++k) {
+      columns.push_back(static_cast<int>(plan.size()));
+      if (also) also->push_back(static_cast<int>(plan.size()));
+      plan.push_back({candidate.through_compliance ? 2 : 1, c, k, candidate.joint});
+    }
+  };
+  for (int idx : cal.free) { lin.base_columns.push_back(static_cast<int>(plan.size())); plan.push_back({0, idx, 0, 0}); }
+  for (const Active& a : active) {
+    std::vector<int> cols;
+    planFeatures(a.candidate, cols, &lin.active_columns);
+    lin.active_of.push_back(cols);
+  }
+  lin.candidate_columns.resize(f.candidates.size());
+  for (std::size_t c = 0; c < f.candidates.size(); ++c) {
+    if (!offered[c]) continue;
+    planFeatures(static_cast<int>(c), lin.candidate_columns[c], nullptr);
+    for (int idx : f.releases[c]) {
+      if (free.count(idx)) continue;
+      lin.candidate_columns[c].push_back(static_cast<int>(plan.size()));
+      plan.push_back({0, idx, 0, 0});
+    }
+  }
+  const int cols = static_cast<int>(plan.size());
+  lin.r.resize(3 * rows);
+  lin.X.resize(3 * rows, cols);
+  lin.fold.resize(static_cast<std::size_t>(rows));
+  if (map_joints) lin.joint_residual.assign(static_cast<std::size_t>(n), std::vector<double>(static_cast<std::size_t>(rows)));
+  Eigen::MatrixXd J;
+  for (int i = 0; i < rows; ++i) {
+    const Eigen::Vector3d m =
+        predictMeasurement(robot, cal.estimate, data.command[i], data.load_torque[i], data.other_error[i], &J);
+    const double w = std::sqrt(i < static_cast<int>(cal.weight.size()) ? cal.weight[i] : 1.0);
+    lin.r.segment<3>(3 * i) = w * (m - data.measured[i]);
+    for (int c = 0; c < cols; ++c) {
+      const Source& s = plan[static_cast<std::size_t>(c)];
+      if (s.kind == 0) {
+        lin.X.block<3, 1>(3 * i, c) = w * J.col(s.index);
+        continue;
+      }
+      const Eigen::MatrixXd& values = f.candidates[static_cast<std::size_t>(s.index)].columns;
+      if (s.kind == 1) lin.X.block<3, 1>(3 * i, c) = w * values(i, s.column) * J.col(layout.offset(s.joint));
+      else {
+        Eigen::Vector3d column = Eigen::Vector3d::Zero();
+        for (int j = 0; j < n; ++j) column -= cal.estimate.compliance[j] * values(i, s.column * n + j) * J.col(layout.offset(j));
+        lin.X.block<3, 1>(3 * i, c) = w * column;
+      }
+    }
+    lin.fold[static_cast<std::size_t>(i)] = std::min(folds - 1, static_cast<int>(static_cast<long>(i) * folds / rows));
+    if (map_joints) {
+      Eigen::MatrixXd Jq(3, n);
+      for (int j = 0; j < n; ++j) Jq.col(j) = J.col(layout.offset(j));
+      const Eigen::VectorXd dq = Jq.completeOrthogonalDecomposition().solve(-(m - data.measured[i]));
+      for (int j = 0; j < n; ++j) lin.joint_residual[static_cast<std::size_t>(j)][static_cast<std::size_t>(i)] = dq[j];
+    }
+  }
+  lin.scale.resize(cols);
+  for (int c = 0; c < cols; ++c) {
+    const double norm = lin.X.col(c).norm();
+    lin.scale[c] = norm > 0.0 ? norm : 1.0;
+    lin.X.col(c) /= lin.scale[c];
+  }
+  accumulateFolds(lin, folds, rows);
   return lin;
 }
 
@@ -506,9 +374,7 @@ bool isPathCampaign(const MeasurementCampaign& campaign) {
 }
 
 const std::vector<std::string>& discoveryEffectTypes() {
-  static const std::vector<std::string> types = {"offset",    "compliance", "nonlinear_compliance", "harmonic",
-                                                 "backlash",  "hysteresis", "thermal",              "geometric",
-                                                 "payload"};
+  static const std::vector<std::string> types = EffectRegistry::builtin().discoveryVocabulary();
   return types;
 }
 
@@ -539,103 +405,114 @@ MeasurementCampaign concatenateCampaigns(const std::vector<MeasurementCampaign>&
   return all;
 }
 
-DiscoveryResult discoverEffects(const JointErrorModel& prior, const std::vector<MeasurementCampaign>& fitted,
-                                const std::vector<MeasurementCampaign>& heldout, const DiscoveryOptions& options) {
-  if (options.folds < 2) throw InvalidArgument("discover: folds must be at least 2");
-  const MeasurementCampaign campaign = concatenateCampaigns(fitted);
-  const Robot& robot = prior.robot();
-  const int n = robot.dof();
-  const std::vector<std::string> names = geometricParameterNames(robot);
-  GeometricParameterLayout layout(n);
+namespace {
 
-  DiscoveryResult result(prior);
-  // Noise floor: 3-D RMS of the instrument noise.
-  if (options.noise_floor > 0.0) result.noise_floor = options.noise_floor;
-  else {
-    double sigma = campaign.position_noise;
-    for (const auto& h : heldout) sigma = std::max(sigma, h.position_noise);
-    result.noise_floor = std::sqrt(3.0) * sigma;
-  }
-
-  const CalibrationData data0 = prepareCalibrationData(prior, campaign);
-  const Features features = buildFeatures(prior, campaign, data0, options);
-  result.candidates = static_cast<int>(features.candidates.size());
-  std::vector<bool> offered(features.candidates.size(), true);
-  std::set<int> released;
-  if (!options.base_geometry) {
-    // The frame and target are the base.
-  } else {
-    for (std::size_t c = 0; c < features.candidates.size(); ++c) {
-      if (features.candidates[c].features == 0) offered[c] = false;
+// One run of discovery: the fitted data, the candidates, and the model as it grows step by step.
+class DiscoveryRun {
+public:
+  DiscoveryRun(const JointErrorModel& prior, const std::vector<MeasurementCampaign>& fitted,
+               const std::vector<MeasurementCampaign>& heldout, const DiscoveryOptions& options)
+      : prior_(prior), fitted_(fitted), heldout_(heldout), options_(options), campaign_(concatenateCampaigns(fitted)),
+        names_(geometricParameterNames(prior.robot())), data_(discoveryData(prior, campaign_,
+                                                                             prepareCalibrationData(prior, campaign_), options)),
+        features_(offerCandidates(data_, options)), offered_(features_.candidates.size(), true), model_(prior),
+        result_(prior) {
+    if (options.base_geometry) {
+      // The textbook base frees the calibration's parameters from the start: only feature columns compete.
+      for (std::size_t c = 0; c < features_.candidates.size(); ++c) {
+        if (features_.candidates[c].columns.cols() == 0) offered_[c] = false;
+      }
     }
+    std::size_t first = 0;
+    for (const auto& c : fitted) {
+      first_row_.push_back(first);
+      first += c.size();
+      fitted_path_ = fitted_path_ || isPathCampaign(c);
+    }
+    first_row_.push_back(first);
   }
-  std::vector<Active> active;
 
-  GeometricCalibrationOptions cal_options = options.calibration;
-  auto calibrate = [&](const JointErrorModel& model) {
-    cal_options.fixed = fixedNames(names, released, options, n);
-    return calibrateGeometry(model, campaign, cal_options);
-  };
-  // Paths among the fitted campaigns: their rows in the concatenation.
-  std::vector<std::size_t> first_row{0};
-  bool fitted_path = false;
-  for (const auto& c : fitted) {
-    first_row.push_back(first_row.back() + c.size());
-    fitted_path = fitted_path || isPathCampaign(c);
+  DiscoveryResult run() {
+    result_.noise_floor = noiseFloor();
+    result_.candidates = static_cast<int>(features_.candidates.size());
+    cal_ = calibrate(model_);
+    lin_ = linearise(model_, campaign_, cal_, features_, active_, offered_, options_.folds, true);
+    result_.joint_residual_rms_initial = jointRms(lin_);
+    residuals_ = static_cast<int>(lin_.r.size());
+    current_ = lin_.base_columns;
+    base_fit_ = fitColumns(lin_, current_, false);
+    result_.initial = evaluate(base_fit_.cv);
+    state_ = result_.initial;
+    result_.stop_reason = "max_steps reached";
+    for (int step = 0; step < options_.max_steps; ++step) {
+      if (!takeStep()) break;
+    }
+    finish();
+    return std::move(result_);
   }
-  auto evaluate = [&](const JointErrorModel& model, const GeometricCalibrationResult& cal, double cv_sse,
-                      int residuals) {
+
+private:
+  struct Choice {
+    int index = -1;
+    Fit fit;
+    double dbic = 0.0;
+    int tried = 0;
+    std::string runner_up;
+  };
+
+  double noiseFloor() const {
+    if (options_.noise_floor > 0.0) return options_.noise_floor;
+    double sigma = campaign_.position_noise;
+    for (const auto& h : heldout_) sigma = std::max(sigma, h.position_noise);
+    return std::sqrt(3.0) * sigma;  // 3-D RMS of the instrument noise
+  }
+
+  GeometricCalibrationResult calibrate(const JointErrorModel& model) {
+    GeometricCalibrationOptions cal_options = options_.calibration;
+    cal_options.fixed = fixedNames(names_, released_, options_, prior_.robot().dof());
+    return calibrateGeometry(model, campaign_, cal_options);
+  }
+
+  // Errors on the fitted rows, on every held-out campaign (frame re-fitted) and the paths' Ra and Rz.
+  DiscoveryState evaluate(double cv_sse) const {
     DiscoveryState state;
-    state.fitted = cal.after;
-    if (fitted_path) {
+    state.fitted = cal_.after;
+    if (fitted_path_) {
       std::vector<int> rows;
-      const std::vector<double> z = zErrors(model, cal.estimate, campaign, rows);
-      for (std::size_t c = 0; c < fitted.size(); ++c) {
-        if (!isPathCampaign(fitted[c])) continue;
+      const std::vector<double> z = zErrors(model_, cal_.estimate, campaign_, rows);
+      for (std::size_t c = 0; c < fitted_.size(); ++c) {
+        if (!isPathCampaign(fitted_[c])) continue;
         std::vector<double> part;
         for (std::size_t i = 0; i < z.size(); ++i) {
           const std::size_t row = static_cast<std::size_t>(rows[i]);
-          if (row >= first_row[c] && row < first_row[c + 1]) part.push_back(z[i]);
+          if (row >= first_row_[c] && row < first_row_[c + 1]) part.push_back(z[i]);
         }
         state.paths.push_back(roughness(part, false, static_cast<int>(c)));
       }
     }
-    for (std::size_t k = 0; k < heldout.size(); ++k) {
-      const HoldoutEvaluation e = evaluateOnCampaign(model, cal.estimate, heldout[k], true, cal_options);
+    GeometricCalibrationOptions cal_options = options_.calibration;
+    cal_options.fixed = fixedNames(names_, released_, options_, prior_.robot().dof());
+    for (std::size_t k = 0; k < heldout_.size(); ++k) {
+      const HoldoutEvaluation e = evaluateOnCampaign(model_, cal_.estimate, heldout_[k], true, cal_options);
       state.heldout.push_back(e.statistics);
-      if (isPathCampaign(heldout[k])) {
+      if (isPathCampaign(heldout_[k])) {
         std::vector<int> rows;
-        state.paths.push_back(roughness(zErrors(model, e.parameters, heldout[k], rows), true, static_cast<int>(k)));
+        state.paths.push_back(roughness(zErrors(model_, e.parameters, heldout_[k], rows), true, static_cast<int>(k)));
       }
     }
-    state.cv_rms = std::sqrt(cv_sse / std::max(1, residuals));
+    state.cv_rms = std::sqrt(cv_sse / std::max(1, residuals_));
     return state;
-  };
+  }
 
-  JointErrorModel model = prior;
-  GeometricCalibrationResult cal = calibrate(model);
-  Linearised lin = linearise(model, campaign, cal, features, active, offered, options.folds, true);
-  result.joint_residual_rms_initial = jointRms(lin);
-  const int residuals = static_cast<int>(lin.r.size());
-  const double log_n = std::log(static_cast<double>(residuals));
-  std::vector<int> current = lin.base_columns;
-  Fit base_fit = fitColumns(lin, current, false);
-  result.initial = evaluate(model, cal, base_fit.cv, residuals);
-  DiscoveryState state = result.initial;
-  result.stop_reason = "max_steps reached";
-
-  for (int step = 0; step < options.max_steps; ++step) {
-    int tried = 0;
-    for (std::size_t c = 0; c < features.candidates.size(); ++c) tried += offered[c] && !lin.candidate_columns[c].empty();
-    if (tried == 0) {
-      result.stop_reason = "no candidate left";
-      break;
-    }
-    const double penalty_m = 2.0 * std::log(static_cast<double>(tried));
-    int best = -1;
-    Fit best_fit;
-    double best_dbic = 0.0;
-    std::string runner_up;
+  // The candidate to accept: it must lower the time-blocked CV error by min_cv_gain and the extended BIC;
+  // of those whose CV error is within a quarter of the required gain of the best one, the one with the
+  // fewest parameters (an offset rather than the joint's whole placement).
+  Choice choose() const {
+    Choice choice;
+    for (std::size_t c = 0; c < features_.candidates.size(); ++c) choice.tried += offered_[c] && !lin_.candidate_columns[c].empty();
+    if (choice.tried == 0) return choice;
+    const double log_n = std::log(static_cast<double>(residuals_));
+    const double penalty_m = 2.0 * std::log(static_cast<double>(choice.tried));
     double runner_cv = std::numeric_limits<double>::infinity();
     struct Passing {
       int index;
@@ -644,171 +521,194 @@ DiscoveryResult discoverEffects(const JointErrorModel& prior, const std::vector<
       int added;
     };
     std::vector<Passing> passing;
-    for (std::size_t c = 0; c < features.candidates.size(); ++c) {
-      if (!offered[c] || lin.candidate_columns[c].empty()) continue;
-      std::vector<int> s = current;
-      s.insert(s.end(), lin.candidate_columns[c].begin(), lin.candidate_columns[c].end());
-      Fit fit = fitColumns(lin, s, false);
-      const int added = fit.rank - base_fit.rank;
-      if (added <= 0 || fit.rss <= 0.0 || base_fit.rss <= 0.0) continue;
-      const double dbic = residuals * std::log(fit.rss / base_fit.rss) + added * log_n + penalty_m;
-      if (fit.cv < base_fit.cv * (1.0 - options.min_cv_gain) && dbic < 0.0) {
+    for (std::size_t c = 0; c < features_.candidates.size(); ++c) {
+      if (!offered_[c] || lin_.candidate_columns[c].empty()) continue;
+      std::vector<int> s = current_;
+      s.insert(s.end(), lin_.candidate_columns[c].begin(), lin_.candidate_columns[c].end());
+      Fit fit = fitColumns(lin_, s, false);
+      const int added = fit.rank - base_fit_.rank;
+      if (added <= 0 || fit.rss <= 0.0 || base_fit_.rss <= 0.0) continue;
+      const double dbic = residuals_ * std::log(fit.rss / base_fit_.rss) + added * log_n + penalty_m;
+      if (fit.cv < base_fit_.cv * (1.0 - options_.min_cv_gain) && dbic < 0.0) {
         passing.push_back({static_cast<int>(c), fit, dbic, added});
       } else if (fit.cv < runner_cv) {
         runner_cv = fit.cv;
-        runner_up = features.candidates[c].label();
+        choice.runner_up = features_.candidates[c].label();
       }
     }
-    // Parsimony: of the passing candidates whose CV error is within a quarter of the required gain of the
-    // best one, the one with the fewest parameters (an offset rather than the joint's whole placement).
     double best_cv = std::numeric_limits<double>::infinity();
     for (const Passing& p : passing) best_cv = std::min(best_cv, p.fit.cv);
-    const Passing* chosen_passing = nullptr;
+    const Passing* chosen = nullptr;
     for (const Passing& p : passing) {
-      if (p.fit.cv > best_cv * (1.0 + 0.25 * options.min_cv_gain)) continue;
-      if (!chosen_passing || p.added < chosen_passing->added ||
-          (p.added == chosen_passing->added && p.fit.cv < chosen_passing->fit.cv)) {
-        chosen_passing = &p;
+      if (p.fit.cv > best_cv * (1.0 + 0.25 * options_.min_cv_gain)) continue;
+      if (!chosen || p.added < chosen->added || (p.added == chosen->added && p.fit.cv < chosen->fit.cv)) chosen = &p;
+    }
+    if (!chosen) return choice;
+    choice.index = chosen->index;
+    choice.fit = chosen->fit;
+    choice.dbic = chosen->dbic;
+    for (const Passing& p : passing) {
+      if (&p != chosen && p.fit.cv < runner_cv) {
+        runner_cv = p.fit.cv;
+        choice.runner_up = features_.candidates[static_cast<std::size_t>(p.index)].label();
       }
     }
-    if (chosen_passing) {
-      best = chosen_passing->index;
-      best_fit = chosen_passing->fit;
-      best_dbic = chosen_passing->dbic;
-      for (const Passing& p : passing) {
-        if (&p != chosen_passing && p.fit.cv < runner_cv) {
-          runner_cv = p.fit.cv;
-          runner_up = features.candidates[static_cast<std::size_t>(p.index)].label();
-        }
+    return choice;
+  }
+
+  // Adds the step's solution for the active and the chosen candidate's coefficients (the freed geometry
+  // is refitted by the calibration).
+  void acceptCoefficients(const Choice& choice) {
+    const DiscoveryCandidate& chosen = features_.candidates[static_cast<std::size_t>(choice.index)];
+    const int coefficients = chosen.coefficients(prior_.robot().dof());
+    if (coefficients == 0) return;
+    std::vector<int> s = current_;
+    const std::vector<int>& added = lin_.candidate_columns[static_cast<std::size_t>(choice.index)];
+    s.insert(s.end(), added.begin(), added.end());
+    std::size_t pos = current_.size() - lin_.active_columns.size();
+    for (Active& a : active_) {
+      for (int k = 0; k < a.theta.size(); ++k, ++pos) a.theta[k] += choice.fit.d[static_cast<int>(pos)] / lin_.scale[s[pos]];
+    }
+    Active fresh{choice.index, Eigen::VectorXd::Zero(coefficients), Eigen::VectorXd::Zero(coefficients)};
+    for (int k = 0; k < coefficients; ++k, ++pos) fresh.theta[k] = choice.fit.d[static_cast<int>(pos)] / lin_.scale[s[pos]];
+    active_.push_back(fresh);
+  }
+
+  // Refits everything together: calibrates the base with the effects fixed, then a joint Gauss-Newton step
+  // of the effects' coefficients with the base; then the final model of the step and its uncertainties.
+  void refit() {
+    const std::vector<bool> none(features_.candidates.size(), false);
+    for (int it = 0; it < options_.refit_iterations; ++it) {
+      model_ = buildModel(prior_, active_, features_, data_, options_);
+      cal_ = calibrate(model_);
+      if (active_.empty()) break;
+      lin_ = linearise(model_, campaign_, cal_, features_, active_, none, options_.folds, false);
+      std::vector<int> s = lin_.base_columns;
+      s.insert(s.end(), lin_.active_columns.begin(), lin_.active_columns.end());
+      const Fit fit = fitColumns(lin_, s, false);
+      std::size_t pos = lin_.base_columns.size();
+      for (Active& a : active_) {
+        for (int k = 0; k < a.theta.size(); ++k, ++pos) a.theta[k] += fit.d[static_cast<int>(pos)] / lin_.scale[s[pos]];
       }
     }
-    if (best < 0) {
-      result.stop_reason = "no candidate lowers the cross-validated error and the BIC";
-      break;
+    model_ = buildModel(prior_, active_, features_, data_, options_);
+    cal_ = calibrate(model_);
+    lin_ = linearise(model_, campaign_, cal_, features_, active_, offered_, options_.folds, false);
+    current_ = lin_.base_columns;
+    current_.insert(current_.end(), lin_.active_columns.begin(), lin_.active_columns.end());
+    base_fit_ = fitColumns(lin_, current_, true);
+    // Uncertainties of the effects' parameters: sigma^2 (X^T X)^-1, unscaled.
+    const double sigma2 = base_fit_.rss / std::max(1, residuals_ - base_fit_.rank);
+    std::size_t pos = lin_.base_columns.size();
+    for (Active& a : active_) {
+      for (int k = 0; k < a.theta.size(); ++k, ++pos) {
+        const double variance = sigma2 * base_fit_.inverse(static_cast<int>(pos), static_cast<int>(pos));
+        a.sigma[k] = std::sqrt(std::max(0.0, variance)) / lin_.scale[current_[pos]];
+      }
     }
-    const Candidate& chosen = features.candidates[static_cast<std::size_t>(best)];
-    offered[static_cast<std::size_t>(best)] = false;
+  }
+
+  // The calibration's estimates of the given layout parameters, where identified.
+  void appendCalibrationEstimates(const std::vector<int>& indices, std::vector<NamedEstimate>& out) const {
+    for (int idx : indices) {
+      for (const ParameterEstimate& p : cal_.parameters) {
+        if (p.name == names_[static_cast<std::size_t>(idx)] && p.identified) out.push_back({p.name, p.value, p.sigma});
+      }
+    }
+  }
+
+  // One step: choose, accept, refit, record. False when discovery stops.
+  bool takeStep() {
+    const Choice choice = choose();
+    if (choice.tried == 0) {
+      result_.stop_reason = "no candidate left";
+      return false;
+    }
+    if (choice.index < 0) {
+      result_.stop_reason = "no candidate lowers the cross-validated error and the BIC";
+      return false;
+    }
+    const std::size_t best = static_cast<std::size_t>(choice.index);
+    const DiscoveryCandidate& chosen = features_.candidates[best];
+    offered_[best] = false;
     DiscoveryStep record;
     record.type = chosen.type;
     record.joint = chosen.joint;
-    record.joint_name = chosen.joint >= 0 ? robot.joints[static_cast<std::size_t>(chosen.joint)].name : std::string();
+    record.joint_name = chosen.joint >= 0 ? prior_.robot().joints[static_cast<std::size_t>(chosen.joint)].name : std::string();
     record.stage = chosen.stage;
     record.part = chosen.part;
     record.cycles = chosen.cycles;
-    record.cv_rms_before = std::sqrt(base_fit.cv / residuals);
-    record.cv_rms_after = std::sqrt(best_fit.cv / residuals);
-    record.delta_bic = best_dbic;
-    record.candidates_tried = tried;
-    record.runner_up = runner_up;
-    record.before = state;
+    record.cv_rms_before = std::sqrt(base_fit_.cv / residuals_);
+    record.cv_rms_after = std::sqrt(choice.fit.cv / residuals_);
+    record.delta_bic = choice.dbic;
+    record.candidates_tried = choice.tried;
+    record.runner_up = choice.runner_up;
+    record.before = state_;
 
-    std::vector<int> newly_released;  // geometry this step frees (a thermal step's offset)
-    {
-      const std::set<int> free_before(cal.free.begin(), cal.free.end());
-      for (int idx : chosen.geometric) {
-        if (!free_before.count(idx)) newly_released.push_back(idx);
-        released.insert(idx);
-      }
+    std::vector<int> newly_released;  // calibration parameters this step frees
+    const std::set<int> free_before(cal_.free.begin(), cal_.free.end());
+    for (int idx : features_.releases[best]) {
+      if (!free_before.count(idx)) newly_released.push_back(idx);
+      released_.insert(idx);
     }
-    if (chosen.features > 0) {
-      // The step of the joint fit for the new and the active features (the released geometry is refitted
-      // by the calibration below).
-      std::vector<int> s = current;
-      s.insert(s.end(), lin.candidate_columns[static_cast<std::size_t>(best)].begin(),
-               lin.candidate_columns[static_cast<std::size_t>(best)].end());
-      std::size_t pos = current.size() - lin.active_columns.size();
-      for (Active& a : active) {
-        for (int k = 0; k < a.theta.size(); ++k, ++pos) a.theta[k] += best_fit.d[static_cast<int>(pos)] / lin.scale[s[pos]];
-      }
-      Active added{chosen, Eigen::VectorXd::Zero(chosen.features), Eigen::VectorXd::Zero(chosen.features)};
-      for (int k = 0; k < chosen.features; ++k, ++pos) added.theta[k] = best_fit.d[static_cast<int>(pos)] / lin.scale[s[pos]];
-      active.push_back(added);
-    }
-    // Refit everything together: calibrate the base with the effects fixed, then a joint Gauss-Newton step.
-    for (int it = 0; it < options.refit_iterations; ++it) {
-      model = buildModel(prior, active, features, options);
-      cal = calibrate(model);
-      if (active.empty()) break;
-      lin = linearise(model, campaign, cal, features, active, std::vector<bool>(features.candidates.size(), false),
-                      options.folds, false);
-      std::vector<int> s = lin.base_columns;
-      s.insert(s.end(), lin.active_columns.begin(), lin.active_columns.end());
-      const Fit fit = fitColumns(lin, s, false);
-      std::size_t pos = lin.base_columns.size();
-      for (Active& a : active) {
-        for (int k = 0; k < a.theta.size(); ++k, ++pos) a.theta[k] += fit.d[static_cast<int>(pos)] / lin.scale[s[pos]];
-      }
-    }
-    model = buildModel(prior, active, features, options);
-    cal = calibrate(model);
-    lin = linearise(model, campaign, cal, features, active, offered, options.folds, false);
-    current = lin.base_columns;
-    current.insert(current.end(), lin.active_columns.begin(), lin.active_columns.end());
-    base_fit = fitColumns(lin, current, true);
-    // Uncertainties of the effects' parameters: sigma^2 (X^T X)^-1, unscaled.
-    const double sigma2 = base_fit.rss / std::max(1, residuals - base_fit.rank);
-    std::size_t pos = lin.base_columns.size();
-    for (Active& a : active) {
-      for (int k = 0; k < a.theta.size(); ++k, ++pos) {
-        a.sigma[k] = std::sqrt(std::max(0.0, sigma2 * base_fit.inverse(static_cast<int>(pos), static_cast<int>(pos)))) /
-                     lin.scale[current[pos]];
-      }
-    }
-    state = evaluate(model, cal, base_fit.cv, residuals);
-    record.after = state;
-    // Parameters of the accepted effect.
-    if (chosen.features == 0) {
-      for (int idx : chosen.geometric) {
-        for (const ParameterEstimate& p : cal.parameters) {
-          if (p.name == names[static_cast<std::size_t>(idx)] && p.identified) record.parameters.push_back({p.name, p.value, p.sigma});
-        }
-      }
+    acceptCoefficients(choice);
+    refit();
+    state_ = evaluate(base_fit_.cv);
+    record.after = state_;
+    if (chosen.columns.cols() == 0) {
+      appendCalibrationEstimates(features_.releases[best], record.parameters);
     } else {
-      const Active& a = active.back();
-      const std::string& jn = record.joint_name;
-      if (chosen.type == "backlash") record.parameters.push_back({jn + ".backlash_width_rad", a.theta[0], a.sigma[0]});
-      else if (chosen.type == "hysteresis") record.parameters.push_back({jn + ".hysteresis_width_rad_per_nm", a.theta[0], a.sigma[0]});
-      else if (chosen.type == "payload") {
-        // The model's payload (every accepted payload step adds to it): m and c = (m c) / m, with the
-        // first-order sigma of the ratio (the covariance of m and m c left out).
-        const int index = model.findEffect(PayloadEffect::kType);
-        const auto& effect = static_cast<const PayloadEffect&>(model.effect(index));
-        const double m = effect.mass();
-        record.parameters.push_back({"payload.mass_kg", m, a.sigma[0]});
-        const char* axes[3] = {"x", "y", "z"};
-        for (int k = 0; k < 3; ++k) {
-          const double c = effect.centreOfMass()[k];
-          const double sigma = std::abs(m) > 1e-9 ? std::hypot(a.sigma[k + 1], c * a.sigma[0]) / std::abs(m) : 0.0;
-          record.parameters.push_back({std::string("payload.com_") + axes[k] + "_m", c, sigma});
-        }
-      }
-      else if (chosen.type == "nonlinear_compliance") record.parameters.push_back({jn + ".cubic_compliance_rad_per_nm3", a.theta[0], a.sigma[0]});
-      else if (chosen.type == "thermal") {
-        record.parameters.push_back({jn + (chosen.part == "time" ? ".drift_rad_per_s" : ".thermal_rad_per_degc"), a.theta[0], a.sigma[0]});
-        for (int idx : newly_released) {
-          for (const ParameterEstimate& p : cal.parameters) {
-            if (p.name == names[static_cast<std::size_t>(idx)] && p.identified) record.parameters.push_back({p.name, p.value, p.sigma});
-          }
-        }
-      } else if (chosen.type == "harmonic") {
-        const double amp = std::hypot(a.theta[0], a.theta[1]);
-        const double amp_sigma = amp > 0.0 ? std::hypot(a.theta[0] * a.sigma[0], a.theta[1] * a.sigma[1]) / amp : a.sigma[0];
-        record.parameters.push_back({jn + "." + chosen.part + ".harmonic_" + std::to_string(static_cast<int>(chosen.cycles)) + ".amplitude_rad", amp, amp_sigma});
-        record.parameters.push_back({jn + "." + chosen.part + ".harmonic_" + std::to_string(static_cast<int>(chosen.cycles)) + ".phase_rad",
-                                     std::atan2(a.theta[1], a.theta[0]), amp > 0.0 ? amp_sigma / amp : kPi});
-      }
+      const Active& a = active_.back();
+      record.parameters = features_.family[best]->describe({&chosen, a.theta, a.sigma}, model_);
+      appendCalibrationEstimates(newly_released, record.parameters);
     }
-    result.steps.push_back(record);
+    result_.steps.push_back(record);
+    return true;
   }
-  // Final: joint-space residual and the calibrated model.
-  lin = linearise(model, campaign, cal, features, active, std::vector<bool>(features.candidates.size(), false), options.folds, true);
-  result.joint_residual_rms_final = jointRms(lin);
-  result.final_state = state;
-  result.fitted_rows = cal.used_rows;
-  std::vector<std::string> left_out;
-  result.model = calibratedJointErrorModel(model, std::make_shared<const Robot>(correctedRobot(robot, cal.estimate)), cal, left_out);
-  result.calibration = cal;
-  return result;
+
+  // The joint-space residual and the calibrated model.
+  void finish() {
+    lin_ = linearise(model_, campaign_, cal_, features_, active_, std::vector<bool>(features_.candidates.size(), false),
+                     options_.folds, true);
+    result_.joint_residual_rms_final = jointRms(lin_);
+    result_.final_state = state_;
+    result_.fitted_rows = cal_.used_rows;
+    std::vector<std::string> left_out;
+    const Robot& robot = prior_.robot();
+    result_.model = calibratedJointErrorModel(model_, std::make_shared<const Robot>(correctedRobot(robot, cal_.estimate)),
+                                              cal_, left_out);
+    result_.calibration = cal_;
+  }
+
+  const JointErrorModel& prior_;
+  const std::vector<MeasurementCampaign>& fitted_;
+  const std::vector<MeasurementCampaign>& heldout_;
+  const DiscoveryOptions& options_;
+  const MeasurementCampaign campaign_;
+  const std::vector<std::string> names_;
+  const DiscoveryData data_;
+  const Features features_;
+  std::vector<std::size_t> first_row_;  // each fitted campaign's first row in the concatenation, and the end
+  bool fitted_path_ = false;
+  std::vector<bool> offered_;
+  std::set<int> released_;
+  std::vector<Active> active_;
+  JointErrorModel model_;
+  GeometricCalibrationResult cal_;
+  Linearised lin_;
+  int residuals_ = 0;
+  std::vector<int> current_;
+  Fit base_fit_;
+  DiscoveryState state_;
+  DiscoveryResult result_;
+};
+
+}  // namespace
+
+DiscoveryResult discoverEffects(const JointErrorModel& prior, const std::vector<MeasurementCampaign>& fitted,
+                                const std::vector<MeasurementCampaign>& heldout, const DiscoveryOptions& options) {
+  if (options.folds < 2) throw InvalidArgument("discover: folds must be at least 2");
+  return DiscoveryRun(prior, fitted, heldout, options).run();
 }
 
 }  // namespace jointcomp

@@ -10,23 +10,12 @@
 // parameters jointly with the geometry, alternated with calibrateGeometry); repeated until no candidate
 // passes or max_steps.
 //
-// Candidates, per joint j (names: the effect registry's vocabulary):
-//   offset                dq_j = c                              (the calibration's offset parameter)
-//   compliance            dq_j = -c tau_j                       (the calibration's compliance parameter)
-//   geometric             the six placement corrections of joint j (identifiable subset)
-//   nonlinear_compliance  dq_j = -c3 tau_j^3
-//   harmonic              dq_j = a sin(k x) + b cos(k x), x the angle of the motor, of each stage's input,
-//                         or of the output of joint j (distinct parts only), k = 1..max_harmonic_order;
-//                         written as a transmission_error harmonic (amplitude, phase)
-//   backlash              dq_j = -b/2 tanh(v_j / v_s), v_j from the command sequence (direction of approach)
-//   hysteresis            dq_j = -h/2 |tau_j| tanh(v_j / v_s): load-dependent lost motion (hysteresis.hpp)
-//   thermal               dq_j = a (T - T0) (when the campaign has temperatures) or d (t - t0) (time drift),
-//                         each with the joint's offset when that is not free yet (a drift is known only up
-//                         to the zero it drifts from; T0 and t0 are the campaign's mean and start)
-// and one for the whole robot:
-//   payload               an undeclared mass m at c (tool frame): tau += -J_c^T (m g), through the current
-//                         compliances dq = -C tau; linear in m and m c (4 columns); written as a "payload"
-//                         load effect (payload.hpp) with mass_kg = m, com_m = (m c) / m
+// Candidates: every discovery family of the effect registry (model/effects/registry.hpp) offers its own,
+// per joint and for the whole robot, with the columns they bring and the calibration parameters they free;
+// the family turns the accepted coefficients into its effect and names their estimates. The built-in
+// vocabulary: offset, compliance and geometric (the calibration's own parameters of a joint), backlash,
+// hysteresis, payload, nonlinear_compliance, thermal, harmonic; each family's comment (model/effects) says
+// what its columns are. A user's effect type joins through its own registry (DiscoveryOptions::registry).
 //
 // Ra and Rz on paths: for every fitted or held-out campaign that is a path (isPathCampaign), each state
 // gives Ra = mean |z_k| and Rz = max z_k - min z_k (metrics.hpp) of the Z component, in the robot's base
@@ -39,6 +28,7 @@
 #include <string>
 #include <vector>
 
+#include "model/effects/registry.hpp"
 #include "model/identify/geometric_calibration.hpp"
 
 namespace jointcomp {
@@ -56,16 +46,13 @@ struct DiscoveryOptions {
   int refit_iterations = 2;     // joint refits after each accepted step
   double velocity_scale = 1e-3; // rad/s, backlash smooth sign
   std::vector<std::string> types;  // candidate types to try; empty: all
+  const EffectRegistry* registry = nullptr;  // whose discovery families compete; null: the built-in one
 };
 
-// The fixed vocabulary of discovered effect types.
+// The built-in vocabulary of discovered effect types (the built-in registry's families, in order).
 const std::vector<std::string>& discoveryEffectTypes();
 
-struct DiscoveredParameter {
-  std::string name;  // e.g. "shoulder_lift_joint.backlash_width_rad"
-  double value = 0.0;
-  double sigma = 0.0;
-};
+using DiscoveredParameter = NamedEstimate;  // e.g. "shoulder_lift_joint.backlash_width_rad"
 
 struct PathRoughness {
   bool held_out = false;

@@ -321,7 +321,7 @@ CalibrationData prepareCalibrationData(const JointErrorModel& prior, const Measu
   for (int i = 0; i < prior.effectCount(); ++i) {
     const Effect& effect = prior.effect(i);
     if (effect.role() == EffectRole::Load) loads |= EffectMask(1) << i;
-    else if (effect.type() != JointOffsetEffect::kType && effect.type() != ComplianceEffect::kType) others |= EffectMask(1) << i;
+    else if (!effect.calibrationParameter()) others |= EffectMask(1) << i;
   }
   JointErrorWorkspace ws(robot);
   JointContext ctx(robot.dof());
@@ -453,19 +453,29 @@ Eigen::Isometry3d fitRigidTransform(const std::vector<Eigen::Vector3d>& from, co
   return transform;
 }
 
+namespace {
+
+int findCalibrationEffect(const JointErrorModel& model, CalibrationParameter parameter) {
+  for (int i = 0; i < model.effectCount(); ++i) {
+    if (model.effect(i).calibrationParameter() == parameter) return i;
+  }
+  return -1;
+}
+
+}  // namespace
+
 GeometricParameters nominalParameters(const JointErrorModel& prior, const MeasurementCampaign& campaign) {
   const int n = prior.robot().dof();
   GeometricParameters p = GeometricParameters::zero(n);
   if (campaign.has_target) p.target = campaign.target_in_flange;
-  const int offset = prior.findEffect(JointOffsetEffect::kType);
+  // The first effect holding each of the calibration's own per-joint parameters is where it starts.
+  const int offset = findCalibrationEffect(prior, CalibrationParameter::Offset);
   if (offset >= 0) {
-    const std::vector<double> values = prior.effect(offset).parameters();
-    for (int j = 0; j < n; ++j) p.offset[j] = values[static_cast<std::size_t>(j)];
+    for (int j = 0; j < n; ++j) p.offset[j] = prior.effect(offset).calibrationValue(j);
   }
-  const int compliance = prior.findEffect(ComplianceEffect::kType);
+  const int compliance = findCalibrationEffect(prior, CalibrationParameter::Compliance);
   if (compliance >= 0) {
-    const std::vector<double> stiffness = prior.effect(compliance).parameters();
-    for (int j = 0; j < n; ++j) p.compliance[j] = 1.0 / stiffness[static_cast<std::size_t>(j)];
+    for (int j = 0; j < n; ++j) p.compliance[j] = prior.effect(compliance).calibrationValue(j);
   }
   return p;
 }
@@ -772,8 +782,7 @@ JointErrorModel calibratedJointErrorModel(const JointErrorModel& prior, std::sha
   left_out.clear();
   std::vector<std::unique_ptr<Effect>> effects;
   for (int i = 0; i < prior.effectCount(); ++i) {
-    const std::string type = prior.effect(i).type();
-    if (type == JointOffsetEffect::kType || type == ComplianceEffect::kType) continue;
+    if (prior.effect(i).calibrationParameter()) continue;  // replaced by the calibration's values below
     effects.push_back(prior.effect(i).clone());
   }
   std::vector<double> offsets(static_cast<std::size_t>(n));
@@ -783,7 +792,7 @@ JointErrorModel calibratedJointErrorModel(const JointErrorModel& prior, std::sha
   effects.push_back(std::move(offset));
 
   const GeometricParameterLayout layout(n);
-  const int prior_compliance = prior.findEffect(ComplianceEffect::kType);
+  const int prior_compliance = findCalibrationEffect(prior, CalibrationParameter::Compliance);
   std::vector<double> stiffness(static_cast<std::size_t>(n));
   for (int j = 0; j < n; ++j) {
     const ParameterEstimate& c = result.parameters[static_cast<std::size_t>(layout.compliance(j))];

@@ -8,7 +8,7 @@
 #include "model/effects/compliance.hpp"
 #include "model/identify/identification_statistics.hpp"
 #include "model/identify/identification_support.hpp"
-#include "model/identify/instrument_noise.hpp"
+#include "model/io/instrument_noise.hpp"
 #include "model/robot/kinematics.hpp"
 
 namespace jointcomp {

@@ -7,7 +7,7 @@
 #include "model/common/errors.hpp"
 #include "model/identify/identification_statistics.hpp"
 #include "model/identify/identification_support.hpp"
-#include "model/identify/instrument_noise.hpp"
+#include "model/io/instrument_noise.hpp"
 #include "model/robot/kinematics.hpp"
 
 namespace jointcomp {

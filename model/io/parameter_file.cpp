@@ -9,20 +9,33 @@
 
 namespace jointcomp {
 namespace {
-constexpr const char* kFormat = "jointcomp-parameters/1";
-}
 
-JointErrorModel parseParameters(const std::string& json_text, const std::string& source_name,
-                                std::shared_ptr<const Robot> robot) {
-  if (!robot) throw InvalidArgument("parameters need a robot");
-  nlohmann::json document;
+constexpr const char* kFormat = "jointcomp-parameters/1";
+
+nlohmann::json parseDocument(const std::string& json_text, const std::string& source_name) {
   try {
-    document = nlohmann::json::parse(json_text);
+    return nlohmann::json::parse(json_text);
   } catch (const nlohmann::json::parse_error& error) {
     throw ParameterError(source_name + ": not valid JSON (byte " + std::to_string(error.byte) + "): " + error.what());
   } catch (const nlohmann::json::exception& error) {  // e.g. a number too large for a double
     throw ParameterError(source_name + ": not valid JSON: " + error.what());
   }
+}
+
+std::string readParameterText(const std::string& path) {
+  try {
+    return readTextFile(path, "parameter file");
+  } catch (const Error& error) {
+    throw ParameterError(error.what());
+  }
+}
+
+}  // namespace
+
+ParameterSet parseParameterSet(const std::string& json_text, const std::string& source_name,
+                               std::shared_ptr<const Robot> robot, const EffectRegistry& registry) {
+  if (!robot) throw InvalidArgument("parameters need a robot");
+  const nlohmann::json document = parseDocument(json_text, source_name);
   JsonFields fields(document, source_name + ": ");
   const std::string format = fields.text("format");
   if (format != kFormat) fields.fail("format", "expected \"" + std::string(kFormat) + "\", found \"" + format + "\"");
@@ -31,40 +44,42 @@ JointErrorModel parseParameters(const std::string& json_text, const std::string&
     fields.fail("robot", "the file is for robot '" + robot_name + "' but the URDF describes '" + robot->name + "'");
   }
   const std::string notes = fields.textOr("notes", "");
-  if (fields.has("plant")) fields.object("plant");  // read by parseDriveParameters
+  std::vector<DriveParameters> drives;
+  if (fields.has("plant")) drives = drivesFromJson(fields.object("plant"), *robot, source_name + ": plant");
   GearTrain gears = fields.has("gears") ? GearTrain::fromJson(fields.object("gears"), *robot, fields.pathOf("gears"))
                                         : GearTrain::direct(robot->dof());
   std::vector<std::unique_ptr<Effect>> effects;
   const nlohmann::json& list = fields.array("effects");
   for (std::size_t i = 0; i < list.size(); ++i) {
-    effects.push_back(createEffect(list[i], *robot, gears, fields.pathOf("effects[" + std::to_string(i) + "]")));
+    effects.push_back(registry.create(list[i], *robot, gears, fields.pathOf("effects[" + std::to_string(i) + "]")));
   }
   fields.rejectUnknownKeys();
   JointErrorModel model(std::move(robot), std::move(gears), std::move(effects));
   model.notes = notes;
-  return model;
+  return ParameterSet{std::move(model), std::move(drives)};
+}
+
+ParameterSet loadParameterSet(const std::string& path, std::shared_ptr<const Robot> robot,
+                              const EffectRegistry& registry) {
+  return parseParameterSet(readParameterText(path), path, std::move(robot), registry);
+}
+
+ParameterSet loadParameterSet(const std::string& path, std::shared_ptr<const Robot> robot) {
+  return loadParameterSet(path, std::move(robot), EffectRegistry::builtin());
+}
+
+JointErrorModel parseParameters(const std::string& json_text, const std::string& source_name,
+                                std::shared_ptr<const Robot> robot) {
+  return parseParameterSet(json_text, source_name, std::move(robot), EffectRegistry::builtin()).model;
 }
 
 JointErrorModel loadParameterFile(const std::string& path, std::shared_ptr<const Robot> robot) {
-  std::string text;
-  try {
-    text = readTextFile(path, "parameter file");
-  } catch (const Error& error) {
-    throw ParameterError(error.what());
-  }
-  return parseParameters(text, path, std::move(robot));
+  return loadParameterSet(path, std::move(robot)).model;
 }
 
 std::vector<DriveParameters> parseDriveParameters(const std::string& json_text, const std::string& source_name,
                                                   const Robot& robot) {
-  nlohmann::json document;
-  try {
-    document = nlohmann::json::parse(json_text);
-  } catch (const nlohmann::json::parse_error& error) {
-    throw ParameterError(source_name + ": not valid JSON (byte " + std::to_string(error.byte) + "): " + error.what());
-  } catch (const nlohmann::json::exception& error) {  // e.g. a number too large for a double
-    throw ParameterError(source_name + ": not valid JSON: " + error.what());
-  }
+  const nlohmann::json document = parseDocument(json_text, source_name);
   if (!document.is_object() || !document.contains("plant")) {
     throw ParameterError(source_name + ": no \"plant\" object (drives and controller gains) for the plant");
   }
@@ -72,13 +87,7 @@ std::vector<DriveParameters> parseDriveParameters(const std::string& json_text, 
 }
 
 std::vector<DriveParameters> loadDriveParameters(const std::string& path, const Robot& robot) {
-  std::string text;
-  try {
-    text = readTextFile(path, "parameter file");
-  } catch (const Error& error) {
-    throw ParameterError(error.what());
-  }
-  return parseDriveParameters(text, path, robot);
+  return parseDriveParameters(readParameterText(path), path, robot);
 }
 
 std::string parametersToJson(const JointErrorModel& model, const std::vector<DriveParameters>& drives) {

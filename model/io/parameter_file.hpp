@@ -14,6 +14,25 @@
 
 namespace jointcomp {
 
+class EffectRegistry;
+
+// Everything a parameter file says, read once: the joint-error model and, when the file has a "plant"
+// object, the drives and controller gains of the plant.
+struct ParameterSet {
+  JointErrorModel model;
+  std::vector<DriveParameters> drives;  // empty when the file has no "plant" object
+  bool hasDrives() const { return !drives.empty(); }
+};
+
+// Reads and fully validates the whole file, the "plant" object included (a malformed one is an error even
+// for a caller that does not simulate). Effect types come from `registry` (the built-in one by default).
+// Throws ParameterError naming the file and the JSON path of the offending field.
+ParameterSet loadParameterSet(const std::string& path, std::shared_ptr<const Robot> robot);
+ParameterSet loadParameterSet(const std::string& path, std::shared_ptr<const Robot> robot,
+                              const EffectRegistry& registry);
+ParameterSet parseParameterSet(const std::string& json_text, const std::string& source_name,
+                               std::shared_ptr<const Robot> robot, const EffectRegistry& registry);
+
 // Reads and fully validates a parameter file for `robot`. Throws ParameterError naming the file and the
 // JSON path of the offending field (unknown keys, missing values, wrong types, out-of-range values).
 JointErrorModel loadParameterFile(const std::string& path, std::shared_ptr<const Robot> robot);

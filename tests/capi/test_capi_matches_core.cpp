@@ -11,9 +11,9 @@
 #include <unistd.h>
 #include <jointcomp/jointcomp.h>
 
-#include "model/compensation/spiral_experiment.hpp"
+#include "model/experiment/spiral_experiment.hpp"
 #include "model/identify/calibration_report.hpp"
-#include "model/identify/campaign_simulation.hpp"
+#include "model/experiment/campaign_simulation.hpp"
 #include "model/identify/discovery.hpp"
 #include "model/identify/identification_report.hpp"
 #include "model/io/atomic_file.hpp"

@@ -38,7 +38,7 @@
 #include "model/compensation/feed_rate.hpp"
 #include "model/compensation/joint_trajectory.hpp"
 #include "model/compensation/path.hpp"
-#include "model/compensation/spiral_experiment.hpp"
+#include "model/experiment/spiral_experiment.hpp"
 #include "model/effects/perturbation.hpp"
 #include "model/io/atomic_file.hpp"
 #include "model/io/parameter_file.hpp"

@@ -23,7 +23,7 @@
 #include "model/effects/registry.hpp"
 #include "model/effects/thermal_drift.hpp"
 #include "model/effects/transmission_error.hpp"
-#include "model/identify/campaign_simulation.hpp"
+#include "model/experiment/campaign_simulation.hpp"
 #include "model/identify/discovery.hpp"
 #include "model/identify/discovery_report.hpp"
 #include "model/io/parameter_file.hpp"

@@ -14,7 +14,7 @@
 
 #include "model/common/errors.hpp"
 #include "model/effects/perturbation.hpp"
-#include "model/identify/campaign_simulation.hpp"
+#include "model/experiment/campaign_simulation.hpp"
 #include "model/identify/identification_report.hpp"
 #include "model/identify/identification_statistics.hpp"
 #include "model/identify/stiffness_identification.hpp"

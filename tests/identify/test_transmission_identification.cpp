@@ -15,7 +15,7 @@
 #include "model/common/errors.hpp"
 #include "model/effects/perturbation.hpp"
 #include "model/effects/transmission_error.hpp"
-#include "model/identify/campaign_simulation.hpp"
+#include "model/experiment/campaign_simulation.hpp"
 #include "model/identify/identification_report.hpp"
 #include "model/identify/transmission_identification.hpp"
 #include "tests/identify/identify_test_support.hpp"

@@ -14,7 +14,7 @@
 
 #include "tests/plant/plant_test_support.hpp"
 
-#include "model/compensation/spiral_experiment.hpp"
+#include "model/experiment/spiral_experiment.hpp"
 #include "model/io/parameter_file.hpp"
 #include "model/robot/load_urdf.hpp"
 

@@ -1,4 +1,4 @@
-#include "model/identify/instrument_noise.hpp"
+#include "model/io/instrument_noise.hpp"
 
 #include <charconv>
 #include <cmath>

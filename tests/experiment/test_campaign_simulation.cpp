@@ -11,7 +11,7 @@
 #include "model/common/errors.hpp"
 #include "model/effects/compliance.hpp"
 #include "model/effects/perturbation.hpp"
-#include "model/identify/campaign_simulation.hpp"
+#include "model/experiment/campaign_simulation.hpp"
 #include "model/io/parameter_file.hpp"
 #include "model/robot/kinematics.hpp"
 #include "tests/identify/identify_test_support.hpp"

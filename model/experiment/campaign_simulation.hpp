@@ -34,7 +34,7 @@
 #include "model/compensation/feed_rate.hpp"
 #include "model/compensation/path.hpp"
 #include "model/effects/joint_error_model.hpp"
-#include "model/identify/instrument_noise.hpp"
+#include "model/io/instrument_noise.hpp"
 #include "model/io/measurement_campaign.hpp"
 #include "model/plant/flexible_joint_plant.hpp"
 

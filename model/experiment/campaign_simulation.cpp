@@ -1,4 +1,4 @@
-#include "model/identify/campaign_simulation.hpp"
+#include "model/experiment/campaign_simulation.hpp"
 
 #include <algorithm>
 #include <charconv>
@@ -12,7 +12,7 @@
 #include "model/common/errors.hpp"
 #include "model/common/random.hpp"
 #include "model/compensation/joint_trajectory.hpp"
-#include "model/compensation/spiral_experiment.hpp"
+#include "model/experiment/spiral_experiment.hpp"
 #include "model/effects/compliance.hpp"
 #include "model/identify/identification_support.hpp"
 #include "model/robot/kinematics.hpp"

@@ -12,7 +12,7 @@
 #include <gtest/gtest.h>
 
 #include "model/common/errors.hpp"
-#include "model/compensation/spiral_experiment.hpp"
+#include "model/experiment/spiral_experiment.hpp"
 #include "model/io/parameter_file.hpp"
 #include "model/robot/kinematics.hpp"
 #include "model/robot/load_urdf.hpp"

@@ -1,4 +1,4 @@
-#include "model/compensation/spiral_experiment.hpp"
+#include "model/experiment/spiral_experiment.hpp"
 
 #include <chrono>
 
@@ -105,8 +105,7 @@ SpiralExperimentResult runSpiralExperiment(const JointErrorModel& nominal, const
     for (std::size_t k = 0; k < count; ++k) {
       forwardKinematics(robot, ws.robot, run.actual[k]);
       const Eigen::Vector3d position = ws.robot.tool_pose.translation();
-      const double sigma =
-          spec.noise.constant_m + spec.noise.per_metre * (position - spec.noise.tracker_position).norm();
+      const double sigma = spec.noise.sigma(position);
       // One draw per statement: the order of a constructor's arguments is unspecified (GCC evaluates them
       // last to first, clang first to last), so three draws in one call gave each compiler other noise.
       // z, y, x is the order of the GCC build the stored results come from.

@@ -1,0 +1,106 @@
+// What residual discovery needs of an effect type, said by the type itself: the candidate columns it
+// offers for the fitted data (per joint, per stage and order where that applies), and how fitted
+// coefficients become the effect, with named parameters and uncertainties. Discovery (model/identify)
+// fits the columns and iterates over the registry's families; it never asks for a type by name.
+//
+// A candidate either brings feature columns, the joint error of its joint per unit coefficient (so the
+// predicted measurement moves by dm/dq_j times the column), or, for a load (through_compliance), blocks of
+// one column per joint: the load torque of every joint per unit coefficient, which moves the joints
+// through their current compliances. It may also free parameters that the kinematic calibration owns
+// (a joint's offset, compliance or placement), alone or beside its columns.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <Eigen/Dense>
+
+#include "model/effects/effect.hpp"
+#include "model/effects/gear_train.hpp"
+
+namespace jointcomp {
+
+class JointErrorModel;
+
+// The fitted rows as discovery offers them to the families (row i of every vector is one used campaign row).
+struct DiscoveryData {
+  const Robot* robot = nullptr;
+  const GearTrain* gears = nullptr;
+  std::vector<JointVector> command;      // rad
+  std::vector<JointVector> motor;        // rad, through the gear train
+  std::vector<JointVector> velocity;     // rad/s, from the command sequence (direction of approach)
+  std::vector<JointVector> load_torque;  // N m, what each joint's transmission carries
+  std::vector<double> time;              // s
+  std::vector<double> temperature;       // degC; NaN where not measured
+  bool torque_known = false;             // the robot has inertials
+  bool have_temperature = false;         // every row has a temperature
+  double time0 = 0.0;                    // s, the campaign's start (the reference of time drift)
+  double temperature0 = 20.0;            // degC, the rows' mean temperature (the reference of thermal drift)
+  double velocity_scale = 1e-3;          // rad/s, smooth sign of lost motion
+  int max_harmonic_order = 4;
+  int rows() const { return static_cast<int>(command.size()); }
+};
+
+
+struct DiscoveryCandidate {
+  std::string type;      // the family's name in the vocabulary
+  int joint = -1;        // -1: the whole robot
+  int stage = 0;         // gear part: 1 = motor ... stageCount + 1 = output (harmonics)
+  std::string part;      // "motor", "stage_k", "output"; or the variant ("temperature", "time")
+  double cycles = 0.0;   // harmonic order (cycles per revolution of the part)
+  std::string detail;    // appended to the label, e.g. " motor order 2"
+  std::vector<CalibrationParameter> releases;
+  // rows x coefficients; through_compliance: rows x (coefficients * dof), block k holding the load torque
+  // of every joint per unit of coefficient k.
+  Eigen::MatrixXd columns;
+  bool through_compliance = false;
+
+  int coefficients(int dof) const {
+    return through_compliance ? static_cast<int>(columns.cols()) / dof : static_cast<int>(columns.cols());
+  }
+  std::string label() const;  // "backlash joint 3", "harmonic joint 2 motor order 1", "payload (tool)"
+};
+
+// An accepted candidate with its fitted coefficients and their standard deviations (SI units).
+struct FittedCandidate {
+  const DiscoveryCandidate* candidate = nullptr;
+  Eigen::VectorXd theta;
+  Eigen::VectorXd sigma;
+};
+
+struct NamedEstimate {
+  std::string name;  // e.g. "shoulder_lift_joint.backlash_width_rad"
+  double value = 0.0;
+  double sigma = 0.0;
+};
+
+class DiscoveryFamily {
+public:
+  virtual ~DiscoveryFamily() = default;
+  // The name in the discovery vocabulary (--types), e.g. "harmonic" for transmission-error harmonics.
+  virtual std::string name() const = 0;
+  // Appends this family's candidates for `joint` (0 .. dof-1), or for the whole robot (joint -1): every
+  // family is asked for each joint in turn, then once for the robot.
+  virtual void offer(const DiscoveryData& data, int joint, std::vector<DiscoveryCandidate>& candidates) const = 0;
+  // The effect that all accepted candidates of this family make together (in acceptance order), or
+  // nullptr when the family only frees calibration parameters.
+  virtual std::unique_ptr<Effect> makeEffect(const DiscoveryData& data,
+                                             const std::vector<FittedCandidate>& accepted) const;
+  // Named estimates of one accepted candidate's coefficients; `model` holds the effect makeEffect built.
+  // The calibration parameters it freed are reported by discovery itself.
+  virtual std::vector<NamedEstimate> describe(const FittedCandidate& fitted, const JointErrorModel& model) const;
+};
+
+// One feature column of `joint`'s candidate from a function of the row.
+template <typename Feature>
+Eigen::MatrixXd featureColumn(const DiscoveryData& data, Feature feature) {
+  Eigen::MatrixXd column(data.rows(), 1);
+  for (int i = 0; i < data.rows(); ++i) column(i, 0) = feature(i);
+  return column;
+}
+
+// The joint's name, for "<joint>.<parameter>" names.
+const std::string& jointNameOf(const DiscoveryData& data, int joint);
+
+}  // namespace jointcomp
