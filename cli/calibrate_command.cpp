@@ -15,6 +15,7 @@
 
 #include "cli/commands.hpp"
 #include "cli/options.hpp"
+#include "cli/robot_setup.hpp"
 #include "model/common/errors.hpp"
 #include "model/identify/calibration_report.hpp"
 #include "model/io/atomic_file.hpp"
@@ -45,15 +46,14 @@ int runCalibrate(int argc, char** argv) {
     throw std::invalid_argument(
         "calibrate needs --campaign CAMPAIGN.csv and --out DIR (and --urdf FILE, --params FILE, --holdout FILE)");
   }
-  const std::string urdf = options.get("urdf", JOINTCOMP_DATA_DIR "/robots/ur10.urdf");
+  const RobotSetup setup = loadRobotSetup(options, JOINTCOMP_DATA_DIR "/robots/ur10.urdf");
+  const std::string& urdf = setup.urdf;
   const std::string campaign_path = options.get("campaign", "");
   const std::string out = options.get("out", "");
   const auto started = std::chrono::steady_clock::now();
 
-  auto robot = std::make_shared<const Robot>(loadRobotFromUrdfFile(urdf));
-  const bool has_params = options.has("params");
-  const JointErrorModel prior = has_params ? loadParameterFile(options.get("params", ""), robot)
-                                           : JointErrorModel(robot, GearTrain::direct(robot->dof()), {});
+  const std::shared_ptr<const Robot>& robot = setup.robot;
+  const JointErrorModel& prior = setup.parameters.model;
   GeometricCalibrationOptions calibration;
   calibration.loss = parseRobustLoss(options.get("loss", "huber"));
   if (options.has("loss-scale-mm")) calibration.loss_scale = std::stod(options.get("loss-scale-mm", "0")) * 1e-3;
@@ -75,20 +75,12 @@ int runCalibrate(int argc, char** argv) {
                 "  " + robot->name + " after kinematic calibration by jointcomp calibrate\n  nominal: " + urdf +
                     "\n  campaign: " + campaign_path +
                     "\n  Joint placements corrected; joint offsets and compliance are in the parameter file.");
-  std::vector<DriveParameters> drives;
-  if (has_params) {
-    try {
-      drives = loadDriveParameters(options.get("params", ""), *robot);
-    } catch (const ParameterError&) {
-      drives.clear();  // the prior has no plant section: none is written
-    }
-  }
   const std::string params_out = out + "/parameters.json";
-  saveParameterFile(run.calibrated, params_out, drives);
+  saveParameterFile(run.calibrated, params_out, setup.parameters.drives);  // the prior's drives, if any
 
   CalibrationSources sources;
   sources.urdf = urdf;
-  sources.parameters = has_params ? options.get("params", "") : "";
+  sources.parameters = setup.params;
   sources.campaign = campaign_path;
   sources.outputs = {{"urdf", urdf_out}, {"parameters", params_out}, {"residuals", out + "/residuals.csv"}};
   writeFileAtomically(out + "/residuals.csv", calibrationResidualsCsv(run, sources));

@@ -17,6 +17,7 @@
 
 #include "cli/commands.hpp"
 #include "cli/options.hpp"
+#include "cli/robot_setup.hpp"
 #include "model/common/errors.hpp"
 #include "model/identify/discovery_report.hpp"
 #include "model/io/atomic_file.hpp"
@@ -46,13 +47,12 @@ int runDiscover(int argc, char** argv) {
   if (campaigns.empty() || !options.has("out")) {
     throw std::invalid_argument("discover needs --campaign FILE[,FILE..] and --out DIR (and --urdf, --params, --holdout)");
   }
-  const std::string urdf = options.get("urdf", JOINTCOMP_DATA_DIR "/robots/ur10.urdf");
+  const RobotSetup setup = loadRobotSetup(options, JOINTCOMP_DATA_DIR "/robots/ur10.urdf");
+  const std::string& urdf = setup.urdf;
   const std::string out = options.get("out", "");
   const auto started = std::chrono::steady_clock::now();
-  auto robot = std::make_shared<const Robot>(loadRobotFromUrdfFile(urdf));
-  const bool has_params = options.has("params");
-  const JointErrorModel prior = has_params ? loadParameterFile(options.get("params", ""), robot)
-                                           : JointErrorModel(robot, GearTrain::direct(robot->dof()), {});
+  const std::shared_ptr<const Robot>& robot = setup.robot;
+  const JointErrorModel& prior = setup.parameters.model;
   DiscoveryOptions discovery;
   discovery.calibration.loss = parseRobustLoss(options.get("loss", "huber"));
   const std::string base = options.get("base", "frame");
@@ -85,20 +85,12 @@ int runDiscover(int argc, char** argv) {
                 "  " + robot->name + " after jointcomp discover\n  nominal: " + urdf +
                     "\n  Joint placements corrected; joint offsets, compliance and the discovered effects are in the "
                     "parameter file.");
-  std::vector<DriveParameters> drives;
-  if (has_params) {
-    try {
-      drives = loadDriveParameters(options.get("params", ""), *robot);
-    } catch (const ParameterError&) {
-      drives.clear();
-    }
-  }
   const std::string params_out = out + "/parameters.json";
-  saveParameterFile(result.model, params_out, drives);
+  saveParameterFile(result.model, params_out, setup.parameters.drives);  // the prior's drives, if any
 
   DiscoverySources sources;
   sources.urdf = urdf;
-  sources.parameters = has_params ? options.get("params", "") : "";
+  sources.parameters = setup.params;
   sources.campaigns = campaigns;
   sources.held_out = holdouts;
   sources.outputs = {{"parameters", params_out}, {"urdf", urdf_out}};

@@ -10,6 +10,7 @@
 
 #include "cli/commands.hpp"
 #include "cli/options.hpp"
+#include "cli/robot_setup.hpp"
 #include "model/identify/identification_report.hpp"
 #include "model/io/atomic_file.hpp"
 #include "model/io/parameter_file.hpp"
@@ -32,12 +33,6 @@ int integerOption(const Options& options, const std::string& name, int fallback)
   return value;
 }
 
-// The drives of the nominal file, kept in the updated file when it has them.
-std::vector<DriveParameters> drivesOf(const std::string& path, const Robot& robot) {
-  const nlohmann::json document = nlohmann::json::parse(readTextFile(path, "parameter file"), nullptr, false);
-  if (document.is_object() && document.contains("plant")) return loadDriveParameters(path, robot);
-  return {};
-}
 
 }  // namespace
 
@@ -56,15 +51,17 @@ int runIdentify(int argc, char** argv) {
     throw std::invalid_argument("identify " + kind + " needs --campaign FILE and --out DIR");
   }
   const std::string campaign_path = options.get("campaign", "");
-  const std::string urdf = options.get("urdf", JOINTCOMP_DATA_DIR "/robots/rx170.urdf");
-  const std::string params = options.get("params", JOINTCOMP_DATA_DIR "/params/rx170.json");
+  const RobotSetup setup =
+      loadRobotSetup(options, JOINTCOMP_DATA_DIR "/robots/rx170.urdf", "params", JOINTCOMP_DATA_DIR "/params/rx170.json");
+  const std::string& urdf = setup.urdf;
+  const std::string& params = setup.params;
   const std::string out = options.get("out", "");
   const std::string use = options.get("use", "local");
   if (use != "local" && use != "global") throw std::invalid_argument("--use takes local or global");
 
-  auto robot = std::make_shared<const Robot>(loadRobotFromUrdfFile(urdf));
-  const JointErrorModel nominal = loadParameterFile(params, robot);
-  const std::vector<DriveParameters> drives = drivesOf(params, *robot);
+  const std::shared_ptr<const Robot>& robot = setup.robot;
+  const JointErrorModel& nominal = setup.parameters.model;
+  const std::vector<DriveParameters>& drives = setup.parameters.drives;  // kept in the updated file
   const MeasurementCampaign campaign = readCampaignFile(campaign_path);
   std::unique_ptr<JointErrorModel> truth;
   if (options.has("truth")) truth = std::make_unique<JointErrorModel>(loadParameterFile(options.get("truth", ""), robot));

@@ -7,6 +7,8 @@
 
 #include "cli/commands.hpp"
 #include "cli/options.hpp"
+#include "cli/robot_setup.hpp"
+#include "model/common/errors.hpp"
 #include "model/effects/perturbation.hpp"
 #include "model/experiment/campaign_simulation.hpp"
 #include "model/io/parameter_file.hpp"
@@ -36,12 +38,12 @@ int runSimulate(int argc, char** argv) {
         "simulate needs --protocol stiffness|joint2-sweep|spiral|random|back-and-forth and --truth PARAMS.json");
   }
   const std::string protocol_name = options.get("protocol", "");
-  const std::string urdf = options.get("urdf", JOINTCOMP_DATA_DIR "/robots/rx170.urdf");
-  const std::string truth_path = options.get("truth", "");
+  const RobotSetup setup = loadRobotSetup(options, JOINTCOMP_DATA_DIR "/robots/rx170.urdf", "truth");
+  const std::string& truth_path = setup.params;
   CampaignSimulationSpec spec = defaultCampaignSpec(protocolFromName(protocol_name));
   const std::string out = options.get("out", "out/" + protocolName(spec.protocol) + ".csv");
-  auto robot = std::make_shared<const Robot>(loadRobotFromUrdfFile(urdf));
-  JointErrorModel truth = loadParameterFile(truth_path, robot);
+  const std::shared_ptr<const Robot>& robot = setup.robot;
+  JointErrorModel truth = setup.parameters.model;
   spec.metadata["truth"] = truth_path;
   std::string truth_written;
   if (options.has("perturb")) {
@@ -87,7 +89,12 @@ int runSimulate(int argc, char** argv) {
     if (warm_up.size() > 2) spec.temperature.start_degc = warm_up[2];
     if (!(spec.temperature.time_constant_s > 0.0)) throw std::invalid_argument("--warm-up: the time constant must be positive");
   }
-  if (options.has("plant")) spec.drives = loadDriveParameters(truth_path, *robot);
+  if (options.has("plant")) {
+    if (!setup.parameters.hasDrives()) {
+      throw ParameterError(truth_path + ": no \"plant\" object (drives and controller gains) for the plant");
+    }
+    spec.drives = setup.parameters.drives;
+  }
 
   std::printf("jointcomp simulate: %s campaign of robot '%s'\n  truth %s\n", protocolName(spec.protocol).c_str(),
               robot->name.c_str(), spec.metadata["truth"].c_str());

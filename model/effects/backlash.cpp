@@ -10,20 +10,24 @@
 
 namespace jointcomp {
 
-BacklashEffect::BacklashEffect(const Robot& robot, std::vector<double> width_rad, double velocity_scale)
-    : velocity_scale_(velocity_scale) {
-  for (const Joint& joint : robot.joints) joint_names_.push_back(joint.name);
+const std::vector<PerJointEffect::Field>& BacklashEffect::layout() {
+  static const std::vector<Field> fields = {{"width_rad", "backlash_width_rad"}};
+  return fields;
+}
+
+BacklashEffect::BacklashEffect(const Robot& robot, std::vector<double> width, double velocity_scale)
+    : PerJointEffect(robot, layout()), velocity_scale_(velocity_scale) {
   if (!(std::isfinite(velocity_scale) && velocity_scale > 0.0)) {
     throw ParameterError("backlash: velocity_scale_rad_per_s must be finite and positive");
   }
-  setParameters(width_rad);
+  setParameters(width);
 }
 
 std::unique_ptr<Effect> BacklashEffect::fromJson(const nlohmann::json& json, const Robot& robot, const GearTrain&,
-                                                 const std::string& path) {
+                                          const std::string& path) {
   JsonFields fields(json, path);
   fields.text("type");
-  const std::vector<double> width = fields.numbers("width_rad", robot.dof());
+  const std::vector<double> width = readFields(fields, layout(), robot.dof());
   const double scale = fields.numberOr("velocity_scale_rad_per_s", kDefaultVelocityScale);
   const std::string note = fields.textOr("estimate", "");
   fields.rejectUnknownKeys();
@@ -33,35 +37,15 @@ std::unique_ptr<Effect> BacklashEffect::fromJson(const nlohmann::json& json, con
   return effect;
 }
 
+void BacklashEffect::writeExtraJson(nlohmann::json& json) const { json["velocity_scale_rad_per_s"] = velocity_scale_; }
+
 void BacklashEffect::addJointError(const Robot&, const JointContext& ctx, JointVector& dq) const {
-  if (ctx.velocity.size() != dq.size()) return;  // no motion known
-  for (std::size_t i = 0; i < width_.size(); ++i) {
+  if (ctx.velocity.size() != dq.size()) return;  // no motion (or load) known
+  const std::vector<double>& width = field(0);
+  for (std::size_t i = 0; i < width.size(); ++i) {
     const int j = static_cast<int>(i);
-    dq[j] += width_[i] * feature(ctx.velocity[j], velocity_scale_);
+    dq[j] += width[i] * feature(ctx.velocity[j], velocity_scale_);
   }
-}
-
-std::vector<std::string> BacklashEffect::parameterNames() const {
-  std::vector<std::string> names;
-  for (const auto& joint : joint_names_) names.push_back(joint + ".backlash_width_rad");
-  return names;
-}
-
-void BacklashEffect::setParameters(const std::vector<double>& values) {
-  if (values.size() != joint_names_.size()) {
-    throw ParameterError("backlash: expected " + std::to_string(joint_names_.size()) + " widths, found " +
-                         std::to_string(values.size()));
-  }
-  for (std::size_t i = 0; i < values.size(); ++i) {
-    if (!std::isfinite(values[i])) throw ParameterError("backlash: " + joint_names_[i] + ".backlash_width_rad must be finite");
-  }
-  width_ = values;
-}
-
-nlohmann::json BacklashEffect::toJson() const {
-  nlohmann::json json = {{"type", kType}, {"width_rad", width_}, {"velocity_scale_rad_per_s", velocity_scale_}};
-  if (!estimate_note.empty()) json["estimate"] = estimate_note;
-  return json;
 }
 
 void BacklashDiscovery::offer(const DiscoveryData& data, int joint, std::vector<DiscoveryCandidate>& candidates) const {

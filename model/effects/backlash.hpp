@@ -14,11 +14,12 @@
 
 #include "model/effects/discovery_family.hpp"
 #include "model/effects/effect.hpp"
+#include "model/effects/per_joint_effect.hpp"
 #include "model/effects/gear_train.hpp"
 
 namespace jointcomp {
 
-class BacklashEffect : public Effect {
+class BacklashEffect : public PerJointEffect {
 public:
   static constexpr const char* kType = "backlash";
   static constexpr double kDefaultVelocityScale = 1e-3;  // rad/s
@@ -30,10 +31,6 @@ public:
   std::string type() const override { return kType; }
   EffectRole role() const override { return EffectRole::JointError; }
   void addJointError(const Robot& robot, const JointContext& ctx, JointVector& dq) const override;
-  std::vector<std::string> parameterNames() const override;  // "<joint>.backlash_width_rad"
-  std::vector<double> parameters() const override { return width_; }
-  void setParameters(const std::vector<double>& values) override;
-  nlohmann::json toJson() const override;
   std::unique_ptr<Effect> clone() const override { return std::make_unique<BacklashEffect>(*this); }
 
   double velocityScale() const { return velocity_scale_; }
@@ -41,9 +38,9 @@ public:
   static double feature(double velocity, double velocity_scale) { return -0.5 * std::tanh(velocity / velocity_scale); }
 
 private:
-  std::vector<std::string> joint_names_;
-  std::vector<double> width_;  // rad
-  double velocity_scale_;      // rad/s
+  static const std::vector<Field>& layout();  // "<joint>.backlash_width_rad"
+  void writeExtraJson(nlohmann::json& json) const override;
+  double velocity_scale_;  // rad/s
 };
 
 // Discovery: "backlash", one column per joint, -tanh(v_j / v_s) / 2 with v_j from the command sequence.

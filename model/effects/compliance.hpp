@@ -6,32 +6,30 @@
 
 #include "model/effects/discovery_family.hpp"
 #include "model/effects/effect.hpp"
+#include "model/effects/per_joint_effect.hpp"
 
 namespace jointcomp {
 
-class ComplianceEffect : public Effect {
+class ComplianceEffect : public PerJointEffect {
 public:
   static constexpr const char* kType = "compliance";
+  // Throws ParameterError for the wrong number of stiffnesses or one that is not positive.
   ComplianceEffect(const Robot& robot, std::vector<double> stiffness_nm_per_rad);
   static std::unique_ptr<Effect> fromJson(const nlohmann::json& json, const Robot& robot, const std::string& path);
 
   std::string type() const override { return kType; }
   EffectRole role() const override { return EffectRole::JointError; }
   void addJointError(const Robot& robot, const JointContext& ctx, JointVector& dq) const override;
-  std::vector<std::string> parameterNames() const override;
-  std::vector<double> parameters() const override { return stiffness_; }
-  void setParameters(const std::vector<double>& values) override;
-  nlohmann::json toJson() const override;
   std::unique_ptr<Effect> clone() const override { return std::make_unique<ComplianceEffect>(*this); }
 
-  double stiffness(int joint) const { return stiffness_[joint]; }
+  double stiffness(int joint) const { return field(0)[static_cast<std::size_t>(joint)]; }
   std::optional<CalibrationParameter> calibrationParameter() const override { return CalibrationParameter::Compliance; }
   double calibrationValue(int joint) const override { return compliance_[joint]; }
 
 private:
-  std::vector<std::string> joint_names_;
-  std::vector<double> stiffness_;  // N m / rad
-  JointVector compliance_;         // rad / (N m), 1 / stiffness
+  static const std::vector<Field>& layout();  // "<joint>.stiffness_nm_per_rad"
+  void parametersChanged() override;
+  JointVector compliance_;  // rad / (N m), 1 / stiffness
 };
 
 // Discovery: "compliance", a joint's linear compliance under its load torque, freed in the kinematic

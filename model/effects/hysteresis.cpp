@@ -10,20 +10,24 @@
 
 namespace jointcomp {
 
-HysteresisEffect::HysteresisEffect(const Robot& robot, std::vector<double> width_rad_per_nm, double velocity_scale)
-    : velocity_scale_(velocity_scale) {
-  for (const Joint& joint : robot.joints) joint_names_.push_back(joint.name);
+const std::vector<PerJointEffect::Field>& HysteresisEffect::layout() {
+  static const std::vector<Field> fields = {{"width_rad_per_nm", "hysteresis_width_rad_per_nm"}};
+  return fields;
+}
+
+HysteresisEffect::HysteresisEffect(const Robot& robot, std::vector<double> width, double velocity_scale)
+    : PerJointEffect(robot, layout()), velocity_scale_(velocity_scale) {
   if (!(std::isfinite(velocity_scale) && velocity_scale > 0.0)) {
     throw ParameterError("hysteresis: velocity_scale_rad_per_s must be finite and positive");
   }
-  setParameters(width_rad_per_nm);
+  setParameters(width);
 }
 
 std::unique_ptr<Effect> HysteresisEffect::fromJson(const nlohmann::json& json, const Robot& robot, const GearTrain&,
-                                                   const std::string& path) {
+                                          const std::string& path) {
   JsonFields fields(json, path);
   fields.text("type");
-  const std::vector<double> width = fields.numbers("width_rad_per_nm", robot.dof());
+  const std::vector<double> width = readFields(fields, layout(), robot.dof());
   const double scale = fields.numberOr("velocity_scale_rad_per_s", kDefaultVelocityScale);
   const std::string note = fields.textOr("estimate", "");
   fields.rejectUnknownKeys();
@@ -33,37 +37,15 @@ std::unique_ptr<Effect> HysteresisEffect::fromJson(const nlohmann::json& json, c
   return effect;
 }
 
+void HysteresisEffect::writeExtraJson(nlohmann::json& json) const { json["velocity_scale_rad_per_s"] = velocity_scale_; }
+
 void HysteresisEffect::addJointError(const Robot&, const JointContext& ctx, JointVector& dq) const {
-  if (ctx.velocity.size() != dq.size() || ctx.load_torque.size() != dq.size()) return;  // no motion or load known
-  for (std::size_t i = 0; i < width_.size(); ++i) {
+  if (ctx.velocity.size() != dq.size() || ctx.load_torque.size() != dq.size()) return;  // no motion (or load) known
+  const std::vector<double>& width = field(0);
+  for (std::size_t i = 0; i < width.size(); ++i) {
     const int j = static_cast<int>(i);
-    dq[j] += width_[i] * feature(ctx.velocity[j], ctx.load_torque[j], velocity_scale_);
+    dq[j] += width[i] * feature(ctx.velocity[j], ctx.load_torque[j], velocity_scale_);
   }
-}
-
-std::vector<std::string> HysteresisEffect::parameterNames() const {
-  std::vector<std::string> names;
-  for (const auto& joint : joint_names_) names.push_back(joint + ".hysteresis_width_rad_per_nm");
-  return names;
-}
-
-void HysteresisEffect::setParameters(const std::vector<double>& values) {
-  if (values.size() != joint_names_.size()) {
-    throw ParameterError("hysteresis: expected " + std::to_string(joint_names_.size()) + " widths, found " +
-                         std::to_string(values.size()));
-  }
-  for (std::size_t i = 0; i < values.size(); ++i) {
-    if (!std::isfinite(values[i])) {
-      throw ParameterError("hysteresis: " + joint_names_[i] + ".hysteresis_width_rad_per_nm must be finite");
-    }
-  }
-  width_ = values;
-}
-
-nlohmann::json HysteresisEffect::toJson() const {
-  nlohmann::json json = {{"type", kType}, {"width_rad_per_nm", width_}, {"velocity_scale_rad_per_s", velocity_scale_}};
-  if (!estimate_note.empty()) json["estimate"] = estimate_note;
-  return json;
 }
 
 void HysteresisDiscovery::offer(const DiscoveryData& data, int joint, std::vector<DiscoveryCandidate>& candidates) const {

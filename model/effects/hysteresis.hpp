@@ -24,11 +24,12 @@
 
 #include "model/effects/discovery_family.hpp"
 #include "model/effects/effect.hpp"
+#include "model/effects/per_joint_effect.hpp"
 #include "model/effects/gear_train.hpp"
 
 namespace jointcomp {
 
-class HysteresisEffect : public Effect {
+class HysteresisEffect : public PerJointEffect {
 public:
   static constexpr const char* kType = "hysteresis";
   static constexpr double kDefaultVelocityScale = 1e-3;  // rad/s, as backlash
@@ -40,10 +41,6 @@ public:
   std::string type() const override { return kType; }
   EffectRole role() const override { return EffectRole::JointError; }
   void addJointError(const Robot& robot, const JointContext& ctx, JointVector& dq) const override;
-  std::vector<std::string> parameterNames() const override;  // "<joint>.hysteresis_width_rad_per_nm"
-  std::vector<double> parameters() const override { return width_; }
-  void setParameters(const std::vector<double>& values) override;
-  nlohmann::json toJson() const override;
   std::unique_ptr<Effect> clone() const override { return std::make_unique<HysteresisEffect>(*this); }
 
   double velocityScale() const { return velocity_scale_; }
@@ -53,9 +50,9 @@ public:
   }
 
 private:
-  std::vector<std::string> joint_names_;
-  std::vector<double> width_;  // rad / (N m)
-  double velocity_scale_;      // rad/s
+  static const std::vector<Field>& layout();  // "<joint>.hysteresis_width_rad_per_nm"
+  void writeExtraJson(nlohmann::json& json) const override;
+  double velocity_scale_;  // rad/s
 };
 
 // Discovery: "hysteresis", one column per joint, -|tau_j| tanh(v_j / v_s) / 2 (needs the load torque).

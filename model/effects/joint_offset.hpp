@@ -5,11 +5,12 @@
 
 #include "model/effects/discovery_family.hpp"
 #include "model/effects/effect.hpp"
+#include "model/effects/per_joint_effect.hpp"
 #include "model/effects/gear_train.hpp"
 
 namespace jointcomp {
 
-class JointOffsetEffect : public Effect {
+class JointOffsetEffect : public PerJointEffect {
 public:
   static constexpr const char* kType = "offset";
   // Throws ParameterError for the wrong number of offsets or a value that is not finite.
@@ -21,19 +22,14 @@ public:
   std::string type() const override { return kType; }
   EffectRole role() const override { return EffectRole::JointError; }
   void addJointError(const Robot& robot, const JointContext& ctx, JointVector& dq) const override;
-  std::vector<std::string> parameterNames() const override;  // "joint_i.offset_rad"
-  std::vector<double> parameters() const override { return offsets_; }
-  void setParameters(const std::vector<double>& values) override;
-  nlohmann::json toJson() const override;
   std::unique_ptr<Effect> clone() const override { return std::make_unique<JointOffsetEffect>(*this); }
 
-  double offset(int joint) const { return offsets_[joint]; }
+  double offset(int joint) const { return field(0)[static_cast<std::size_t>(joint)]; }
   std::optional<CalibrationParameter> calibrationParameter() const override { return CalibrationParameter::Offset; }
-  double calibrationValue(int joint) const override { return offsets_[static_cast<std::size_t>(joint)]; }
+  double calibrationValue(int joint) const override { return offset(joint); }
 
 private:
-  std::vector<std::string> joint_names_;
-  std::vector<double> offsets_;  // rad
+  static const std::vector<Field>& layout();  // "<joint>.offset_rad"
 };
 
 // Discovery: "offset", a joint's zero, freed in the kinematic calibration.

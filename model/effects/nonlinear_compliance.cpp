@@ -10,8 +10,13 @@
 
 namespace jointcomp {
 
-NonlinearComplianceEffect::NonlinearComplianceEffect(const Robot& robot, std::vector<double> cubic_rad_per_nm3) {
-  for (const Joint& joint : robot.joints) joint_names_.push_back(joint.name);
+const std::vector<PerJointEffect::Field>& NonlinearComplianceEffect::layout() {
+  static const std::vector<Field> fields = {{"cubic_compliance_rad_per_nm3", "cubic_compliance_rad_per_nm3"}};
+  return fields;
+}
+
+NonlinearComplianceEffect::NonlinearComplianceEffect(const Robot& robot, std::vector<double> cubic_rad_per_nm3)
+    : PerJointEffect(robot, layout()) {
   setParameters(cubic_rad_per_nm3);
 }
 
@@ -19,7 +24,7 @@ std::unique_ptr<Effect> NonlinearComplianceEffect::fromJson(const nlohmann::json
                                                             const GearTrain&, const std::string& path) {
   JsonFields fields(json, path);
   fields.text("type");
-  const std::vector<double> cubic = fields.numbers("cubic_compliance_rad_per_nm3", robot.dof());
+  const std::vector<double> cubic = readFields(fields, layout(), robot.dof());
   const std::string note = fields.textOr("estimate", "");
   fields.rejectUnknownKeys();
   auto effect = std::make_unique<NonlinearComplianceEffect>(robot, cubic);
@@ -29,35 +34,11 @@ std::unique_ptr<Effect> NonlinearComplianceEffect::fromJson(const nlohmann::json
 
 void NonlinearComplianceEffect::addJointError(const Robot&, const JointContext& ctx, JointVector& dq) const {
   if (ctx.load_torque.size() != dq.size()) return;
-  for (std::size_t i = 0; i < cubic_.size(); ++i) {
+  const std::vector<double>& cubic = field(0);
+  for (std::size_t i = 0; i < cubic.size(); ++i) {
     const int j = static_cast<int>(i);
-    dq[j] += cubic_[i] * feature(ctx.load_torque[j]);
+    dq[j] += cubic[i] * feature(ctx.load_torque[j]);
   }
-}
-
-std::vector<std::string> NonlinearComplianceEffect::parameterNames() const {
-  std::vector<std::string> names;
-  for (const auto& joint : joint_names_) names.push_back(joint + ".cubic_compliance_rad_per_nm3");
-  return names;
-}
-
-void NonlinearComplianceEffect::setParameters(const std::vector<double>& values) {
-  if (values.size() != joint_names_.size()) {
-    throw ParameterError("nonlinear_compliance: expected " + std::to_string(joint_names_.size()) +
-                         " coefficients, found " + std::to_string(values.size()));
-  }
-  for (std::size_t i = 0; i < values.size(); ++i) {
-    if (!std::isfinite(values[i])) {
-      throw ParameterError("nonlinear_compliance: " + joint_names_[i] + ".cubic_compliance_rad_per_nm3 must be finite");
-    }
-  }
-  cubic_ = values;
-}
-
-nlohmann::json NonlinearComplianceEffect::toJson() const {
-  nlohmann::json json = {{"type", kType}, {"cubic_compliance_rad_per_nm3", cubic_}};
-  if (!estimate_note.empty()) json["estimate"] = estimate_note;
-  return json;
 }
 
 void NonlinearComplianceDiscovery::offer(const DiscoveryData& data, int joint,

@@ -6,11 +6,12 @@
 
 #include "model/effects/discovery_family.hpp"
 #include "model/effects/effect.hpp"
+#include "model/effects/per_joint_effect.hpp"
 #include "model/effects/gear_train.hpp"
 
 namespace jointcomp {
 
-class NonlinearComplianceEffect : public Effect {
+class NonlinearComplianceEffect : public PerJointEffect {
 public:
   static constexpr const char* kType = "nonlinear_compliance";
   // Throws ParameterError for the wrong number of coefficients or one that is not finite.
@@ -21,17 +22,12 @@ public:
   std::string type() const override { return kType; }
   EffectRole role() const override { return EffectRole::JointError; }
   void addJointError(const Robot& robot, const JointContext& ctx, JointVector& dq) const override;
-  std::vector<std::string> parameterNames() const override;  // "<joint>.cubic_compliance_rad_per_nm3"
-  std::vector<double> parameters() const override { return cubic_; }
-  void setParameters(const std::vector<double>& values) override;
-  nlohmann::json toJson() const override;
   std::unique_ptr<Effect> clone() const override { return std::make_unique<NonlinearComplianceEffect>(*this); }
 
   static double feature(double torque) { return -torque * torque * torque; }
 
 private:
-  std::vector<std::string> joint_names_;
-  std::vector<double> cubic_;  // rad / (N m)^3
+  static const std::vector<Field>& layout();  // "<joint>.cubic_compliance_rad_per_nm3"
 };
 
 // Discovery: "nonlinear_compliance", one column per joint, tau_j^3 (needs the load torque).

@@ -7,11 +7,12 @@
 
 #include "model/effects/discovery_family.hpp"
 #include "model/effects/effect.hpp"
+#include "model/effects/per_joint_effect.hpp"
 #include "model/effects/gear_train.hpp"
 
 namespace jointcomp {
 
-class ThermalDriftEffect : public Effect {
+class ThermalDriftEffect : public PerJointEffect {
 public:
   static constexpr const char* kType = "thermal";
   // Throws ParameterError for wrong sizes or values that are not finite.
@@ -23,20 +24,15 @@ public:
   std::string type() const override { return kType; }
   EffectRole role() const override { return EffectRole::JointError; }
   void addJointError(const Robot& robot, const JointContext& ctx, JointVector& dq) const override;
-  // "<joint>.thermal_rad_per_degc" for every joint, then "<joint>.drift_rad_per_s" for every joint.
-  std::vector<std::string> parameterNames() const override;
-  std::vector<double> parameters() const override;
-  void setParameters(const std::vector<double>& values) override;
-  nlohmann::json toJson() const override;
   std::unique_ptr<Effect> clone() const override { return std::make_unique<ThermalDriftEffect>(*this); }
 
   double referenceTemperature() const { return t0_degc_; }
   double referenceTime() const { return t0_s_; }
 
 private:
-  std::vector<std::string> joint_names_;
-  std::vector<double> coefficient_;  // rad / degC
-  std::vector<double> drift_;        // rad / s
+  // "<joint>.thermal_rad_per_degc" for every joint, then "<joint>.drift_rad_per_s" for every joint.
+  static const std::vector<Field>& layout();
+  void writeExtraJson(nlohmann::json& json) const override;
   double t0_degc_;
   double t0_s_;
 };

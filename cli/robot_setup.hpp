@@ -1,0 +1,35 @@
+// The preamble most commands share: the robot of --urdf and everything its parameter file says (joint-error
+// model and drives), read once (model/io/parameter_file.hpp). A malformed "plant" object is an error in
+// every command, whether it simulates or only carries the drives over into the file it writes.
+#pragma once
+
+#include <memory>
+#include <string>
+
+#include "cli/options.hpp"
+#include "model/io/parameter_file.hpp"
+#include "model/robot/load_urdf.hpp"
+
+namespace jointcomp::cli {
+
+struct RobotSetup {
+  std::string urdf;        // the URDF read
+  std::string params;      // the parameter file read; "" when there was none
+  std::shared_ptr<const Robot> robot;
+  ParameterSet parameters;  // without a file: no effects, a direct gear train, no drives
+};
+
+// `params_option` is the option naming the file ("params", or "truth" for simulate). With an empty
+// `default_params` the file is optional.
+inline RobotSetup loadRobotSetup(const Options& options, const std::string& default_urdf,
+                                 const std::string& params_option = "params", const std::string& default_params = "") {
+  const std::string urdf = options.get("urdf", default_urdf);
+  const std::string params = options.get(params_option, default_params);
+  auto robot = std::make_shared<const Robot>(loadRobotFromUrdfFile(urdf));
+  ParameterSet parameters = params.empty()
+                                ? ParameterSet{JointErrorModel(robot, GearTrain::direct(robot->dof()), {}), {}}
+                                : loadParameterSet(params, robot);
+  return RobotSetup{urdf, params, std::move(robot), std::move(parameters)};
+}
+
+}  // namespace jointcomp::cli

@@ -1,0 +1,55 @@
+// What the per-joint effects share: one or more vectors of one value per joint, each a named parameter of
+// every joint ("<joint>.<parameter>") and a key of the parameter file, read, checked and written alike. A
+// type derived from it keeps only its physics (and its own extra keys, if any).
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "model/common/json_fields.hpp"
+#include "model/effects/effect.hpp"
+
+namespace jointcomp {
+
+class PerJointEffect : public Effect {
+public:
+  enum class Check {
+    Finite,           // any finite value
+    PositiveOrRigid,  // positive, +infinity for a rigid joint (null in the file)
+  };
+  struct Field {
+    std::string json_key;    // "width_rad"
+    std::string parameter;   // "backlash_width_rad", named "<joint>.backlash_width_rad"
+    Check check = Check::Finite;
+    bool optional = false;   // may be left out of the file (zeros)
+  };
+
+  // Field by field, joint by joint.
+  std::vector<std::string> parameterNames() const override;
+  std::vector<double> parameters() const override;
+  // Throws ParameterError naming the parameter; a rejected update leaves the effect as it was.
+  void setParameters(const std::vector<double>& values) override;
+  nlohmann::json toJson() const override;
+
+protected:
+  PerJointEffect(const Robot& robot, std::vector<Field> fields);
+  // Every field of a parameter file's object, in the order of setParameters (the caller reads its own
+  // keys and then calls rejectUnknownKeys).
+  static std::vector<double> readFields(JsonFields& fields, const std::vector<Field>& layout, int dof);
+  // Joins per-field vectors into the order of setParameters.
+  static std::vector<double> joined(std::initializer_list<const std::vector<double>*> vectors);
+
+  const std::vector<double>& field(std::size_t k) const { return values_[k]; }
+  std::size_t jointCount() const { return joint_names_.size(); }
+  // Keys of the type's own beside the fields (e.g. a velocity scale).
+  virtual void writeExtraJson(nlohmann::json&) const {}
+  // Called after every accepted setParameters (e.g. to cache 1 / stiffness).
+  virtual void parametersChanged() {}
+
+private:
+  std::vector<std::string> joint_names_;
+  std::vector<Field> fields_;
+  std::vector<std::vector<double>> values_;
+};
+
+}  // namespace jointcomp
