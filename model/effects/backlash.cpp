@@ -5,7 +5,6 @@
 #include <nlohmann/json.hpp>
 
 #include "model/common/errors.hpp"
-#include "model/effects/joint_error_model.hpp"
 #include "model/common/json_fields.hpp"
 
 namespace jointcomp {
@@ -15,11 +14,14 @@ const std::vector<PerJointEffect::Field>& BacklashEffect::layout() {
   return fields;
 }
 
+const std::vector<PerJointEffect::Scalar>& BacklashEffect::scalarLayout() {
+  static const std::vector<Scalar> scalars = {{"velocity_scale_rad_per_s", kDefaultVelocityScale, Check::Positive}};
+  return scalars;
+}
+
 BacklashEffect::BacklashEffect(const Robot& robot, std::vector<double> width, double velocity_scale)
-    : PerJointEffect(robot, layout()), velocity_scale_(velocity_scale) {
-  if (!(std::isfinite(velocity_scale) && velocity_scale > 0.0)) {
-    throw ParameterError("backlash: velocity_scale_rad_per_s must be finite and positive");
-  }
+    : PerJointEffect(robot, layout(), scalarLayout()) {
+  setScalars({velocity_scale});
   setParameters(width);
 }
 
@@ -28,45 +30,29 @@ std::unique_ptr<Effect> BacklashEffect::fromJson(const nlohmann::json& json, con
   JsonFields fields(json, path);
   fields.text("type");
   const std::vector<double> width = readFields(fields, layout(), robot.dof());
-  const double scale = fields.numberOr("velocity_scale_rad_per_s", kDefaultVelocityScale);
+  const std::vector<double> scalars = readScalars(fields, scalarLayout());
   const std::string note = fields.textOr("estimate", "");
   fields.rejectUnknownKeys();
-  if (!(scale > 0.0)) throw ParameterError(path + ".velocity_scale_rad_per_s: must be positive");
-  auto effect = std::make_unique<BacklashEffect>(robot, width, scale);
+  auto effect = std::make_unique<BacklashEffect>(robot, width, scalars[0]);
   effect->estimate_note = note;
   return effect;
 }
-
-void BacklashEffect::writeExtraJson(nlohmann::json& json) const { json["velocity_scale_rad_per_s"] = velocity_scale_; }
 
 void BacklashEffect::addJointError(const Robot&, const JointContext& ctx, JointVector& dq) const {
   if (ctx.velocity.size() != dq.size()) return;  // no motion (or load) known
   const std::vector<double>& width = field(0);
   for (std::size_t i = 0; i < width.size(); ++i) {
     const int j = static_cast<int>(i);
-    dq[j] += width[i] * feature(ctx.velocity[j], velocity_scale_);
+    dq[j] += width[i] * feature(ctx.velocity[j], scalar(0));
   }
 }
 
-void BacklashDiscovery::offer(const DiscoveryData& data, int joint, std::vector<DiscoveryCandidate>& candidates) const {
-  if (joint < 0) return;
-  DiscoveryCandidate candidate;
-  candidate.type = name();
-  candidate.joint = joint;
-  candidate.columns = featureColumn(data, [&](int i) { return BacklashEffect::feature(data.velocity[i][joint], data.velocity_scale); });
-  candidates.push_back(std::move(candidate));
+double BacklashDiscovery::feature(const DiscoveryData& data, int row, int joint) const {
+  return BacklashEffect::feature(data.velocity[row][joint], data.velocity_scale);
 }
 
-std::unique_ptr<Effect> BacklashDiscovery::makeEffect(const DiscoveryData& data,
-                                                      const std::vector<FittedCandidate>& accepted) const {
-  std::vector<double> width(static_cast<std::size_t>(data.robot->dof()), 0.0);
-  for (const FittedCandidate& a : accepted) width[static_cast<std::size_t>(a.candidate->joint)] += a.theta[0];
-  return std::make_unique<BacklashEffect>(*data.robot, width, data.velocity_scale);
-}
-
-std::vector<NamedEstimate> BacklashDiscovery::describe(const FittedCandidate& fitted, const JointErrorModel& model) const {
-  const std::string& joint = model.robot().joints[static_cast<std::size_t>(fitted.candidate->joint)].name;
-  return {{joint + ".backlash_width_rad", fitted.theta[0], fitted.sigma[0]}};
+std::unique_ptr<Effect> BacklashDiscovery::effectOf(const DiscoveryData& data, std::vector<double> width) const {
+  return std::make_unique<BacklashEffect>(*data.robot, std::move(width), data.velocity_scale);
 }
 
 }  // namespace jointcomp

@@ -33,23 +33,23 @@ public:
   void addJointError(const Robot& robot, const JointContext& ctx, JointVector& dq) const override;
   std::unique_ptr<Effect> clone() const override { return std::make_unique<BacklashEffect>(*this); }
 
-  double velocityScale() const { return velocity_scale_; }
+  double velocityScale() const { return scalar(0); }
   // The factor of b_j in dq_j: -tanh(v / v_s) / 2.
   static double feature(double velocity, double velocity_scale) { return -0.5 * std::tanh(velocity / velocity_scale); }
 
 private:
+  static const std::vector<Scalar>& scalarLayout();  // velocity_scale_rad_per_s
   static const std::vector<Field>& layout();  // "<joint>.backlash_width_rad"
-  void writeExtraJson(nlohmann::json& json) const override;
-  double velocity_scale_;  // rad/s
 };
 
 // Discovery: "backlash", one column per joint, -tanh(v_j / v_s) / 2 with v_j from the command sequence.
-class BacklashDiscovery : public DiscoveryFamily {
+class BacklashDiscovery : public PerJointFeatureDiscovery {
 public:
-  std::string name() const override { return "backlash"; }
-  void offer(const DiscoveryData& data, int joint, std::vector<DiscoveryCandidate>& candidates) const override;
-  std::unique_ptr<Effect> makeEffect(const DiscoveryData& data, const std::vector<FittedCandidate>& accepted) const override;
-  std::vector<NamedEstimate> describe(const FittedCandidate& fitted, const JointErrorModel& model) const override;
+  BacklashDiscovery() : PerJointFeatureDiscovery("backlash", "backlash_width_rad", false) {}
+
+protected:
+  double feature(const DiscoveryData& data, int row, int joint) const override;
+  std::unique_ptr<Effect> effectOf(const DiscoveryData& data, std::vector<double> width) const override;
 };
 
 }  // namespace jointcomp

@@ -41,13 +41,5 @@ void ComplianceEffect::addJointError(const Robot&, const JointContext& ctx, Join
   dq -= ctx.load_torque.cwiseProduct(compliance_);
 }
 
-void ComplianceDiscovery::offer(const DiscoveryData& data, int joint, std::vector<DiscoveryCandidate>& candidates) const {
-  if (joint < 0 || !data.torque_known) return;
-  DiscoveryCandidate candidate;
-  candidate.type = name();
-  candidate.joint = joint;
-  candidate.releases = {CalibrationParameter::Compliance};
-  candidates.push_back(std::move(candidate));
-}
 
 }  // namespace jointcomp

@@ -34,10 +34,9 @@ private:
 
 // Discovery: "compliance", a joint's linear compliance under its load torque, freed in the kinematic
 // calibration (offered when the robot has inertials, so that the torque is known).
-class ComplianceDiscovery : public DiscoveryFamily {
+class ComplianceDiscovery : public CalibrationParameterDiscovery {
 public:
-  std::string name() const override { return "compliance"; }
-  void offer(const DiscoveryData& data, int joint, std::vector<DiscoveryCandidate>& candidates) const override;
+  ComplianceDiscovery() : CalibrationParameterDiscovery("compliance", CalibrationParameter::Compliance, true) {}
 };
 
 }  // namespace jointcomp

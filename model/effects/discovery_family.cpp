@@ -1,5 +1,7 @@
 #include "model/effects/discovery_family.hpp"
 
+#include "model/effects/joint_error_model.hpp"
+
 namespace jointcomp {
 
 std::string DiscoveryCandidate::label() const {
@@ -17,6 +19,38 @@ std::vector<NamedEstimate> DiscoveryFamily::describe(const FittedCandidate&, con
 
 const std::string& jointNameOf(const DiscoveryData& data, int joint) {
   return data.robot->joints[static_cast<std::size_t>(joint)].name;
+}
+
+void CalibrationParameterDiscovery::offer(const DiscoveryData& data, int joint,
+                                          std::vector<DiscoveryCandidate>& candidates) const {
+  if (joint < 0 || (needs_torque_ && !data.torque_known)) return;
+  DiscoveryCandidate candidate;
+  candidate.type = name_;
+  candidate.joint = joint;
+  candidate.releases = {parameter_};
+  candidates.push_back(std::move(candidate));
+}
+
+void PerJointFeatureDiscovery::offer(const DiscoveryData& data, int joint, std::vector<DiscoveryCandidate>& candidates) const {
+  if (joint < 0 || (needs_torque_ && !data.torque_known)) return;
+  DiscoveryCandidate candidate;
+  candidate.type = name_;
+  candidate.joint = joint;
+  candidate.columns = featureColumn(data, [&](int i) { return feature(data, i, joint); });
+  candidates.push_back(std::move(candidate));
+}
+
+std::unique_ptr<Effect> PerJointFeatureDiscovery::makeEffect(const DiscoveryData& data,
+                                                             const std::vector<FittedCandidate>& accepted) const {
+  std::vector<double> per_joint(static_cast<std::size_t>(data.robot->dof()), 0.0);
+  for (const FittedCandidate& a : accepted) per_joint[static_cast<std::size_t>(a.candidate->joint)] += a.theta[0];
+  return effectOf(data, std::move(per_joint));
+}
+
+std::vector<NamedEstimate> PerJointFeatureDiscovery::describe(const FittedCandidate& fitted,
+                                                              const JointErrorModel& model) const {
+  const std::string& joint = model.robot().joints[static_cast<std::size_t>(fitted.candidate->joint)].name;
+  return {{joint + "." + parameter_, fitted.theta[0], fitted.sigma[0]}};
 }
 
 }  // namespace jointcomp

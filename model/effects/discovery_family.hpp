@@ -92,6 +92,45 @@ public:
   virtual std::vector<NamedEstimate> describe(const FittedCandidate& fitted, const JointErrorModel& model) const;
 };
 
+// A family that only frees one of the calibration's own parameters of each joint (offset, compliance,
+// placement): no columns, no effect of its own.
+class CalibrationParameterDiscovery : public DiscoveryFamily {
+public:
+  std::string name() const override { return name_; }
+  void offer(const DiscoveryData& data, int joint, std::vector<DiscoveryCandidate>& candidates) const override;
+
+protected:
+  CalibrationParameterDiscovery(std::string name, CalibrationParameter parameter, bool needs_torque)
+      : name_(std::move(name)), parameter_(parameter), needs_torque_(needs_torque) {}
+
+private:
+  std::string name_;
+  CalibrationParameter parameter_;
+  bool needs_torque_;  // offered only when the load torque is known
+};
+
+// A family of one feature column per joint whose coefficients are the effect's one per-joint vector
+// (named "<joint>.<parameter>"): the derived type gives the column and makes the effect.
+class PerJointFeatureDiscovery : public DiscoveryFamily {
+public:
+  std::string name() const override { return name_; }
+  void offer(const DiscoveryData& data, int joint, std::vector<DiscoveryCandidate>& candidates) const override;
+  std::unique_ptr<Effect> makeEffect(const DiscoveryData& data, const std::vector<FittedCandidate>& accepted) const override;
+  std::vector<NamedEstimate> describe(const FittedCandidate& fitted, const JointErrorModel& model) const override;
+
+protected:
+  PerJointFeatureDiscovery(std::string name, std::string parameter, bool needs_torque)
+      : name_(std::move(name)), parameter_(std::move(parameter)), needs_torque_(needs_torque) {}
+  // The column of `joint` at fitted row `row`: the joint error per unit coefficient.
+  virtual double feature(const DiscoveryData& data, int row, int joint) const = 0;
+  virtual std::unique_ptr<Effect> effectOf(const DiscoveryData& data, std::vector<double> per_joint) const = 0;
+
+private:
+  std::string name_;
+  std::string parameter_;
+  bool needs_torque_;
+};
+
 // One feature column of `joint`'s candidate from a function of the row.
 template <typename Feature>
 Eigen::MatrixXd featureColumn(const DiscoveryData& data, Feature feature) {

@@ -43,25 +43,25 @@ public:
   void addJointError(const Robot& robot, const JointContext& ctx, JointVector& dq) const override;
   std::unique_ptr<Effect> clone() const override { return std::make_unique<HysteresisEffect>(*this); }
 
-  double velocityScale() const { return velocity_scale_; }
+  double velocityScale() const { return scalar(0); }
   // The factor of h_j in dq_j: -|tau| tanh(v / v_s) / 2.
   static double feature(double velocity, double torque, double velocity_scale) {
     return -0.5 * std::abs(torque) * std::tanh(velocity / velocity_scale);
   }
 
 private:
+  static const std::vector<Scalar>& scalarLayout();  // velocity_scale_rad_per_s
   static const std::vector<Field>& layout();  // "<joint>.hysteresis_width_rad_per_nm"
-  void writeExtraJson(nlohmann::json& json) const override;
-  double velocity_scale_;  // rad/s
 };
 
 // Discovery: "hysteresis", one column per joint, -|tau_j| tanh(v_j / v_s) / 2 (needs the load torque).
-class HysteresisDiscovery : public DiscoveryFamily {
+class HysteresisDiscovery : public PerJointFeatureDiscovery {
 public:
-  std::string name() const override { return "hysteresis"; }
-  void offer(const DiscoveryData& data, int joint, std::vector<DiscoveryCandidate>& candidates) const override;
-  std::unique_ptr<Effect> makeEffect(const DiscoveryData& data, const std::vector<FittedCandidate>& accepted) const override;
-  std::vector<NamedEstimate> describe(const FittedCandidate& fitted, const JointErrorModel& model) const override;
+  HysteresisDiscovery() : PerJointFeatureDiscovery("hysteresis", "hysteresis_width_rad_per_nm", true) {}
+
+protected:
+  double feature(const DiscoveryData& data, int row, int joint) const override;
+  std::unique_ptr<Effect> effectOf(const DiscoveryData& data, std::vector<double> width) const override;
 };
 
 }  // namespace jointcomp

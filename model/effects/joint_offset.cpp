@@ -35,13 +35,5 @@ void JointOffsetEffect::addJointError(const Robot&, const JointContext&, JointVe
   for (std::size_t i = 0; i < offsets.size(); ++i) dq[static_cast<int>(i)] += offsets[i];
 }
 
-void JointOffsetDiscovery::offer(const DiscoveryData&, int joint, std::vector<DiscoveryCandidate>& candidates) const {
-  if (joint < 0) return;
-  DiscoveryCandidate candidate;
-  candidate.type = name();
-  candidate.joint = joint;
-  candidate.releases = {CalibrationParameter::Offset};
-  candidates.push_back(std::move(candidate));
-}
 
 }  // namespace jointcomp

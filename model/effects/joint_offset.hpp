@@ -33,10 +33,9 @@ private:
 };
 
 // Discovery: "offset", a joint's zero, freed in the kinematic calibration.
-class JointOffsetDiscovery : public DiscoveryFamily {
+class JointOffsetDiscovery : public CalibrationParameterDiscovery {
 public:
-  std::string name() const override { return "offset"; }
-  void offer(const DiscoveryData& data, int joint, std::vector<DiscoveryCandidate>& candidates) const override;
+  JointOffsetDiscovery() : CalibrationParameterDiscovery("offset", CalibrationParameter::Offset, false) {}
 };
 
 }  // namespace jointcomp

@@ -8,10 +8,9 @@
 
 namespace jointcomp {
 
-class JointPlacementDiscovery : public DiscoveryFamily {
+class JointPlacementDiscovery : public CalibrationParameterDiscovery {
 public:
-  std::string name() const override { return "geometric"; }
-  void offer(const DiscoveryData& data, int joint, std::vector<DiscoveryCandidate>& candidates) const override;
+  JointPlacementDiscovery() : CalibrationParameterDiscovery("geometric", CalibrationParameter::Placement, false) {}
 };
 
 }  // namespace jointcomp

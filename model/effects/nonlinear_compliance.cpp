@@ -5,7 +5,6 @@
 #include <nlohmann/json.hpp>
 
 #include "model/common/errors.hpp"
-#include "model/effects/joint_error_model.hpp"
 #include "model/common/json_fields.hpp"
 
 namespace jointcomp {
@@ -41,27 +40,12 @@ void NonlinearComplianceEffect::addJointError(const Robot&, const JointContext& 
   }
 }
 
-void NonlinearComplianceDiscovery::offer(const DiscoveryData& data, int joint,
-                                         std::vector<DiscoveryCandidate>& candidates) const {
-  if (joint < 0 || !data.torque_known) return;
-  DiscoveryCandidate candidate;
-  candidate.type = name();
-  candidate.joint = joint;
-  candidate.columns = featureColumn(data, [&](int i) { return NonlinearComplianceEffect::feature(data.load_torque[i][joint]); });
-  candidates.push_back(std::move(candidate));
+double NonlinearComplianceDiscovery::feature(const DiscoveryData& data, int row, int joint) const {
+  return NonlinearComplianceEffect::feature(data.load_torque[row][joint]);
 }
 
-std::unique_ptr<Effect> NonlinearComplianceDiscovery::makeEffect(const DiscoveryData& data,
-                                                                 const std::vector<FittedCandidate>& accepted) const {
-  std::vector<double> cubic(static_cast<std::size_t>(data.robot->dof()), 0.0);
-  for (const FittedCandidate& a : accepted) cubic[static_cast<std::size_t>(a.candidate->joint)] += a.theta[0];
-  return std::make_unique<NonlinearComplianceEffect>(*data.robot, cubic);
-}
-
-std::vector<NamedEstimate> NonlinearComplianceDiscovery::describe(const FittedCandidate& fitted,
-                                                                  const JointErrorModel& model) const {
-  const std::string& joint = model.robot().joints[static_cast<std::size_t>(fitted.candidate->joint)].name;
-  return {{joint + ".cubic_compliance_rad_per_nm3", fitted.theta[0], fitted.sigma[0]}};
+std::unique_ptr<Effect> NonlinearComplianceDiscovery::effectOf(const DiscoveryData& data, std::vector<double> width) const {
+  return std::make_unique<NonlinearComplianceEffect>(*data.robot, std::move(width));
 }
 
 }  // namespace jointcomp

@@ -31,12 +31,13 @@ private:
 };
 
 // Discovery: "nonlinear_compliance", one column per joint, tau_j^3 (needs the load torque).
-class NonlinearComplianceDiscovery : public DiscoveryFamily {
+class NonlinearComplianceDiscovery : public PerJointFeatureDiscovery {
 public:
-  std::string name() const override { return "nonlinear_compliance"; }
-  void offer(const DiscoveryData& data, int joint, std::vector<DiscoveryCandidate>& candidates) const override;
-  std::unique_ptr<Effect> makeEffect(const DiscoveryData& data, const std::vector<FittedCandidate>& accepted) const override;
-  std::vector<NamedEstimate> describe(const FittedCandidate& fitted, const JointErrorModel& model) const override;
+  NonlinearComplianceDiscovery() : PerJointFeatureDiscovery("nonlinear_compliance", "cubic_compliance_rad_per_nm3", true) {}
+
+protected:
+  double feature(const DiscoveryData& data, int row, int joint) const override;
+  std::unique_ptr<Effect> effectOf(const DiscoveryData& data, std::vector<double> width) const override;
 };
 
 }  // namespace jointcomp

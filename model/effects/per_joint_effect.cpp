@@ -9,9 +9,32 @@
 
 namespace jointcomp {
 
-PerJointEffect::PerJointEffect(const Robot& robot, std::vector<Field> fields) : fields_(std::move(fields)) {
+PerJointEffect::PerJointEffect(const Robot& robot, std::vector<Field> fields, std::vector<Scalar> scalars)
+    : fields_(std::move(fields)), scalars_(std::move(scalars)) {
   for (const Joint& joint : robot.joints) joint_names_.push_back(joint.name);
   values_.assign(fields_.size(), std::vector<double>(joint_names_.size(), 0.0));
+  for (const Scalar& s : scalars_) scalar_values_.push_back(s.fallback);
+}
+
+void PerJointEffect::setScalars(const std::vector<double>& values) {
+  if (values.size() != scalars_.size()) throw ParameterError(type() + ": expected " + std::to_string(scalars_.size()) + " scalars");
+  for (std::size_t k = 0; k < values.size(); ++k) {
+    const std::string& key = scalars_[k].json_key;
+    if (!std::isfinite(values[k])) throw ParameterError(type() + ": " + key + " must be finite");
+    if (scalars_[k].check != Check::Finite && !(values[k] > 0.0)) {
+      throw ParameterError(type() + ": " + key + " must be finite and positive");
+    }
+  }
+  scalar_values_ = values;
+}
+
+std::vector<double> PerJointEffect::readScalars(JsonFields& fields, const std::vector<Scalar>& layout) {
+  std::vector<double> values;
+  for (const Scalar& s : layout) {
+    values.push_back(fields.numberOr(s.json_key, s.fallback));
+    if (s.check != Check::Finite && !(values.back() > 0.0)) fields.fail(s.json_key, "must be positive");
+  }
+  return values;
 }
 
 std::vector<std::string> PerJointEffect::parameterNames() const {
@@ -40,7 +63,8 @@ void PerJointEffect::setParameters(const std::vector<double>& values) {
     for (std::size_t j = 0; j < n; ++j) {
       const double value = values[f * n + j];
       const std::string name = type() + ": " + joint_names_[j] + "." + fields_[f].parameter;
-      if (fields_[f].check == Check::Finite && !std::isfinite(value)) throw ParameterError(name + " must be finite");
+      if (fields_[f].check != Check::PositiveOrRigid && !std::isfinite(value)) throw ParameterError(name + " must be finite");
+      if (fields_[f].check == Check::Positive && !(value > 0.0)) throw ParameterError(name + " must be positive");
       if (fields_[f].check == Check::PositiveOrRigid && (std::isnan(value) || !(value > 0.0))) {
         throw ParameterError(name + " must be positive (+infinity for a rigid joint)");
       }
@@ -59,7 +83,7 @@ nlohmann::json PerJointEffect::toJson() const {
     for (double v : values_[f]) list.push_back(std::isinf(v) ? nlohmann::json(nullptr) : nlohmann::json(v));
     json[fields_[f].json_key] = list;
   }
-  writeExtraJson(json);
+  for (std::size_t k = 0; k < scalars_.size(); ++k) json[scalars_[k].json_key] = scalar_values_[k];
   if (!estimate_note.empty()) json["estimate"] = estimate_note;
   return json;
 }
@@ -71,7 +95,7 @@ std::vector<double> PerJointEffect::readFields(JsonFields& fields, const std::ve
       all.insert(all.end(), static_cast<std::size_t>(dof), 0.0);
       continue;
     }
-    if (f.check == Check::Finite) {
+    if (f.check != Check::PositiveOrRigid) {
       const std::vector<double> values = fields.numbers(f.json_key, dof);
       all.insert(all.end(), values.begin(), values.end());
       continue;

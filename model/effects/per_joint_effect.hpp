@@ -16,12 +16,19 @@ public:
   enum class Check {
     Finite,           // any finite value
     PositiveOrRigid,  // positive, +infinity for a rigid joint (null in the file)
+    Positive,         // finite and positive
   };
   struct Field {
     std::string json_key;    // "width_rad"
     std::string parameter;   // "backlash_width_rad", named "<joint>.backlash_width_rad"
     Check check = Check::Finite;
     bool optional = false;   // may be left out of the file (zeros)
+  };
+  // A single number of the effect beside the per-joint vectors (a velocity scale, a reference temperature).
+  struct Scalar {
+    std::string json_key;  // "velocity_scale_rad_per_s"
+    double fallback = 0.0;  // when the file leaves it out
+    Check check = Check::Finite;
   };
 
   // Field by field, joint by joint.
@@ -32,17 +39,19 @@ public:
   nlohmann::json toJson() const override;
 
 protected:
-  PerJointEffect(const Robot& robot, std::vector<Field> fields);
-  // Every field of a parameter file's object, in the order of setParameters (the caller reads its own
-  // keys and then calls rejectUnknownKeys).
+  PerJointEffect(const Robot& robot, std::vector<Field> fields, std::vector<Scalar> scalars = {});
+  // Every field of a parameter file's object, in the order of setParameters, and its scalars, in their
+  // order (the caller reads its own keys, if any, and then calls rejectUnknownKeys).
   static std::vector<double> readFields(JsonFields& fields, const std::vector<Field>& layout, int dof);
+  static std::vector<double> readScalars(JsonFields& fields, const std::vector<Scalar>& layout);
+  // Throws ParameterError naming the scalar (derived constructors call it: type() is theirs).
+  void setScalars(const std::vector<double>& values);
+  double scalar(std::size_t k) const { return scalar_values_[k]; }
   // Joins per-field vectors into the order of setParameters.
   static std::vector<double> joined(std::initializer_list<const std::vector<double>*> vectors);
 
   const std::vector<double>& field(std::size_t k) const { return values_[k]; }
   std::size_t jointCount() const { return joint_names_.size(); }
-  // Keys of the type's own beside the fields (e.g. a velocity scale).
-  virtual void writeExtraJson(nlohmann::json&) const {}
   // Called after every accepted setParameters (e.g. to cache 1 / stiffness).
   virtual void parametersChanged() {}
 
@@ -50,6 +59,8 @@ private:
   std::vector<std::string> joint_names_;
   std::vector<Field> fields_;
   std::vector<std::vector<double>> values_;
+  std::vector<Scalar> scalars_;
+  std::vector<double> scalar_values_;
 };
 
 }  // namespace jointcomp

@@ -16,12 +16,16 @@ const std::vector<PerJointEffect::Field>& ThermalDriftEffect::layout() {
   return fields;
 }
 
+const std::vector<PerJointEffect::Scalar>& ThermalDriftEffect::scalarLayout() {
+  static const std::vector<Scalar> scalars = {{"reference_temperature_degc", 20.0}, {"reference_time_s", 0.0}};
+  return scalars;
+}
+
 ThermalDriftEffect::ThermalDriftEffect(const Robot& robot, std::vector<double> coefficient_rad_per_degc,
                                        double reference_temperature_degc, std::vector<double> drift_rad_per_s,
                                        double reference_time_s)
-    : PerJointEffect(robot, layout()), t0_degc_(reference_temperature_degc), t0_s_(reference_time_s) {
-  if (!std::isfinite(t0_degc_)) throw ParameterError("thermal: reference_temperature_degc must be finite");
-  if (!std::isfinite(t0_s_)) throw ParameterError("thermal: reference_time_s must be finite");
+    : PerJointEffect(robot, layout(), scalarLayout()) {
+  setScalars({reference_temperature_degc, reference_time_s});
   if (coefficient_rad_per_degc.size() != jointCount() || drift_rad_per_s.size() != jointCount()) {
     throw ParameterError("thermal: expected " + std::to_string(jointCount()) + " coefficients and drifts, found " +
                          std::to_string(coefficient_rad_per_degc.size()) + " and " + std::to_string(drift_rad_per_s.size()));
@@ -34,25 +38,20 @@ std::unique_ptr<Effect> ThermalDriftEffect::fromJson(const nlohmann::json& json,
   JsonFields fields(json, path);
   fields.text("type");
   const std::vector<double> values = readFields(fields, layout(), robot.dof());
-  const double t0 = fields.numberOr("reference_temperature_degc", 20.0);
-  const double time0 = fields.numberOr("reference_time_s", 0.0);
+  const std::vector<double> scalars = readScalars(fields, scalarLayout());
   const std::string note = fields.textOr("estimate", "");
   fields.rejectUnknownKeys();
   const auto n = static_cast<long>(robot.dof());
-  auto effect = std::make_unique<ThermalDriftEffect>(robot, std::vector<double>(values.begin(), values.begin() + n), t0,
-                                                     std::vector<double>(values.begin() + n, values.end()), time0);
+  auto effect = std::make_unique<ThermalDriftEffect>(robot, std::vector<double>(values.begin(), values.begin() + n),
+                                                     scalars[0], std::vector<double>(values.begin() + n, values.end()),
+                                                     scalars[1]);
   effect->estimate_note = note;
   return effect;
 }
 
-void ThermalDriftEffect::writeExtraJson(nlohmann::json& json) const {
-  json["reference_temperature_degc"] = t0_degc_;
-  json["reference_time_s"] = t0_s_;
-}
-
 void ThermalDriftEffect::addJointError(const Robot&, const JointContext& ctx, JointVector& dq) const {
-  const double dt = ctx.temperature - t0_degc_;
-  const double dtime = ctx.time - t0_s_;
+  const double dt = ctx.temperature - scalar(0);
+  const double dtime = ctx.time - scalar(1);
   const std::vector<double>& coefficient = field(0);
   const std::vector<double>& drift = field(1);
   for (std::size_t i = 0; i < coefficient.size(); ++i) {

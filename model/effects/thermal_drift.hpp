@@ -26,15 +26,13 @@ public:
   void addJointError(const Robot& robot, const JointContext& ctx, JointVector& dq) const override;
   std::unique_ptr<Effect> clone() const override { return std::make_unique<ThermalDriftEffect>(*this); }
 
-  double referenceTemperature() const { return t0_degc_; }
-  double referenceTime() const { return t0_s_; }
+  double referenceTemperature() const { return scalar(0); }
+  double referenceTime() const { return scalar(1); }
 
 private:
   // "<joint>.thermal_rad_per_degc" for every joint, then "<joint>.drift_rad_per_s" for every joint.
   static const std::vector<Field>& layout();
-  void writeExtraJson(nlohmann::json& json) const override;
-  double t0_degc_;
-  double t0_s_;
+  static const std::vector<Scalar>& scalarLayout();  // reference_temperature_degc, reference_time_s
 };
 
 // Discovery: "thermal", per joint a temperature drift (when every row has a temperature) and a time
