@@ -270,8 +270,9 @@ BENCHMARK(BM_FmuCallsOnly)->ArgName("fmi")->Arg(2)->Arg(3)->Unit(benchmark::kNan
 void BM_DirectSpiral(benchmark::State& state) {
   const Spiral& s = spiral();
   const std::string parameters = fmuDir(2) + "/resources/parameters.json";
-  const JointErrorModel nominal = loadParameterFile(parameters, s.robot);
-  const std::vector<DriveParameters> drives = loadDriveParameters(parameters, *s.robot);
+  const ParameterSet loaded = loadParameterSet(parameters, s.robot);
+  const JointErrorModel& nominal = loaded.model;
+  const std::vector<DriveParameters>& drives = loaded.drives;
   const EffectMask mask = nominal.loadsAnd({"compliance", "transmission_error"});
   std::unique_ptr<FlexibleJointPlant> plant;
   Compensator compensator(nominal, mask);

@@ -88,8 +88,9 @@ std::unique_ptr<Fixture> buildFixture() {
   auto f = std::make_unique<Fixture>();
   try {
     f->robot = std::make_shared<const Robot>(loadRobotFromUrdfFile(kUrdf));
-    f->model = std::make_unique<JointErrorModel>(loadParameterFile(kParameters, f->robot));
-    f->drives = loadDriveParameters(kParameters, *f->robot);
+    ParameterSet loaded = loadParameterSet(kParameters, f->robot);
+    f->model = std::make_unique<JointErrorModel>(std::move(loaded.model));
+    f->drives = std::move(loaded.drives);
   } catch (const std::exception& error) {
     fail(std::string("cannot load the RX170: ") + error.what());
   }

@@ -1,7 +1,6 @@
 // Robot handles: loading, queries, conditions, kinematics and gravity.
-#include <nlohmann/json.hpp>
-
 #include "api_support.hpp"
+#include "model/effects/registry.hpp"
 #include "model/io/atomic_file.hpp"
 #include "model/io/parameter_file.hpp"
 #include "model/robot/dynamics.hpp"
@@ -13,14 +12,11 @@ using namespace jointcomp::capi;
 
 namespace {
 
+// The "plant" object is optional in a parameter file; present, it must be valid (the set is read once).
 jc_robot* robotFromParameters(const std::shared_ptr<const Robot>& robot, const std::string& json_text,
                               const std::string& source_name) {
-  JointErrorModel model = parseParameters(json_text, source_name, robot);
-  // The "plant" object is optional in a parameter file; present, it must be valid.
-  std::vector<DriveParameters> drives;
-  const nlohmann::json document = nlohmann::json::parse(json_text, nullptr, false);
-  if (document.is_object() && document.contains("plant")) drives = parseDriveParameters(json_text, source_name, *robot);
-  return new jc_robot(robot, std::move(model), std::move(drives));
+  ParameterSet parameters = parseParameterSet(json_text, source_name, robot, EffectRegistry::builtin());
+  return new jc_robot(robot, std::move(parameters.model), std::move(parameters.drives));
 }
 
 std::shared_ptr<const Robot> loadUrdf(const char* urdf_path) {
