@@ -23,6 +23,23 @@ struct DriveParameters {
   double kd_nms_per_rad = 0.0;                    // velocity gain
 };
 
+// The fields of a drive by name: the parameter file's keys, the member, and what values are accepted
+// (positive, or not negative). One table for reading, writing and naming the parameters.
+struct DriveField {
+  const char* key;                   // "kp_nm_per_rad"
+  double DriveParameters::*member;
+  bool positive;                     // true: > 0; false: >= 0
+};
+const std::vector<DriveField>& driveFields();
+
+// The drives' parameters by name, like the effects' (effect.hpp): "<joint>.<key>" ("joint_2.kp_nm_per_rad"),
+// joint by joint, each joint's fields in the order of driveFields().
+std::vector<std::string> driveParameterNames(const Robot& robot);
+std::vector<double> driveParameters(const std::vector<DriveParameters>& drives);
+// Throws ParameterError naming the parameter for a value out of range or the wrong count; a refused
+// update leaves the drives as they were.
+void setDriveParameters(std::vector<DriveParameters>& drives, const Robot& robot, const std::vector<double>& values);
+
 std::vector<DriveParameters> drivesFromJson(const nlohmann::json& plant, const Robot& robot, const std::string& path);
 nlohmann::json drivesToJson(const std::vector<DriveParameters>& drives, const Robot& robot);
 
