@@ -1,7 +1,8 @@
-// The FMU's instance, independent of the FMI version: the flexible-joint plant with the compensator in
-// front of it, every variable of modelDescription/variables.csv by value reference, the state machine,
-// and the FMU state as a snapshot or as bytes. fmi2_functions.cpp and fmi3_functions.cpp are thin glue
-// over it; everything the two versions share lives here.
+// The FMU's instance, independent of the FMI version: the state machine and the stepping of the
+// flexible-joint plant with the compensator in front of it, and every variable of
+// modelDescription/variables.csv by value reference. Beside it: the binding of the parameters to the model
+// (variable_binding.hpp) and the instance's mutable state as one value, the FMU state, with its bytes
+// (instance_state.hpp). fmi2_functions.cpp and fmi3_functions.cpp are thin glue over it.
 //
 // What one communication step does (the C++ sequence a test can replay on FlexibleJointPlant and
 // Compensator directly, bit for bit):
@@ -10,8 +11,9 @@
 //      the previous step), and 0 on the first step after initialisation;
 //   2. Q_ref = q_desired when compensation is none, else Compensator(nominal, mask).compensate() with
 //      ctx.q = q_desired, ctx.velocity = v, ctx.time = t, ctx.tool_wrench = tool_wrench if
-//      compensate_wrench else 0; mask = nominal.loadsAnd({"compliance"}) or
-//      nominal.loadsAnd({"compliance", "transmission_error"});
+//      compensate_wrench else 0; mask = nominal.loadsAnd({"compliance"}) (mode 1, the paper's stiffness
+//      correction) or nominal.allEffects() (mode 2: every effect of the parameter file, the paper's
+//      compliance and transmission error for the shipped RX170, and what discovery added to a file);
 //   3. plant.setToolWrench(tool_wrench) if it differs from the wrench last applied;
 //   4. plant.setReference(Q_ref, v); plant.advance(t + h).
 // Initialisation (exitInitializationMode): plant.setToolWrench(tool_wrench); plant.reset(Q_ref, t0), Q_ref
@@ -26,6 +28,7 @@
 #include <string>
 #include <vector>
 
+#include "fmu/instance_state.hpp"
 #include "jointcomp_fmu_variables.hpp"
 #include "model/compensation/compensator.hpp"
 #include "model/plant/flexible_joint_plant.hpp"
@@ -35,17 +38,6 @@ namespace jointcomp::fmu {
 // The status values of FMI 2 and FMI 3 agree for these five.
 enum class Status : int { OK = 0, Warning = 1, Discard = 2, Error = 3, Fatal = 4 };
 
-// States of the state machine, as bits so that a function can name every state it is allowed in.
-enum Phase : unsigned {
-  kInstantiated = 1u << 0,
-  kInitializationMode = 1u << 1,
-  kStepMode = 1u << 2,         // FMI 2: slave initialised, step complete
-  kStepDiscarded = 1u << 3,    // the last step was discarded (FMI 2: step failed)
-  kTerminated = 1u << 4,
-  kErrorState = 1u << 5,       // a call failed in a way that leaves the instance unusable until reset
-  kAnyPhase = (1u << 6) - 1,
-};
-const char* phaseName(unsigned phase);
 
 // Accepted variable types for a typed get or set, as bits.
 enum TypeMask : unsigned {
@@ -58,8 +50,6 @@ enum TypeMask : unsigned {
 // The log channel to the importer: the FMI glue turns these into its logger's calls.
 using LogSink = void (*)(void* context, Status status, const char* category, const char* message);
 
-struct Snapshot;  // an FMU state (fmi2FMUstate, fmi3FMUState)
-
 class Instance {
 public:
   // Loads <resource_dir>/robot.json and <resource_dir>/parameters.json. Throws jointcomp::Error with a
@@ -71,8 +61,8 @@ public:
   Instance& operator=(const Instance&) = delete;
 
   const std::string& name() const { return name_; }
-  unsigned phase() const { return phase_; }
-  double time() const { return time_; }
+  unsigned phase() const { return state_.phase; }
+  double time() const { return state_.time; }
 
   // State machine: true when the call is allowed in the current phase; otherwise logs why (naming the
   // function, the phase and the phases it is allowed in) and returns false. Every FMI function starts here.
@@ -126,7 +116,7 @@ public:
   Status deserialize(const char* function, const unsigned char bytes[], std::size_t size, Snapshot** state);
 
   // For FMI 2's fmi2GetRealStatus(fmi2LastSuccessfulTime).
-  double lastSuccessfulTime() const { return time_; }
+  double lastSuccessfulTime() const { return state_.time; }
 
 private:
   enum LogCategory { kLogWarning, kLogDiscard, kLogError, kLogCalls, kLogCategoryCount };
@@ -134,7 +124,6 @@ private:
   enum OutputGroup : unsigned { kStateOutputs = 1u, kToolOutputs = 2u, kPredictedOutputs = 4u, kReferenceOutputs = 8u };
   struct Models;
 
-  void setStartValues();
   bool ownsState(const Snapshot* state) const;
   // Builds the models, the plant and the compensator from the fixed parameters when they changed since
   // the last build (or were never built). Throws jointcomp::Error naming the parameter at fault.
@@ -148,30 +137,19 @@ private:
   Status fail(Status status, const char* function, const std::string& what);
   Status checkValue(const char* function, int index, double value);
   bool fixedParametersDiffer(const std::vector<double>& values) const;
-  std::string describe(int index) const;
 
   std::string name_;
   LogSink sink_;
   void* sink_context_;
   bool logging_[kLogCategoryCount];
 
-  unsigned phase_ = kInstantiated;
-  std::vector<double> values_;  // every variable, in table order
-  double time_ = 0.0;
-  double start_time_ = 0.0;
-  bool stop_time_defined_ = false;
-  double stop_time_ = 0.0;
-
-  std::unique_ptr<Models> models_;  // the loaded robot and parameter file, and what is built from them
-  bool initialized_ = false;        // the plant holds the state of this instance
+  InstanceState state_;             // everything an FMU state carries
+  std::unique_ptr<Models> models_;  // the loaded robot and parameter set, and what is built from them
+  // Derived from state_, cached:
   bool reference_valid_ = false;
   unsigned outputs_valid_ = 0;      // OutputGroup bits
   JointVector reference_;           // Q_ref for the current inputs
   JointVector reference_velocity_;  // v for the current inputs
-  bool has_last_step_ = false;      // a step was done since initialisation: v can be estimated
-  JointVector last_q_desired_;
-  double last_step_time_ = 0.0;
-  Vector6 applied_wrench_ = Vector6::Zero();  // what the plant was last given
 
   std::vector<std::unique_ptr<Snapshot>> states_;
 };

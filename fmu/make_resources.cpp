@@ -30,8 +30,9 @@ int run(const std::string& urdf, const std::string& parameters, const std::strin
     std::fprintf(stderr, "%s: the robot does not read back bit for bit from its JSON form\n", urdf.c_str());
     return 1;
   }
-  const JointErrorModel model = loadParameterFile(parameters, robot);
-  const std::vector<DriveParameters> drives = loadDriveParameters(parameters, *robot);
+  const ParameterSet loaded_parameters = loadParameterSet(parameters, robot);
+  const JointErrorModel& model = loaded_parameters.model;
+  const std::vector<DriveParameters>& drives = loaded_parameters.drives;
   const PlantOptions options;
   FlexibleJointPlant plant(model, drives, options);  // what the FMU will build must build
 

@@ -1,0 +1,57 @@
+// All mutable state of an FMU instance that an FMU state carries, as one value type: getting and setting
+// the FMU state is a copy of it (fmi2GetFMUstate, fmi3SetFMUState), and it is written to bytes and read
+// back, every field checked, in one place (serializeState, deserializeState). What the instance caches
+// (the reference for the current inputs, the outputs computed) is derived from it and not part of it.
+#pragma once
+
+#include <cstddef>
+#include <vector>
+
+#include "model/common/types.hpp"
+#include "model/plant/flexible_joint_plant.hpp"
+
+namespace jointcomp::fmu {
+
+// States of the state machine, as bits so that a function can name every state it is allowed in.
+enum Phase : unsigned {
+  kInstantiated = 1u << 0,
+  kInitializationMode = 1u << 1,
+  kStepMode = 1u << 2,         // FMI 2: slave initialised, step complete
+  kStepDiscarded = 1u << 3,    // the last step was discarded (FMI 2: step failed)
+  kTerminated = 1u << 4,
+  kErrorState = 1u << 5,       // a call failed in a way that leaves the instance unusable until reset
+  kAnyPhase = (1u << 6) - 1,
+};
+const char* phaseName(unsigned phase);
+
+struct InstanceState {
+  unsigned phase = kInstantiated;
+  std::vector<double> values;       // every variable, in table order
+  double time = 0.0;                // s, the FMU's time
+  double start_time = 0.0;
+  bool stop_time_defined = false;
+  double stop_time = 0.0;
+  bool initialized = false;         // the plant holds the state of this instance
+  PlantState plant;                 // in an FMU state taken after initialisation: the plant's state
+  bool has_last_step = false;       // a step was done since initialisation: the velocity can be estimated
+  JointVector last_q_desired;       // q_desired and time of that step
+  double last_step_time = 0.0;
+  Vector6 applied_wrench = Vector6::Zero();  // what the plant was last given
+
+  // An instance as instantiated: the table's start values, time 0.
+  static InstanceState atStart();
+};
+
+// An FMU state (fmi2FMUstate, fmi3FMUState) is one InstanceState.
+struct Snapshot {
+  InstanceState state;
+};
+
+// The bytes of a state: magic, format, size, the instantiation token and the table's size, the fields,
+// and an FNV-1a checksum of everything before it.
+std::vector<unsigned char> serializeState(const InstanceState& state);
+// Throws jointcomp::Error saying what is wrong: not a jointcomp state, another FMU or format, a wrong
+// size or checksum, a value that is not finite or out of its variable's range, bytes after the end.
+InstanceState deserializeState(const unsigned char bytes[], std::size_t size);
+
+}  // namespace jointcomp::fmu

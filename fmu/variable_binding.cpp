@@ -1,0 +1,99 @@
+#include "fmu/variable_binding.hpp"
+
+#include <algorithm>
+#include <cstdio>
+
+#include "jointcomp_fmu_variables.hpp"
+#include "model/common/errors.hpp"
+
+namespace jointcomp::fmu {
+
+using table::kVariables;
+
+std::string describeVariable(int index) {
+  char text[64];
+  std::snprintf(text, sizeof text, "vr %u (", kVariables[index].vr);
+  return text + std::string(kVariables[index].name) + ")";
+}
+
+VariableBinding::VariableBinding(const ParameterSet& base, const Robot& robot, const std::string& parameter_path)
+    : effect_slot_(table::kCount), drive_slot_(table::kCount, -1), option_(table::kCount, nullptr) {
+  const std::vector<std::string> drive_names = driveParameterNames(robot);
+  for (int i = 0; i < table::kCount; ++i) {
+    const table::Variable& v = kVariables[i];
+    switch (v.binding) {
+      case table::Binding::None: break;
+      case table::Binding::Plant:
+      case table::Binding::Compensator: {
+        EffectSlot& slot = effect_slot_[static_cast<std::size_t>(i)];
+        for (int e = 0; e < base.model.effectCount() && slot.effect < 0; ++e) {
+          const std::vector<std::string> names = base.model.effect(e).parameterNames();
+          const auto found = std::find(names.begin(), names.end(), v.key);
+          if (found != names.end()) slot = {e, static_cast<int>(found - names.begin())};
+        }
+        if (slot.effect < 0) {
+          throw ParameterError(parameter_path + ": no effect parameter '" + v.key + "' (FMU variable '" + v.name + "')");
+        }
+        break;
+      }
+      case table::Binding::Drive: {
+        const auto found = std::find(drive_names.begin(), drive_names.end(), v.key);
+        if (found == drive_names.end() || !base.hasDrives()) {
+          throw ParameterError(parameter_path + ": no drive parameter '" + v.key + "' (FMU variable '" + v.name + "')");
+        }
+        drive_slot_[static_cast<std::size_t>(i)] = static_cast<int>(found - drive_names.begin());
+        break;
+      }
+      case table::Binding::Integrator:
+        option_[static_cast<std::size_t>(i)] = findIntegratorOption(v.key);
+        if (!option_[static_cast<std::size_t>(i)]) {
+          throw Error(std::string("no integrator option '") + v.key + "' (FMU variable '" + v.name + "')");
+        }
+        break;
+    }
+  }
+}
+
+VariableBinding::Models VariableBinding::apply(const ParameterSet& base, const Robot& robot,
+                                               const std::vector<double>& values) const {
+  Models built{base.model, base.model, base.drives, PlantOptions()};
+  for (int e = 0; e < base.model.effectCount(); ++e) {
+    std::vector<double> truth_values = built.truth.effect(e).parameters();
+    std::vector<double> nominal_values = built.nominal.effect(e).parameters();
+    bool touched = false;
+    for (int i = 0; i < table::kCount; ++i) {
+      const EffectSlot& slot = effect_slot_[static_cast<std::size_t>(i)];
+      if (slot.effect != e) continue;
+      touched = true;
+      auto& target = kVariables[i].binding == table::Binding::Plant ? truth_values : nominal_values;
+      target[static_cast<std::size_t>(slot.parameter)] = values[static_cast<std::size_t>(i)];
+    }
+    if (!touched) continue;
+    try {
+      built.truth.effect(e).setParameters(truth_values);
+    } catch (const Error& error) {
+      throw ParameterError(std::string("plant parameters: ") + error.what());
+    }
+    try {
+      built.nominal.effect(e).setParameters(nominal_values);
+    } catch (const Error& error) {
+      throw ParameterError(std::string("compensator parameters: ") + error.what());
+    }
+  }
+  std::vector<double> drive_values = driveParameters(base.drives);
+  for (int i = 0; i < table::kCount; ++i) {
+    const int slot = drive_slot_[static_cast<std::size_t>(i)];
+    if (slot >= 0) drive_values[static_cast<std::size_t>(slot)] = values[static_cast<std::size_t>(i)];
+  }
+  try {
+    setDriveParameters(built.drives, robot, drive_values);
+  } catch (const Error& error) {
+    throw ParameterError(std::string("controller parameters: ") + error.what());
+  }
+  for (int i = 0; i < table::kCount; ++i) {
+    if (const IntegratorOption* o = option(i)) o->set(built.options, values[static_cast<std::size_t>(i)]);
+  }
+  return built;
+}
+
+}  // namespace jointcomp::fmu

@@ -1,0 +1,49 @@
+// The binding of the FMU's variables to the model (modelDescription/variables.csv, column "binding"): each
+// parameter of the table is a named parameter of an effect of the plant's truth ("plant") or of the
+// compensator's nominal model ("compensator"), a named drive parameter ("drive", model/plant), or an
+// integrator option ("integrator"). Found once, by name, in the parameter set the FMU ships; applied to a
+// copy of that set whenever the fixed parameters change.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "fmu/integrator_options.hpp"
+#include "model/io/parameter_file.hpp"
+
+namespace jointcomp::fmu {
+
+// "vr 12 (q_desired_3)", for messages.
+std::string describeVariable(int index);
+
+class VariableBinding {
+public:
+  // Throws ParameterError naming `parameter_path`, the parameter and the FMU variable when the set lacks a
+  // parameter the table binds.
+  VariableBinding(const ParameterSet& base, const Robot& robot, const std::string& parameter_path);
+
+  struct Models {
+    JointErrorModel truth;     // the plant's joint-error model
+    JointErrorModel nominal;   // the compensator's
+    std::vector<DriveParameters> drives;
+    PlantOptions options;
+  };
+  // The base set with every bound variable's value (`values`: every variable, in table order) in its place.
+  // Throws ParameterError naming the parameter ("plant parameters: ...", "compensator parameters: ...",
+  // "controller parameters: ...") for a value the model refuses.
+  Models apply(const ParameterSet& base, const Robot& robot, const std::vector<double>& values) const;
+
+  // The integrator option a variable binds, nullptr for the others.
+  const IntegratorOption* option(int index) const { return option_[static_cast<std::size_t>(index)]; }
+
+private:
+  struct EffectSlot {
+    int effect = -1;     // index in the parameter set's model
+    int parameter = -1;  // index among that effect's parameters
+  };
+  std::vector<EffectSlot> effect_slot_;
+  std::vector<int> drive_slot_;  // index among driveParameters(), -1 for the others
+  std::vector<const IntegratorOption*> option_;
+};
+
+}  // namespace jointcomp::fmu
