@@ -17,6 +17,7 @@ packages=(
   zip unzip                # packs and unpacks the FMU
   clang libclang-rt-14-dev # sanitizers and libFuzzer
   valgrind                 # memcheck of the FMU importer test (test.sh, tests/load/run-load.sh)
+  clang-format clang-tidy  # packaging/format.sh and packaging/tidy.sh keep the style and the checks
 )
 
 SUDO=""
