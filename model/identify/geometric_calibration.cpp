@@ -501,29 +501,27 @@ std::vector<int> frameIndices() { return {0, 1, 2, 3, 4, 5}; }
 
 // ---- calibration -------------------------------------------------------------------------------------
 
-GeometricCalibrationResult calibrateGeometry(const JointErrorModel& prior, const MeasurementCampaign& campaign,
-                                             const GeometricCalibrationOptions& options) {
+namespace {
+
+// What the calibration may free and why each parameter it does not free is fixed.
+struct ParameterChoice {
+  std::vector<int> candidates, priority;  // layout indices offered to the identifiability analysis
+  std::vector<double> typical;            // their typical changes (scaling)
+  std::vector<std::string> reason;        // per parameter: why it is not free
+  std::vector<double> pivot;              // per parameter: its relative pivot
+  std::vector<std::vector<std::pair<std::string, double>>> redundant;
+  std::vector<int> free;                  // the identifiable subset
+};
+
+// The start: the nominal robot, its frame from the closed-form rigid fit, then fitted robustly like the
+// calibration ("before"). Fills the result's nominal and its errors before the calibration.
+GeometricParameters startingPoint(const JointErrorModel& prior, const MeasurementCampaign& campaign,
+                                  const CalibrationData& data, const GeometricCalibrationOptions& options, bool fit_frame,
+                                  GeometricCalibrationResult& result) {
   const Robot& robot = prior.robot();
   const int n = robot.dof();
-  const GeometricParameterLayout layout(n);
-  const std::string& source = campaign.source;
-  const CalibrationData data = prepareCalibrationData(prior, campaign);
   const int rows = static_cast<int>(data.size());
-  if (rows < std::max(options.minimum_rows, 3)) {
-    throw InvalidArgument(source + ": too few points: " + std::to_string(rows) + " usable rows (" +
-                          std::to_string(data.skipped_rows) + " without a measured position); the calibration needs "
-                          "at least " + std::to_string(std::max(options.minimum_rows, 3)));
-  }
-  const bool fit_frame = options.fit_frame && campaign.frame == MeasurementFrame::Instrument;
-
-  GeometricCalibrationResult result;
-  result.names = geometricParameterNames(robot);
-  result.used_rows = rows;
-  result.skipped_rows = data.skipped_rows;
-  result.row = data.row;
-  result.loss = options.loss;
-
-  // Start: nominal robot, frame from the closed-form rigid fit.
+  const std::string& source = campaign.source;
   GeometricParameters start = nominalParameters(prior, campaign);
   const std::vector<Eigen::Vector3d> points = basePoints(robot, start, data);
   checkPoses(data, points, source);
@@ -544,16 +542,26 @@ GeometricCalibrationResult calibrateGeometry(const JointErrorModel& prior, const
     result.before = errorStatistics(result.error_before);
   }
 
-  // Candidates and their priorities; user-fixed and disabled groups take no part.
+  return start;
+}
+
+// Candidates and their priorities; user-fixed and disabled groups take no part.
+ParameterChoice candidateParameters(const Robot& robot, const CalibrationData& data,
+                                    const GeometricCalibrationOptions& options, bool fit_frame,
+                                    const GeometricCalibrationResult& result, const std::string& source) {
+  const GeometricParameterLayout layout(robot.dof());
+  ParameterChoice choice;
+  std::vector<int>& candidates = choice.candidates;
+  std::vector<int>& priority = choice.priority;
+  std::vector<double>& typical = choice.typical;
+  std::vector<std::string>& reason = choice.reason;
   std::set<std::string> user_fixed(options.fixed.begin(), options.fixed.end());
   for (const std::string& name : user_fixed) {
     if (std::find(result.names.begin(), result.names.end(), name) == result.names.end()) {
       throw InvalidArgument(source + ": cannot fix '" + name + "': no such calibration parameter");
     }
   }
-  std::vector<int> candidates, priority;
-  std::vector<double> typical;
-  std::vector<std::string> reason(result.names.size());
+  reason.resize(result.names.size());
   for (int i = 0; i < layout.size(); ++i) {
     const std::string& name = result.names[static_cast<std::size_t>(i)];
     int group;
@@ -590,18 +598,30 @@ GeometricCalibrationResult calibrateGeometry(const JointErrorModel& prior, const
   }
   if (candidates.empty()) throw InvalidArgument(source + ": no calibration parameter is free");
 
-  // Identifiability at the start point.
+  return choice;
+}
+
+// Identifiability at the start point: the free subset, the others with their reason; throws for a frame
+// that cannot be identified or too few rows for the free parameters.
+void chooseIdentifiable(const Robot& robot, const CalibrationData& data, const GeometricParameters& start,
+                        const GeometricCalibrationOptions& options, bool fit_frame, GeometricCalibrationResult& result,
+                        ParameterChoice& choice, const std::string& source) {
+  const int rows = static_cast<int>(data.size());
+  const std::vector<int>& candidates = choice.candidates;
+  std::vector<std::string>& reason = choice.reason;
+  std::vector<int>& free = choice.free;
   Eigen::MatrixXd start_jacobian(3 * rows, static_cast<Eigen::Index>(candidates.size()));
   {
     Eigen::VectorXd residual(3 * rows);
     CalibrationProblem(robot, data, start.toVector(), candidates).evaluateFull(start.toVector(), residual, &start_jacobian);
   }
   const IdentifiabilityResult identifiability =
-      analyseIdentifiability(start_jacobian, priority, typical, options.identifiability);
+      analyseIdentifiability(start_jacobian, choice.priority, choice.typical, options.identifiability);
   result.condition_number_at_start = identifiability.condition_number;
-  std::vector<double> pivot(result.names.size(), 0.0);
-  std::vector<std::vector<std::pair<std::string, double>>> redundant(result.names.size());
-  std::vector<int> free;
+  std::vector<double>& pivot = choice.pivot;
+  auto& redundant = choice.redundant;
+  pivot.assign(result.names.size(), 0.0);
+  redundant.assign(result.names.size(), {});
   for (std::size_t c = 0; c < candidates.size(); ++c) {
     const int i = candidates[c];
     pivot[static_cast<std::size_t>(i)] = identifiability.pivot[static_cast<Eigen::Index>(c)];
@@ -643,8 +663,16 @@ GeometricCalibrationResult calibrateGeometry(const JointErrorModel& prior, const
                           "parameters (" + std::to_string((needed + 2) / 3) + " rows)");
   }
 
-  // The fit; a compliance that comes out not positive is held at its nominal value and the fit repeated.
-  const Eigen::VectorXd nominal_values = start.toVector();
+}
+
+// The fit; a compliance that comes out not positive is held at its nominal value and the fit repeated.
+FitOutcome fitKeepingCompliancePositive(const Robot& robot, const CalibrationData& data,
+                                        const Eigen::VectorXd& nominal_values, const GeometricCalibrationOptions& options,
+                                        ParameterChoice& choice) {
+  const int n = robot.dof();
+  const GeometricParameterLayout layout(n);
+  std::vector<int>& free = choice.free;
+  std::vector<std::string>& reason = choice.reason;
   FitOutcome fit = fitSubset(robot, data, nominal_values, free, options, 0.0, "calibrating");
   for (int round = 0; round < n; ++round) {
     std::vector<int> dropped;
@@ -662,18 +690,12 @@ GeometricCalibrationResult calibrateGeometry(const JointErrorModel& prior, const
     }
     fit = fitSubset(robot, data, fit.values, free, options, fit.loss_scale, "calibrating");
   }
-  result.estimate = GeometricParameters::fromVector(fit.values, n);
-  result.free = free;
-  result.loss_scale = fit.loss_scale;
-  result.iterations = fit.solver.iterations;
-  result.stop_reason = fit.solver.stop_reason;
-  result.error_after = rowNorms(fit.solver.residual);
-  result.after = errorStatistics(result.error_after);
-  result.weight.assign(fit.solver.block_weight.data(), fit.solver.block_weight.data() + fit.solver.block_weight.size());
-  result.downweighted_rows = countBelow(fit.solver.block_weight, 0.999);
-  result.outlier_rows = countBelow(fit.solver.block_weight, 0.5);
+  return fit;
+}
 
-  // Covariance sigma^2 (J^T W J)^-1 from the unit-scaled, weighted Jacobian of the free parameters.
+// Covariance sigma^2 (J^T W J)^-1 from the unit-scaled, weighted Jacobian of the free parameters.
+void estimateCovariance(const FitOutcome& fit, int rows, const std::vector<int>& free, const std::string& source,
+                        GeometricCalibrationResult& result) {
   const Eigen::Index k = static_cast<Eigen::Index>(free.size());
   Eigen::MatrixXd weighted = fit.solver.jacobian;
   double weighted_squares = 0.0;
@@ -701,6 +723,18 @@ GeometricCalibrationResult calibrateGeometry(const JointErrorModel& prior, const
   result.covariance = result.residual_sigma * result.residual_sigma *
                       (inverse_norms.asDiagonal() * scaled_covariance * inverse_norms.asDiagonal());
 
+}
+
+// One estimate per parameter (free: with its sigma; fixed: with its reason), and the compliances that
+// cannot be compensated.
+void tabulateEstimates(const Robot& robot, const Eigen::VectorXd& nominal_values, const FitOutcome& fit,
+                       const ParameterChoice& choice, GeometricCalibrationResult& result) {
+  const int n = robot.dof();
+  const GeometricParameterLayout layout(n);
+  const std::vector<int>& free = choice.free;
+  const std::vector<double>& pivot = choice.pivot;
+  const std::vector<std::string>& reason = choice.reason;
+  const auto& redundant = choice.redundant;
   for (std::size_t i = 0; i < result.names.size(); ++i) {
     ParameterEstimate estimate;
     estimate.name = result.names[i];
@@ -727,6 +761,48 @@ GeometricCalibrationResult calibrateGeometry(const JointErrorModel& prior, const
                                            (c.identified ? "fitted not positive" : c.fixed_because));
     }
   }
+}
+
+}  // namespace
+
+GeometricCalibrationResult calibrateGeometry(const JointErrorModel& prior, const MeasurementCampaign& campaign,
+                                             const GeometricCalibrationOptions& options) {
+  const Robot& robot = prior.robot();
+  const int n = robot.dof();
+  const std::string& source = campaign.source;
+  const CalibrationData data = prepareCalibrationData(prior, campaign);
+  const int rows = static_cast<int>(data.size());
+  if (rows < std::max(options.minimum_rows, 3)) {
+    throw InvalidArgument(source + ": too few points: " + std::to_string(rows) + " usable rows (" +
+                          std::to_string(data.skipped_rows) + " without a measured position); the calibration needs "
+                          "at least " + std::to_string(std::max(options.minimum_rows, 3)));
+  }
+  const bool fit_frame = options.fit_frame && campaign.frame == MeasurementFrame::Instrument;
+
+  GeometricCalibrationResult result;
+  result.names = geometricParameterNames(robot);
+  result.used_rows = rows;
+  result.skipped_rows = data.skipped_rows;
+  result.row = data.row;
+  result.loss = options.loss;
+
+  const GeometricParameters start = startingPoint(prior, campaign, data, options, fit_frame, result);
+  ParameterChoice choice = candidateParameters(robot, data, options, fit_frame, result, source);
+  chooseIdentifiable(robot, data, start, options, fit_frame, result, choice, source);
+  const Eigen::VectorXd nominal_values = start.toVector();
+  const FitOutcome fit = fitKeepingCompliancePositive(robot, data, nominal_values, options, choice);
+  result.estimate = GeometricParameters::fromVector(fit.values, n);
+  result.free = choice.free;
+  result.loss_scale = fit.loss_scale;
+  result.iterations = fit.solver.iterations;
+  result.stop_reason = fit.solver.stop_reason;
+  result.error_after = rowNorms(fit.solver.residual);
+  result.after = errorStatistics(result.error_after);
+  result.weight.assign(fit.solver.block_weight.data(), fit.solver.block_weight.data() + fit.solver.block_weight.size());
+  result.downweighted_rows = countBelow(fit.solver.block_weight, 0.999);
+  result.outlier_rows = countBelow(fit.solver.block_weight, 0.5);
+  estimateCovariance(fit, rows, choice.free, source, result);
+  tabulateEstimates(robot, nominal_values, fit, choice, result);
   return result;
 }
 
