@@ -19,7 +19,7 @@ const std::vector<PerJointEffect::Scalar>& BacklashEffect::scalarLayout() {
   return scalars;
 }
 
-BacklashEffect::BacklashEffect(const Robot& robot, std::vector<double> width, double velocity_scale)
+BacklashEffect::BacklashEffect(const Robot& robot, const std::vector<double>& width, double velocity_scale)
     : PerJointEffect(robot, layout(), scalarLayout()) {
   setScalars({velocity_scale});
   setParameters(width);
@@ -51,8 +51,8 @@ double BacklashDiscovery::feature(const DiscoveryData& data, int row, int joint)
   return BacklashEffect::feature(data.velocity[row][joint], data.velocity_scale);
 }
 
-std::unique_ptr<Effect> BacklashDiscovery::effectOf(const DiscoveryData& data, std::vector<double> width) const {
-  return std::make_unique<BacklashEffect>(*data.robot, std::move(width), data.velocity_scale);
+std::unique_ptr<Effect> BacklashDiscovery::effectOf(const DiscoveryData& data, const std::vector<double>& width) const {
+  return std::make_unique<BacklashEffect>(*data.robot, width, data.velocity_scale);
 }
 
 }  // namespace jointcomp

@@ -15,7 +15,7 @@ const std::vector<PerJointEffect::Field>& ComplianceEffect::layout() {
   return fields;
 }
 
-ComplianceEffect::ComplianceEffect(const Robot& robot, std::vector<double> stiffness_nm_per_rad)
+ComplianceEffect::ComplianceEffect(const Robot& robot, const std::vector<double>& stiffness_nm_per_rad)
     : PerJointEffect(robot, layout()) {
   setParameters(stiffness_nm_per_rad);
 }

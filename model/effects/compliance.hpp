@@ -14,7 +14,7 @@ class ComplianceEffect : public PerJointEffect {
 public:
   static constexpr const char* kType = "compliance";
   // Throws ParameterError for the wrong number of stiffnesses or one that is not positive.
-  ComplianceEffect(const Robot& robot, std::vector<double> stiffness_nm_per_rad);
+  ComplianceEffect(const Robot& robot, const std::vector<double>& stiffness_nm_per_rad);
   static std::unique_ptr<Effect> fromJson(const nlohmann::json& json, const Robot& robot, const std::string& path);
 
   std::string type() const override { return kType; }

@@ -44,7 +44,7 @@ std::unique_ptr<Effect> PerJointFeatureDiscovery::makeEffect(const DiscoveryData
                                                              const std::vector<FittedCandidate>& accepted) const {
   std::vector<double> per_joint(static_cast<std::size_t>(data.robot->dof()), 0.0);
   for (const FittedCandidate& a : accepted) per_joint[static_cast<std::size_t>(a.candidate->joint)] += a.theta[0];
-  return effectOf(data, std::move(per_joint));
+  return effectOf(data, per_joint);
 }
 
 std::vector<NamedEstimate> PerJointFeatureDiscovery::describe(const FittedCandidate& fitted,

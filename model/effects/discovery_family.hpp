@@ -123,7 +123,7 @@ protected:
       : name_(std::move(name)), parameter_(std::move(parameter)), needs_torque_(needs_torque) {}
   // The column of `joint` at fitted row `row`: the joint error per unit coefficient.
   virtual double feature(const DiscoveryData& data, int row, int joint) const = 0;
-  virtual std::unique_ptr<Effect> effectOf(const DiscoveryData& data, std::vector<double> per_joint) const = 0;
+  virtual std::unique_ptr<Effect> effectOf(const DiscoveryData& data, const std::vector<double>& per_joint) const = 0;
 
 private:
   std::string name_;

@@ -19,7 +19,7 @@ const std::vector<PerJointEffect::Scalar>& HysteresisEffect::scalarLayout() {
   return scalars;
 }
 
-HysteresisEffect::HysteresisEffect(const Robot& robot, std::vector<double> width, double velocity_scale)
+HysteresisEffect::HysteresisEffect(const Robot& robot, const std::vector<double>& width, double velocity_scale)
     : PerJointEffect(robot, layout(), scalarLayout()) {
   setScalars({velocity_scale});
   setParameters(width);
@@ -51,8 +51,8 @@ double HysteresisDiscovery::feature(const DiscoveryData& data, int row, int join
   return HysteresisEffect::feature(data.velocity[row][joint], data.load_torque[row][joint], data.velocity_scale);
 }
 
-std::unique_ptr<Effect> HysteresisDiscovery::effectOf(const DiscoveryData& data, std::vector<double> width) const {
-  return std::make_unique<HysteresisEffect>(*data.robot, std::move(width), data.velocity_scale);
+std::unique_ptr<Effect> HysteresisDiscovery::effectOf(const DiscoveryData& data, const std::vector<double>& width) const {
+  return std::make_unique<HysteresisEffect>(*data.robot, width, data.velocity_scale);
 }
 
 }  // namespace jointcomp

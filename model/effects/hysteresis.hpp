@@ -34,7 +34,7 @@ public:
   static constexpr const char* kType = "hysteresis";
   static constexpr double kDefaultVelocityScale = 1e-3;  // rad/s, as backlash
   // Throws ParameterError for the wrong number of widths, a width that is not finite or a scale <= 0.
-  HysteresisEffect(const Robot& robot, std::vector<double> width_rad_per_nm, double velocity_scale = kDefaultVelocityScale);
+  HysteresisEffect(const Robot& robot, const std::vector<double>& width_rad_per_nm, double velocity_scale = kDefaultVelocityScale);
   static std::unique_ptr<Effect> fromJson(const nlohmann::json& json, const Robot& robot, const GearTrain& gears,
                                           const std::string& path);
 
@@ -61,7 +61,7 @@ public:
 
 protected:
   double feature(const DiscoveryData& data, int row, int joint) const override;
-  std::unique_ptr<Effect> effectOf(const DiscoveryData& data, std::vector<double> width) const override;
+  std::unique_ptr<Effect> effectOf(const DiscoveryData& data, const std::vector<double>& width) const override;
 };
 
 }  // namespace jointcomp

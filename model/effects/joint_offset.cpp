@@ -14,7 +14,7 @@ const std::vector<PerJointEffect::Field>& JointOffsetEffect::layout() {
   return fields;
 }
 
-JointOffsetEffect::JointOffsetEffect(const Robot& robot, std::vector<double> offsets_rad) : PerJointEffect(robot, layout()) {
+JointOffsetEffect::JointOffsetEffect(const Robot& robot, const std::vector<double>& offsets_rad) : PerJointEffect(robot, layout()) {
   setParameters(offsets_rad);
 }
 

@@ -14,7 +14,7 @@ class JointOffsetEffect : public PerJointEffect {
 public:
   static constexpr const char* kType = "offset";
   // Throws ParameterError for the wrong number of offsets or a value that is not finite.
-  JointOffsetEffect(const Robot& robot, std::vector<double> offsets_rad);
+  JointOffsetEffect(const Robot& robot, const std::vector<double>& offsets_rad);
   // The gear train is not used; the signature is the registry's.
   static std::unique_ptr<Effect> fromJson(const nlohmann::json& json, const Robot& robot, const GearTrain& gears,
                                           const std::string& path);

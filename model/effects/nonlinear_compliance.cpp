@@ -14,7 +14,7 @@ const std::vector<PerJointEffect::Field>& NonlinearComplianceEffect::layout() {
   return fields;
 }
 
-NonlinearComplianceEffect::NonlinearComplianceEffect(const Robot& robot, std::vector<double> cubic_rad_per_nm3)
+NonlinearComplianceEffect::NonlinearComplianceEffect(const Robot& robot, const std::vector<double>& cubic_rad_per_nm3)
     : PerJointEffect(robot, layout()) {
   setParameters(cubic_rad_per_nm3);
 }
@@ -44,8 +44,8 @@ double NonlinearComplianceDiscovery::feature(const DiscoveryData& data, int row,
   return NonlinearComplianceEffect::feature(data.load_torque[row][joint]);
 }
 
-std::unique_ptr<Effect> NonlinearComplianceDiscovery::effectOf(const DiscoveryData& data, std::vector<double> width) const {
-  return std::make_unique<NonlinearComplianceEffect>(*data.robot, std::move(width));
+std::unique_ptr<Effect> NonlinearComplianceDiscovery::effectOf(const DiscoveryData& data, const std::vector<double>& width) const {
+  return std::make_unique<NonlinearComplianceEffect>(*data.robot, width);
 }
 
 }  // namespace jointcomp

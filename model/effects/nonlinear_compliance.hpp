@@ -15,7 +15,7 @@ class NonlinearComplianceEffect : public PerJointEffect {
 public:
   static constexpr const char* kType = "nonlinear_compliance";
   // Throws ParameterError for the wrong number of coefficients or one that is not finite.
-  NonlinearComplianceEffect(const Robot& robot, std::vector<double> cubic_rad_per_nm3);
+  NonlinearComplianceEffect(const Robot& robot, const std::vector<double>& cubic_rad_per_nm3);
   static std::unique_ptr<Effect> fromJson(const nlohmann::json& json, const Robot& robot, const GearTrain& gears,
                                           const std::string& path);
 
@@ -37,7 +37,7 @@ public:
 
 protected:
   double feature(const DiscoveryData& data, int row, int joint) const override;
-  std::unique_ptr<Effect> effectOf(const DiscoveryData& data, std::vector<double> width) const override;
+  std::unique_ptr<Effect> effectOf(const DiscoveryData& data, const std::vector<double>& width) const override;
 };
 
 }  // namespace jointcomp

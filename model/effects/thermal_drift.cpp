@@ -21,8 +21,8 @@ const std::vector<PerJointEffect::Scalar>& ThermalDriftEffect::scalarLayout() {
   return scalars;
 }
 
-ThermalDriftEffect::ThermalDriftEffect(const Robot& robot, std::vector<double> coefficient_rad_per_degc,
-                                       double reference_temperature_degc, std::vector<double> drift_rad_per_s,
+ThermalDriftEffect::ThermalDriftEffect(const Robot& robot, const std::vector<double>& coefficient_rad_per_degc,
+                                       double reference_temperature_degc, const std::vector<double>& drift_rad_per_s,
                                        double reference_time_s)
     : PerJointEffect(robot, layout(), scalarLayout()) {
   setScalars({reference_temperature_degc, reference_time_s});

@@ -16,8 +16,8 @@ class ThermalDriftEffect : public PerJointEffect {
 public:
   static constexpr const char* kType = "thermal";
   // Throws ParameterError for wrong sizes or values that are not finite.
-  ThermalDriftEffect(const Robot& robot, std::vector<double> coefficient_rad_per_degc, double reference_temperature_degc,
-                     std::vector<double> drift_rad_per_s, double reference_time_s);
+  ThermalDriftEffect(const Robot& robot, const std::vector<double>& coefficient_rad_per_degc, double reference_temperature_degc,
+                     const std::vector<double>& drift_rad_per_s, double reference_time_s);
   static std::unique_ptr<Effect> fromJson(const nlohmann::json& json, const Robot& robot, const GearTrain& gears,
                                           const std::string& path);
 

@@ -102,7 +102,7 @@ public:
   // The tracker's reading of the target with the links at q.
   Eigen::Vector3d measureTarget(const JointVector& q) {
     forwardKinematics(robot_, ws_.robot, q);
-    const Eigen::Vector3d target = ws_.robot.tool_pose * spec_.target_in_flange;
+    Eigen::Vector3d target = ws_.robot.tool_pose * spec_.target_in_flange;
     const double sigma = spec_.tracker.sigma(target);
     sigma_sum2_ += sigma * sigma;
     ++sigma_count_;
@@ -128,7 +128,7 @@ public:
       }
       campaign_.measured_angles.push_back(measured_angles);
     } else if (campaign_.has_measured_angles) {
-      campaign_.measured_angles.push_back(JointVector::Constant(robot_.dof(), kNaN));
+      campaign_.measured_angles.emplace_back(JointVector::Constant(robot_.dof(), kNaN));
     }
   }
 
@@ -350,7 +350,7 @@ void simulateStiffness(Simulator& sim, const CampaignSimulationSpec& spec,
         w[axis] = sign * (axis < 3 ? p.global_force_n : p.global_moment_nm);
         const JointVector tau = jacobian.transpose() * w;
         w *= std::min(1.0, loadScaleLimit(robot, sim.stiffness(), tau, p.max_deflection_rad, p.effort_fraction));
-        wrenches.push_back((w.array() + 0.0).matrix());
+        wrenches.emplace_back((w.array() + 0.0).matrix());
       }
     }
     for (const Vector6& wrench : wrenches) {

@@ -28,7 +28,7 @@ std::vector<std::string> splitCells(const std::string& line) {
   std::string cell;
   std::istringstream stream(line);
   while (std::getline(stream, cell, ',')) cells.push_back(trim(cell));
-  if (!line.empty() && line.back() == ',') cells.push_back("");
+  if (!line.empty() && line.back() == ',') cells.emplace_back();
   return cells;
 }
 
@@ -74,11 +74,11 @@ public:
       const std::string line = trim(raw);
       if (!header_seen) {
         if (line_number == 1) {
-          if (line.rfind("#", 0) != 0 || trim(line.substr(1)) != std::string("format: ") + kFormatLine) {
+          if (line.rfind('#', 0) != 0 || trim(line.substr(1)) != std::string("format: ") + kFormatLine) {
             fail(1, std::string("the first line must be '# format: ") + kFormatLine + "'");
           }
         }
-        if (line.rfind("#", 0) == 0) {
+        if (line.rfind('#', 0) == 0) {
           const std::string entry = trim(line.substr(1));
           const auto colon = entry.find(':');
           if (colon == std::string::npos) fail(line_number, "metadata line is not '# key: value'");
