@@ -104,25 +104,11 @@ HarmonicEstimate harmonicOf(const LinearFit& fit, int column, double order, doub
 
 }  // namespace
 
-TransmissionIdentificationResult identifyTransmissionError(const JointErrorModel& nominal,
-                                                           const MeasurementCampaign& campaign,
-                                                           const TransmissionIdentificationOptions& options) {
-  const Robot& robot = nominal.robot();
-  const GearTrain& gears = nominal.gears();
-  checkOptions(robot, gears, options);
-  checkCampaign(robot, campaign, campaign.has_position, "transmission-error identification");
-  const int j = options.joint;
+namespace {
+
+// A sweep moves the identified joint only, and its angle is recovered from the tracker or the levels.
+void checkSweep(const Robot& robot, const MeasurementCampaign& campaign, int j, TransmissionIdentificationResult& result) {
   const int n = robot.dof();
-  TransmissionIdentificationResult result;
-  result.joint = j;
-  result.joint_name = robot.joints[j].name;
-  result.stage = options.stage;
-  result.part = options.stage == 1 ? "motor" : options.stage == gears.stageCount(j) + 1 ? "output"
-                                                                                       : "stage_" + std::to_string(options.stage);
-  result.confidence = options.confidence;
-  result.significance = options.significance;
-  if (campaign.size() == 0) throw MeasurementError(campaign.source + ": the campaign has no rows");
-  // A sweep moves this joint only.
   for (std::size_t k = 1; k < campaign.size(); ++k) {
     for (int i = 0; i < n; ++i) {
       if (i != j && std::abs(campaign.command[k][i] - campaign.command[0][i]) > 1e-9) {
@@ -141,6 +127,18 @@ TransmissionIdentificationResult identifyTransmissionError(const JointErrorModel
   if (by_tracker && campaign.frame != MeasurementFrame::Base) {
     throw MeasurementError(campaign.source + ": the transmission-error identification needs positions in the base frame");
   }
+}
+
+// Per measured row: the joint angle measured, the part of it the nominal compliance explains, the
+// kinematic error left, the stage angle; returns each row's 1-sigma noise (NaN where unknown).
+std::vector<double> sweepSamples(const JointErrorModel& nominal, const MeasurementCampaign& campaign,
+                                 const TransmissionIdentificationOptions& options,
+                                 TransmissionIdentificationResult& result) {
+  const Robot& robot = nominal.robot();
+  const GearTrain& gears = nominal.gears();
+  const int j = options.joint;
+  const int n = robot.dof();
+  const bool by_tracker = campaign.has_position;
   const Eigen::Vector3d target = targetOf(campaign);
   const std::vector<double> position_sigma = positionSigmaPerRow(campaign);
   const EffectMask stiffness_mask = nominal.loadsAnd({"compliance"});
@@ -189,15 +187,13 @@ TransmissionIdentificationResult identifyTransmissionError(const JointErrorModel
     result.stage_angle.push_back(gears.stageInputAngle(j, options.stage, motor));
     sigma.push_back(row_sigma);
   }
-  const int samples = static_cast<int>(result.command.size());
-  result.samples = samples;
-  const bool noise_known = fillUnknownSigma(sigma);
-  if (noise_known) {
-    double sum = 0.0;
-    for (double s : sigma) sum += s * s;
-    result.noise_rms_rad = samples > 0 ? std::sqrt(sum / samples) : 0.0;
-  }
-  // Which candidates the sweep can tell apart from the baseline.
+  return sigma;
+}
+
+// Which candidates the sweep can tell apart from the baseline: those it turns through min_periods.
+std::vector<double> resolvableOrders(const MeasurementCampaign& campaign, const TransmissionIdentificationOptions& options,
+                                     TransmissionIdentificationResult& result) {
+  const int samples = result.samples;
   if (samples > 0) {
     const auto range = std::minmax_element(result.stage_angle.begin(), result.stage_angle.end());
     result.stage_revolutions = (*range.second - *range.first) / (2.0 * kPi);
@@ -211,23 +207,16 @@ TransmissionIdentificationResult identifyTransmissionError(const JointErrorModel
                            formatNumber(result.stage_revolutions) + " revolutions: too short for " +
                            formatNumber(options.min_periods) + " periods of any candidate order");
   }
-  const int base_columns = options.baseline_degree + 1;
-  const int columns = base_columns + 2 * static_cast<int>(orders.size());
-  if (samples < columns + 2) {
-    throw MeasurementError(campaign.source + ": " + std::to_string(samples) + " measured points of " + result.joint_name +
-                           " for " + std::to_string(columns) + " unknowns (baseline and harmonics); at least " +
-                           std::to_string(columns + 2) + " are needed");
-  }
-  const auto q_range = std::minmax_element(result.command.begin(), result.command.end());
-  result.baseline_centre = 0.5 * (*q_range.first + *q_range.second);
-  result.baseline_half_range = std::max(1e-12, 0.5 * (*q_range.second - *q_range.first));
-  std::vector<double> x(samples);
-  for (int r = 0; r < samples; ++r) x[r] = (result.command[r] - result.baseline_centre) / result.baseline_half_range;
-  const Design design{&x, &result.stage_angle, options.baseline_degree};
-  const Eigen::Map<const Eigen::VectorXd> y(result.kinematic_error.data(), samples);
-  const Eigen::Map<const Eigen::VectorXd> s(sigma.data(), samples);
+  return orders;
+}
 
-  // The full model and the test of each order.
+// The full model and the F test of each order (Bonferroni over the candidates); the significant orders.
+std::vector<double> significantOrders(const Design& design, const Eigen::Ref<const Eigen::VectorXd>& y,
+                                      const Eigen::Ref<const Eigen::VectorXd>& s, const std::vector<double>& orders,
+                                      int columns, const MeasurementCampaign& campaign,
+                                      const TransmissionIdentificationOptions& options,
+                                      TransmissionIdentificationResult& result) {
+  const int base_columns = options.baseline_degree + 1;
   const LinearFit full = weightedLeastSquares(designMatrix(design, orders), y, s);
   if (full.rank < columns) {
     throw MeasurementError(campaign.source + ": the sweep of " + result.joint_name +
@@ -248,7 +237,16 @@ TransmissionIdentificationResult identifyTransmissionError(const JointErrorModel
     result.candidates.push_back(estimate);
   }
 
-  // The significant orders alone.
+  return significant;
+}
+
+// The significant orders alone: the harmonics reported, the baseline and the residual.
+void fitSignificant(const Design& design, const Eigen::Ref<const Eigen::VectorXd>& y,
+                    const Eigen::Ref<const Eigen::VectorXd>& s, const std::vector<double>& significant,
+                    bool noise_known, const TransmissionIdentificationOptions& options,
+                    TransmissionIdentificationResult& result) {
+  const int base_columns = options.baseline_degree + 1;
+  const int samples = result.samples;
   const LinearFit final_fit = weightedLeastSquares(designMatrix(design, significant), y, s);
   const double t_factor = tIntervalFactor(options.confidence, final_fit.dof);
   for (std::size_t h = 0; h < significant.size(); ++h) {
@@ -269,7 +267,12 @@ TransmissionIdentificationResult identifyTransmissionError(const JointErrorModel
   result.residual_rms_rad = std::sqrt(final_fit.residuals.squaredNorm() / samples);
   result.reduced_chi2 = noise_known ? final_fit.scale2 : 0.0;
 
-  // The spectrum: one harmonic at a time with the baseline.
+}
+
+// The spectrum: one harmonic at a time with the baseline.
+void spectrumOf(const Design& design, const Eigen::Ref<const Eigen::VectorXd>& y, const Eigen::Ref<const Eigen::VectorXd>& s,
+                const TransmissionIdentificationOptions& options, TransmissionIdentificationResult& result) {
+  const int base_columns = options.baseline_degree + 1;
   const int steps = static_cast<int>(std::floor((options.spectrum_max_order - options.spectrum_min_order) / options.spectrum_step + 1e-9));
   for (int i = 0; i <= steps; ++i) {
     const double order = options.spectrum_min_order + i * options.spectrum_step;
@@ -278,6 +281,57 @@ TransmissionIdentificationResult identifyTransmissionError(const JointErrorModel
     result.spectrum_orders.push_back(order);
     result.spectrum_amplitude_rad.push_back(std::hypot(single.coefficients[base_columns], single.coefficients[base_columns + 1]));
   }
+}
+
+}  // namespace
+
+TransmissionIdentificationResult identifyTransmissionError(const JointErrorModel& nominal,
+                                                           const MeasurementCampaign& campaign,
+                                                           const TransmissionIdentificationOptions& options) {
+  const Robot& robot = nominal.robot();
+  const GearTrain& gears = nominal.gears();
+  checkOptions(robot, gears, options);
+  checkCampaign(robot, campaign, campaign.has_position, "transmission-error identification");
+  const int j = options.joint;
+  TransmissionIdentificationResult result;
+  result.joint = j;
+  result.joint_name = robot.joints[j].name;
+  result.stage = options.stage;
+  result.part = options.stage == 1 ? "motor" : options.stage == gears.stageCount(j) + 1 ? "output"
+                                                                                       : "stage_" + std::to_string(options.stage);
+  result.confidence = options.confidence;
+  result.significance = options.significance;
+  if (campaign.size() == 0) throw MeasurementError(campaign.source + ": the campaign has no rows");
+  checkSweep(robot, campaign, j, result);
+  std::vector<double> sigma = sweepSamples(nominal, campaign, options, result);
+  const int samples = static_cast<int>(result.command.size());
+  result.samples = samples;
+  const bool noise_known = fillUnknownSigma(sigma);
+  if (noise_known) {
+    double sum = 0.0;
+    for (double s : sigma) sum += s * s;
+    result.noise_rms_rad = samples > 0 ? std::sqrt(sum / samples) : 0.0;
+  }
+  const std::vector<double> orders = resolvableOrders(campaign, options, result);
+  const int base_columns = options.baseline_degree + 1;
+  const int columns = base_columns + 2 * static_cast<int>(orders.size());
+  if (samples < columns + 2) {
+    throw MeasurementError(campaign.source + ": " + std::to_string(samples) + " measured points of " + result.joint_name +
+                           " for " + std::to_string(columns) + " unknowns (baseline and harmonics); at least " +
+                           std::to_string(columns + 2) + " are needed");
+  }
+  const auto q_range = std::minmax_element(result.command.begin(), result.command.end());
+  result.baseline_centre = 0.5 * (*q_range.first + *q_range.second);
+  result.baseline_half_range = std::max(1e-12, 0.5 * (*q_range.second - *q_range.first));
+  std::vector<double> x(samples);
+  for (int r = 0; r < samples; ++r) x[r] = (result.command[r] - result.baseline_centre) / result.baseline_half_range;
+  const Design design{&x, &result.stage_angle, options.baseline_degree};
+  const Eigen::Map<const Eigen::VectorXd> y(result.kinematic_error.data(), samples);
+  const Eigen::Map<const Eigen::VectorXd> s(sigma.data(), samples);
+
+  const std::vector<double> significant = significantOrders(design, y, s, orders, columns, campaign, options, result);
+  fitSignificant(design, y, s, significant, noise_known, options, result);
+  spectrumOf(design, y, s, options, result);
   return result;
 }
 
