@@ -270,19 +270,11 @@ std::vector<StiffnessEstimate> identifyStiffnessLocal(const JointErrorModel& nom
   return estimates;
 }
 
-std::vector<StiffnessEstimate> identifyStiffnessGlobal(const JointErrorModel& nominal, const MeasurementCampaign& campaign,
-                                                       const StiffnessIdentificationOptions& options, bool use_local_groups) {
-  checkOptions(options);
-  const Robot& robot = nominal.robot();
-  checkCampaign(robot, campaign, true, "global stiffness identification");
-  if (!campaign.has_position) {
-    throw MeasurementError(campaign.source + ": global stiffness identification needs measured positions (x, y, z)");
-  }
-  const int n = robot.dof();
-  const Classified classified = classify(nominal, campaign, options);
-  const Eigen::Vector3d target = targetOf(campaign);
-  // Which groups: the loaded ones that are no local test, or every loaded one when asked or when there
-  // are no others.
+namespace {
+
+// Which groups: the loaded ones that are no local test, or every loaded one when asked or when there are
+// no others.
+std::vector<const Group*> globalGroups(const Classified& classified, bool use_local_groups) {
   auto loaded = [](const Group& g) { return g.kind != GroupKind::Unused; };
   std::vector<const Group*> selected;
   for (const Group& g : classified.groups) {
@@ -294,17 +286,32 @@ std::vector<StiffnessEstimate> identifyStiffnessGlobal(const JointErrorModel& no
       if (loaded(g)) selected.push_back(&g);
     }
   }
-  // Rows with positions per pose (one offset per pose), and which joints' torques vary somewhere.
+  return selected;
+}
+
+// The tracker rows of the poses measured under at least two loads (one offset per pose), and how much
+// each joint's torque varies over them.
+struct GlobalRows {
+  std::vector<std::pair<const Group*, std::size_t>> rows;
+  std::vector<int> offset_of_row;
+  JointVector spread;
+  int used_poses = 0;
+};
+
+GlobalRows globalRows(const MeasurementCampaign& campaign, const Classified& classified,
+                      const std::vector<const Group*>& selected, int n) {
+  GlobalRows global;
+  auto& rows = global.rows;
+  auto& offset_of_row = global.offset_of_row;
+  JointVector& spread = global.spread;
+  int& used_poses = global.used_poses;
   std::vector<std::vector<std::pair<const Group*, std::size_t>>> pose_rows(classified.poses);
   for (const Group* g : selected) {
     for (std::size_t k = g->first; k < g->last; ++k) {
       if (hasPosition(campaign, k)) pose_rows[g->pose].emplace_back(g, k);
     }
   }
-  std::vector<std::pair<const Group*, std::size_t>> rows;
-  std::vector<int> offset_of_row;
-  JointVector spread = JointVector::Zero(n);
-  int used_poses = 0;
+  spread = JointVector::Zero(n);
   for (const auto& members : pose_rows) {
     JointVector low = JointVector::Constant(n, kInfinity);
     JointVector high = JointVector::Constant(n, -kInfinity);
@@ -325,29 +332,35 @@ std::vector<StiffnessEstimate> identifyStiffnessGlobal(const JointErrorModel& no
                            ": global stiffness identification: no pose measured by the tracker under at least two "
                            "different loads");
   }
-  std::vector<StiffnessEstimate> estimates(n);
-  std::vector<int> unknown_of(n, -1);
-  int unknowns = 0;
-  const double spread_scale = std::max(1.0, spread.maxCoeff());
-  for (int j = 0; j < n; ++j) {
-    if (spread[j] > 1e-9 * spread_scale) {
-      unknown_of[j] = unknowns++;
-    } else {
-      estimates[j].reason = "its torque does not vary in the loaded poses";
-    }
-  }
-  const int groups = used_poses;
+  return global;
+}
+
+// The linear problem: per tracker coordinate, -J_j tau_j per unknown compliance and one offset per pose;
+// `first_order` the same with the torques at the commanded poses.
+struct GlobalDesign {
+  Eigen::MatrixXd a, first_order;
+  Eigen::VectorXd y;
+  std::vector<double> sigma;
+};
+
+GlobalDesign globalDesign(const Robot& robot, const MeasurementCampaign& campaign, const Classified& classified,
+                          const GlobalRows& global, const std::vector<int>& unknown_of, int unknowns) {
+  const int n = robot.dof();
+  const Eigen::Vector3d target = targetOf(campaign);
+  const auto& rows = global.rows;
+  const auto& offset_of_row = global.offset_of_row;
+  const int groups = global.used_poses;
   const int columns = unknowns + 3 * groups;
   const int equations = 3 * static_cast<int>(rows.size());
-  if (equations <= columns) {
-    throw MeasurementError(campaign.source + ": global stiffness identification: " + std::to_string(equations) +
-                           " measured coordinates for " + std::to_string(columns) +
-                           " unknowns (compliances and one offset per pose); more rows are needed");
-  }
-  Eigen::MatrixXd a = Eigen::MatrixXd::Zero(equations, columns);
-  Eigen::MatrixXd first_order = Eigen::MatrixXd::Zero(equations, columns);  // torques at the commanded poses
-  Eigen::VectorXd y(equations);
-  std::vector<double> sigma(equations);
+  GlobalDesign d;
+  Eigen::MatrixXd& a = d.a;
+  Eigen::MatrixXd& first_order = d.first_order;
+  Eigen::VectorXd& y = d.y;
+  std::vector<double>& sigma = d.sigma;
+  a = Eigen::MatrixXd::Zero(equations, columns);
+  first_order = Eigen::MatrixXd::Zero(equations, columns);  // torques at the commanded poses
+  y.resize(equations);
+  sigma.resize(static_cast<std::size_t>(equations));
   RobotWorkspace ws(robot);
   Jacobian jacobian(6, n);
   for (std::size_t r = 0; r < rows.size(); ++r) {
@@ -372,6 +385,50 @@ std::vector<StiffnessEstimate> identifyStiffnessGlobal(const JointErrorModel& no
       sigma[row] = classified.sigma[k];
     }
   }
+  return d;
+}
+
+}  // namespace
+
+std::vector<StiffnessEstimate> identifyStiffnessGlobal(const JointErrorModel& nominal, const MeasurementCampaign& campaign,
+                                                       const StiffnessIdentificationOptions& options, bool use_local_groups) {
+  checkOptions(options);
+  const Robot& robot = nominal.robot();
+  checkCampaign(robot, campaign, true, "global stiffness identification");
+  if (!campaign.has_position) {
+    throw MeasurementError(campaign.source + ": global stiffness identification needs measured positions (x, y, z)");
+  }
+  const int n = robot.dof();
+  const Classified classified = classify(nominal, campaign, options);
+  const std::vector<const Group*> selected = globalGroups(classified, use_local_groups);
+  const GlobalRows global = globalRows(campaign, classified, selected, n);
+  const auto& rows = global.rows;
+  const JointVector& spread = global.spread;
+  const int used_poses = global.used_poses;
+  std::vector<StiffnessEstimate> estimates(n);
+  std::vector<int> unknown_of(n, -1);
+  int unknowns = 0;
+  const double spread_scale = std::max(1.0, spread.maxCoeff());
+  for (int j = 0; j < n; ++j) {
+    if (spread[j] > 1e-9 * spread_scale) {
+      unknown_of[j] = unknowns++;
+    } else {
+      estimates[j].reason = "its torque does not vary in the loaded poses";
+    }
+  }
+  const int groups = used_poses;
+  const int columns = unknowns + 3 * groups;
+  const int equations = 3 * static_cast<int>(rows.size());
+  if (equations <= columns) {
+    throw MeasurementError(campaign.source + ": global stiffness identification: " + std::to_string(equations) +
+                           " measured coordinates for " + std::to_string(columns) +
+                           " unknowns (compliances and one offset per pose); more rows are needed");
+  }
+  GlobalDesign design = globalDesign(robot, campaign, classified, global, unknown_of, unknowns);
+  std::vector<double>& sigma = design.sigma;
+  const Eigen::MatrixXd& a = design.a;
+  const Eigen::MatrixXd& first_order = design.first_order;
+  const Eigen::VectorXd& y = design.y;
   const bool noise_known = fillUnknownSigma(sigma);
   const Eigen::Map<const Eigen::VectorXd> sigma_vector(sigma.data(), equations);
   // Identifiability is decided on the first-order design (torques at the commanded poses): the settled
