@@ -245,8 +245,8 @@ JointVector randomPose(const Robot& robot, DeterministicRandom& random, double m
   return q;
 }
 
-void simulateStiffness(Simulator& sim, const CampaignSimulationSpec& spec,
-                       const std::function<void(const std::string&)>& progress) {
+// The stiffness protocol's settings and the joints it tests; throws InvalidArgument naming what is wrong.
+std::vector<int> checkedStiffnessJoints(const Simulator& sim, const CampaignSimulationSpec& spec, JointVector& pose) {
   const Robot& robot = sim.robot();
   const StiffnessProtocolSpec& p = spec.stiffness;
   const int n = robot.dof();
@@ -260,7 +260,7 @@ void simulateStiffness(Simulator& sim, const CampaignSimulationSpec& spec,
     throw InvalidArgument("stiffness protocol: max_deflection_rad, effort_fraction and row_period_s must be positive");
   }
   if (p.global_poses < 0) throw InvalidArgument("stiffness protocol: global_poses must not be negative");
-  const JointVector pose = p.pose.size() > 0 ? p.pose : defaultStiffnessPose(robot);
+  pose = p.pose.size() > 0 ? p.pose : defaultStiffnessPose(robot);
   checkPose(robot, pose, "stiffness protocol pose");
   std::vector<int> joints = p.joints;
   if (joints.empty()) {
@@ -270,6 +270,16 @@ void simulateStiffness(Simulator& sim, const CampaignSimulationSpec& spec,
     if (j < 0 || j >= n) throw InvalidArgument("stiffness protocol: tested joint " + std::to_string(j + 1) + " does not exist");
   }
   if (p.level_joint >= n) throw InvalidArgument("stiffness protocol: level_joint " + std::to_string(p.level_joint + 1) + " does not exist");
+  return joints;
+}
+
+// The local tests: per joint, a ladder of loads at the test pose that turns that joint alone (or, for the
+// level joint, 1 N upwards, read by two levels). Returns the time after the last row.
+double localStiffnessTests(Simulator& sim, const CampaignSimulationSpec& spec, const JointVector& pose,
+                           const std::vector<int>& joints, const std::function<void(const std::string&)>& progress) {
+  const Robot& robot = sim.robot();
+  const StiffnessProtocolSpec& p = spec.stiffness;
+  const int n = robot.dof();
   const Eigen::Vector3d up = -robot.gravity.normalized();
   const std::vector<double> ladder = loadLadder(p.load_levels);
   JointErrorWorkspace& ws = sim.ws();
@@ -277,7 +287,6 @@ void simulateStiffness(Simulator& sim, const CampaignSimulationSpec& spec,
   Jacobian jacobian(6, n);
   const JointVector rest = JointVector::Zero(n);
   double t = 0.0;
-
   for (int j : joints) {
     tell(progress, "local stiffness test of " + robot.joints[j].name);
     forwardKinematics(robot, commanded, pose);
@@ -329,6 +338,19 @@ void simulateStiffness(Simulator& sim, const CampaignSimulationSpec& spec,
     }
   }
 
+  return t;
+}
+
+// The global poses: random well-conditioned poses, each unloaded and under a force or moment along every
+// axis in both directions.
+void globalStiffnessPoses(Simulator& sim, const CampaignSimulationSpec& spec, double t,
+                          const std::function<void(const std::string&)>& progress) {
+  const Robot& robot = sim.robot();
+  const StiffnessProtocolSpec& p = spec.stiffness;
+  const int n = robot.dof();
+  RobotWorkspace commanded(robot);
+  Jacobian jacobian(6, n);
+  const JointVector rest = JointVector::Zero(n);
   if (p.global_poses > 0) tell(progress, "global stiffness poses");
   int accepted = 0;
   for (int attempt = 0; accepted < p.global_poses; ++attempt) {
@@ -359,6 +381,14 @@ void simulateStiffness(Simulator& sim, const CampaignSimulationSpec& spec,
       t += p.row_period_s;
     }
   }
+}
+
+void simulateStiffness(Simulator& sim, const CampaignSimulationSpec& spec,
+                       const std::function<void(const std::string&)>& progress) {
+  JointVector pose;
+  const std::vector<int> joints = checkedStiffnessJoints(sim, spec, pose);
+  const double t = localStiffnessTests(sim, spec, pose, joints, progress);
+  globalStiffnessPoses(sim, spec, t, progress);
 }
 
 // The command sequence of a sweep: from -> to (and back, for back-and-forth) in steps.
