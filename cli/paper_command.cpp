@@ -11,6 +11,8 @@
 
 #include "cli/commands.hpp"
 #include "cli/options.hpp"
+#include "cli/robot_setup.hpp"
+#include "model/common/errors.hpp"
 #include "model/experiment/spiral_experiment.hpp"
 #include "model/io/atomic_file.hpp"
 #include "model/io/parameter_file.hpp"
@@ -49,47 +51,8 @@ std::string runsCsv(const SpiralExperimentResult& result) {
   return csv.str();
 }
 
-}  // namespace
-
-int runPaper(int argc, char** argv) {
-  const Options options(argc, argv, {"urdf", "params", "out", "seed", "compensate-joints", "no-plot", "quasi-static"},
-                        {"no-plot", "quasi-static"});
-  const std::string urdf = options.get("urdf", JOINTCOMP_DATA_DIR "/robots/rx170.urdf");
-  const std::string params = options.get("params", JOINTCOMP_DATA_DIR "/params/rx170.json");
-  const std::string out = options.get("out", "out/paper");
-  const auto started = std::chrono::steady_clock::now();
-
-  std::printf("jointcomp paper: the spiral test of Olabi et al. (IEEE ICIT 2012), simulated\n");
-  std::printf("  robot %s\n  parameters %s\n", urdf.c_str(), params.c_str());
-  auto robot = std::make_shared<const Robot>(loadRobotFromUrdfFile(urdf));
-  const JointErrorModel nominal = loadParameterFile(params, robot);
-
-  SpiralExperimentSpec spec;
-  if (!options.has("quasi-static")) spec.drives = loadDriveParameters(params, *robot);
-  std::printf("  simulated robot: %s\n", spec.drives.empty() ? "quasi-static (kinematics, elastostatics, transmission error)"
-                                                             : "flexible-joint plant integrated by CVODE");
-  if (options.has("seed")) spec.truth.seed = std::stoull(options.get("seed", "2012"));
-  if (options.has("compensate-joints")) {
-    for (const std::string& item : splitCommaList(options.get("compensate-joints", ""))) {
-      if (item.empty() || item.size() > 2 || item.find_first_not_of("0123456789") != std::string::npos) {
-        throw std::invalid_argument("--compensate-joints: '" + item + "' is not a joint number (1, 2, ...)");
-      }
-      spec.compensated_joints.push_back(std::stoi(item) - 1);
-    }
-  }
-  std::printf("  truth: nominal parameters moved by up to %.0f %% (stiffness), %.0f %% (harmonic amplitudes), "
-              "%.2f rad (phases); seed %llu\n",
-              spec.truth.stiffness_relative * 100, spec.truth.amplitude_relative * 100, spec.truth.phase_absolute_rad,
-              static_cast<unsigned long long>(spec.truth.seed));
-  const SpiralExperimentResult result = runSpiralExperiment(nominal, spec, [&](const std::string& what) {
-    const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
-    std::printf("  [%6.2f s] %s\n", elapsed, what.c_str());
-    std::fflush(stdout);
-  });
-
-  ::mkdir("out", 0755);
-  ::mkdir(out.c_str(), 0755);
-  writeFileAtomically(out + "/spiral_runs.csv", runsCsv(result));
+// What `jointcomp paper` writes beside the CSV: the runs' metrics against the paper's.
+std::string summaryJson(const SpiralExperimentResult& result, const SpiralExperimentSpec& spec) {
   nlohmann::ordered_json summary;
   summary["experiment"] = "Olabi et al. 2012 spiral, simulated quasi-static RX170";
   summary["samples"] = result.planned.size();
@@ -108,8 +71,12 @@ int runPaper(int argc, char** argv) {
                                {"compensation_max_iterations", run.compensation.max_iterations},
                                {"compensation_max_correction_deg", run.compensation.max_correction * 180.0 / 3.14159265358979323846}});
   }
-  writeFileAtomically(out + "/summary.json", summary.dump(2) + "\n");
 
+  return summary.dump(2) + "\n";
+}
+
+// The plant's speed and the Table II analogue, on the console.
+void printTable(const SpiralExperimentResult& result) {
   if (result.dynamic) {
     const PlantStatistics& st = result.plant_statistics;
     std::printf("  plant: %.1fx real time (%.3f s for 3 x %.1f s of motion); CVODE %ld steps, %ld right-hand sides, "
@@ -130,9 +97,11 @@ int runPaper(int argc, char** argv) {
   const double rz_gain = 1.0 - result.runs[2].metrics.rz / result.runs[0].metrics.rz;
   std::printf("reduction with both corrections: Ra %.0f %% (paper %.0f %%), Rz %.0f %% (paper %.0f %%)\n",
               ra_gain * 100, (1 - kPaperRa[2] / kPaperRa[0]) * 100, rz_gain * 100, (1 - kPaperRz[2] / kPaperRz[0]) * 100);
-  std::printf("wrote %s/spiral_runs.csv and %s/summary.json\n", out.c_str(), out.c_str());
 
-  // The FMUs of this build, handed out beside the results.
+}
+
+// The FMUs of this build, handed out beside the results.
+void handOutFmus() {
   ::mkdir("out/fmu", 0755);
   for (const char* name : {"jointcomp_fmi2.fmu", "jointcomp_fmi3.fmu"}) {
     const std::string built = std::string(JOINTCOMP_FMU_DIR) + "/" + name;
@@ -147,6 +116,62 @@ int runPaper(int argc, char** argv) {
     std::printf("wrote out/fmu/%s (FMI %s co-simulation of the plant with compensation)\n", name,
                 name[13] == '2' ? "2.0" : "3.0");
   }
+}
+
+// The simulated robot, the truth's seed and the compensated joints from the options.
+SpiralExperimentSpec specFromOptions(const Options& options, const ParameterSet& parameters, const std::string& path) {
+  SpiralExperimentSpec spec;
+  if (!options.has("quasi-static")) {
+    if (!parameters.hasDrives()) {
+      throw ParameterError(path + ": no \"plant\" object (drives and controller gains) for the plant (or --quasi-static)");
+    }
+    spec.drives = parameters.drives;
+  }
+  if (options.has("seed")) spec.truth.seed = std::stoull(options.get("seed", "2012"));
+  if (options.has("compensate-joints")) {
+    for (const std::string& item : splitCommaList(options.get("compensate-joints", ""))) {
+      if (item.empty() || item.size() > 2 || item.find_first_not_of("0123456789") != std::string::npos) {
+        throw std::invalid_argument("--compensate-joints: '" + item + "' is not a joint number (1, 2, ...)");
+      }
+      spec.compensated_joints.push_back(std::stoi(item) - 1);
+    }
+  }
+  return spec;
+}
+
+}  // namespace
+
+int runPaper(int argc, char** argv) {
+  const Options options(argc, argv, {"urdf", "params", "out", "seed", "compensate-joints", "no-plot", "quasi-static"},
+                        {"no-plot", "quasi-static"});
+  const std::string out = options.get("out", "out/paper");
+  const auto started = std::chrono::steady_clock::now();
+
+  std::printf("jointcomp paper: the spiral test of Olabi et al. (IEEE ICIT 2012), simulated\n");
+  const RobotSetup setup =
+      loadRobotSetup(options, JOINTCOMP_DATA_DIR "/robots/rx170.urdf", "params", JOINTCOMP_DATA_DIR "/params/rx170.json");
+  std::printf("  robot %s\n  parameters %s\n", setup.urdf.c_str(), setup.params.c_str());
+  const JointErrorModel& nominal = setup.parameters.model;
+  const SpiralExperimentSpec spec = specFromOptions(options, setup.parameters, setup.params);
+  std::printf("  simulated robot: %s\n", spec.drives.empty() ? "quasi-static (kinematics, elastostatics, transmission error)"
+                                                             : "flexible-joint plant integrated by CVODE");
+  std::printf("  truth: nominal parameters moved by up to %.0f %% (stiffness), %.0f %% (harmonic amplitudes), "
+              "%.2f rad (phases); seed %llu\n",
+              spec.truth.stiffness_relative * 100, spec.truth.amplitude_relative * 100, spec.truth.phase_absolute_rad,
+              static_cast<unsigned long long>(spec.truth.seed));
+  const SpiralExperimentResult result = runSpiralExperiment(nominal, spec, [&](const std::string& what) {
+    const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+    std::printf("  [%6.2f s] %s\n", elapsed, what.c_str());
+    std::fflush(stdout);
+  });
+
+  ::mkdir("out", 0755);
+  ::mkdir(out.c_str(), 0755);
+  writeFileAtomically(out + "/spiral_runs.csv", runsCsv(result));
+  writeFileAtomically(out + "/summary.json", summaryJson(result, spec));
+  printTable(result);
+  std::printf("wrote %s/spiral_runs.csv and %s/summary.json\n", out.c_str(), out.c_str());
+  handOutFmus();
   if (!options.has("no-plot")) {
     const std::string command = "/usr/bin/python3 '" JOINTCOMP_SOURCE_DIR "/cli/plots/plot_spiral_runs.py' '" + out +
                                 "/spiral_runs.csv' '" + out + "/spiral_z_error.png'";
