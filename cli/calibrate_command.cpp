@@ -15,6 +15,7 @@
 
 #include "cli/commands.hpp"
 #include "cli/options.hpp"
+#include "cli/plot.hpp"
 #include "cli/robot_setup.hpp"
 #include "model/common/errors.hpp"
 #include "model/identify/calibration_report.hpp"
@@ -90,15 +91,8 @@ int runCalibrate(int argc, char** argv) {
   writeFileAtomically(out + "/summary.txt", summary);
   std::fputs(summary.c_str(), stdout);
 
-  if (!options.has("no-plot")) {
-    const std::string command = "/usr/bin/python3 '" JOINTCOMP_SOURCE_DIR "/cli/plots/plot_calibration.py' '" + out +
-                                "/residuals.csv' '" + out + "/calibration.png'";
-    if (std::system(command.c_str()) == 0) {
-      std::printf("wrote %s/calibration.png\n", out.c_str());
-    } else {
-      std::printf("no plot: %s failed (needs Debian's python3-matplotlib)\n", command.c_str());
-    }
-  }
+  if (!options.has("no-plot")) drawPlot("plot_calibration.py", out + "/residuals.csv", out + "/calibration.png");
+
   std::printf("done in %.2f s\n", std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count());
   return 0;
 }

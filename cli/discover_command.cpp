@@ -17,6 +17,7 @@
 
 #include "cli/commands.hpp"
 #include "cli/options.hpp"
+#include "cli/plot.hpp"
 #include "cli/robot_setup.hpp"
 #include "model/common/errors.hpp"
 #include "model/identify/discovery_report.hpp"
@@ -100,12 +101,8 @@ int runDiscover(int argc, char** argv) {
                               ", " + out + "/report.json, " + out + "/steps.csv\n";
   writeFileAtomically(out + "/summary.txt", summary);
   std::fputs(summary.c_str(), stdout);
-  if (!options.has("no-plot")) {
-    const std::string command = "/usr/bin/python3 '" JOINTCOMP_SOURCE_DIR "/cli/plots/plot_discovery.py' '" + out +
-                                "/steps.csv' '" + out + "/discovery.png'";
-    if (std::system(command.c_str()) == 0) std::printf("wrote %s/discovery.png\n", out.c_str());
-    else std::printf("no plot: %s failed (needs Debian's python3-matplotlib)\n", command.c_str());
-  }
+  if (!options.has("no-plot")) drawPlot("plot_discovery.py", out + "/steps.csv", out + "/discovery.png");
+
   std::printf("done in %.2f s (discovery %.2f s)\n",
               std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count(), seconds);
   return 0;

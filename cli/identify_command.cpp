@@ -10,6 +10,7 @@
 
 #include "cli/commands.hpp"
 #include "cli/options.hpp"
+#include "cli/plot.hpp"
 #include "cli/robot_setup.hpp"
 #include "model/identify/identification_report.hpp"
 #include "model/io/atomic_file.hpp"
@@ -103,15 +104,8 @@ int runIdentify(int argc, char** argv) {
   writeFileAtomically(out + "/summary.txt", summary);
   std::printf("%s\n", summary.c_str());
   std::printf("wrote %s/params.json, %s/report.json, %s/summary.txt\n", out.c_str(), out.c_str(), out.c_str());
-  if (!options.has("no-plot")) {
-    const std::string command = "/usr/bin/python3 '" JOINTCOMP_SOURCE_DIR "/cli/plots/plot_identification.py' '" + out +
-                                "/report.json' '" + out + "/" + plot_name + "'";
-    if (std::system(command.c_str()) == 0) {
-      std::printf("wrote %s/%s\n", out.c_str(), plot_name.c_str());
-    } else {
-      std::printf("no plot: %s failed (needs Debian's python3-matplotlib)\n", command.c_str());
-    }
-  }
+  if (!options.has("no-plot")) drawPlot("plot_identification.py", out + "/report.json", out + "/" + plot_name);
+
   return 0;
 }
 

@@ -11,6 +11,7 @@
 
 #include "cli/commands.hpp"
 #include "cli/options.hpp"
+#include "cli/plot.hpp"
 #include "cli/robot_setup.hpp"
 #include "model/common/errors.hpp"
 #include "model/experiment/spiral_experiment.hpp"
@@ -172,15 +173,8 @@ int runPaper(int argc, char** argv) {
   printTable(result);
   std::printf("wrote %s/spiral_runs.csv and %s/summary.json\n", out.c_str(), out.c_str());
   handOutFmus();
-  if (!options.has("no-plot")) {
-    const std::string command = "/usr/bin/python3 '" JOINTCOMP_SOURCE_DIR "/cli/plots/plot_spiral_runs.py' '" + out +
-                                "/spiral_runs.csv' '" + out + "/spiral_z_error.png'";
-    if (std::system(command.c_str()) == 0) {
-      std::printf("wrote %s/spiral_z_error.png (in the manner of the paper's Fig. 13)\n", out.c_str());
-    } else {
-      std::printf("no plot: %s failed (needs Debian's python3-matplotlib)\n", command.c_str());
-    }
-  }
+  if (!options.has("no-plot")) drawPlot("plot_spiral_runs.py", out + "/spiral_runs.csv", out + "/spiral_z_error.png", " (in the manner of the paper's Fig. 13)");
+
   return 0;
 }
 
