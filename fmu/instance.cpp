@@ -8,6 +8,7 @@
 
 #include "fmu/integrator_options.hpp"
 #include "fmu/variable_binding.hpp"
+#include "model/common/bits.hpp"
 #include "model/common/errors.hpp"
 #include "model/io/parameter_file.hpp"
 #include "model/io/robot_file.hpp"
@@ -105,8 +106,6 @@ Vector6 wrenchOf(const std::vector<double>& values) {
   for (int k = 0; k < 6; ++k) w[k] = values[role::wrench[k]];
   return w;
 }
-
-bool sameBits(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }
 
 }  // namespace
 

@@ -24,7 +24,7 @@ double scaledConditionNumber(const Eigen::MatrixXd& jacobian, const std::vector<
   const Eigen::Index k = scaled.cols();
   const Eigen::MatrixXd r = qr.matrixQR().topLeftCorner(std::min(k, scaled.rows()), k).triangularView<Eigen::Upper>();
   const Eigen::JacobiSVD<Eigen::MatrixXd> svd(r);
-  const Eigen::VectorXd sigma = svd.singularValues();
+  const Eigen::VectorXd& sigma = svd.singularValues();
   if (sigma.size() < k || sigma[sigma.size() - 1] <= 0.0) return std::numeric_limits<double>::infinity();
   return sigma[0] / sigma[sigma.size() - 1];
 }

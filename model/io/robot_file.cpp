@@ -6,6 +6,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "model/common/bits.hpp"
 #include "model/common/errors.hpp"
 #include "model/common/json_fields.hpp"
 #include "model/io/atomic_file.hpp"
@@ -184,20 +185,18 @@ Robot loadRobotFile(const std::string& path) {
 
 namespace {
 
+using ::jointcomp::sameBits;  // doubles (model/common/bits.hpp); matrices below
+
 template <typename Matrix>
 bool sameBits(const Matrix& a, const Matrix& b) {
   if (a.rows() != b.rows() || a.cols() != b.cols()) return false;
   for (Eigen::Index r = 0; r < a.rows(); ++r) {
     for (Eigen::Index c = 0; c < a.cols(); ++c) {
-      const double x = a(r, c);
-      const double y = b(r, c);
-      if (std::memcmp(&x, &y, sizeof x) != 0) return false;
+      if (!sameBits(a(r, c), b(r, c))) return false;
     }
   }
   return true;
 }
-
-bool sameBits(double x, double y) { return std::memcmp(&x, &y, sizeof x) == 0; }
 
 }  // namespace
 

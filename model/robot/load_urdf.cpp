@@ -200,7 +200,7 @@ private:
     }
     if (inertial.mass <= 0.0) fail(where + ": <mass> must be positive, is " + std::to_string(inertial.mass));
     Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> principal(inertia);
-    const Eigen::Vector3d moments = principal.eigenvalues();
+    const Eigen::Vector3d& moments = principal.eigenvalues();
     const double tolerance = 1e-9 * std::max(1.0, moments.cwiseAbs().maxCoeff());
     if (moments.minCoeff() < -tolerance || moments[0] + moments[1] < moments[2] - tolerance) {
       fail(where + ": <inertia> is not a physical inertia tensor (principal moments must be non-negative and "
