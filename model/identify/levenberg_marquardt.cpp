@@ -91,10 +91,11 @@ double robustWeight(RobustLoss loss, double scale, double s) {
   return 1.0;
 }
 
-LevenbergMarquardtResult solveLevenbergMarquardt(const ResidualFunction& function, const Eigen::VectorXd& x0,
-                                                 int residual_count, const LevenbergMarquardtOptions& options) {
-  const Eigen::Index n = x0.size();
-  if (n < 1) throw InvalidArgument("Levenberg-Marquardt: no parameters to solve for");
+namespace {
+
+// The problem is one the solver can start on; throws InvalidArgument saying what is wrong.
+void checkProblem(const Eigen::VectorXd& x0, int residual_count, const LevenbergMarquardtOptions& options) {
+  if (x0.size() < 1) throw InvalidArgument("Levenberg-Marquardt: no parameters to solve for");
   if (options.block_size < 1 || residual_count < 1 || residual_count % options.block_size != 0) {
     throw InvalidArgument("Levenberg-Marquardt: " + std::to_string(residual_count) +
                           " residuals do not make whole blocks of " + std::to_string(options.block_size));
@@ -105,6 +106,14 @@ LevenbergMarquardtResult solveLevenbergMarquardt(const ResidualFunction& functio
   }
   if (!x0.allFinite()) throw InvalidArgument("Levenberg-Marquardt: the start point is not finite");
   if (options.max_iterations < 1) throw InvalidArgument("Levenberg-Marquardt: max_iterations must be at least 1");
+}
+
+}  // namespace
+
+LevenbergMarquardtResult solveLevenbergMarquardt(const ResidualFunction& function, const Eigen::VectorXd& x0,
+                                                 int residual_count, const LevenbergMarquardtOptions& options) {
+  checkProblem(x0, residual_count, options);
+  const Eigen::Index n = x0.size();
 
   LevenbergMarquardtResult result;
   result.x = x0;
