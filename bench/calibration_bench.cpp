@@ -47,7 +47,8 @@ void BM_ImportSeriesA(benchmark::State& state) {
     return;
   }
   for (auto _ : state) {
-    MeasurementCampaign campaign = importIpaUr10(ipa("Series_A/measurements_grid.csv"), ipa("Series_A/Trafo_TM_F_init.txt"));
+    MeasurementCampaign campaign =
+        importIpaUr10(ipa("Series_A/measurements_grid.csv"), ipa("Series_A/Trafo_TM_F_init.txt"));
     benchmark::DoNotOptimize(campaign.position.data());
   }
 }

@@ -62,9 +62,9 @@ const Spiral& spiral() {
     feed.controller_period = kStep;
     JointVector seed = JointVector::Zero(kDof);
     seed[1] = seed[2] = seed[4] = 60 * kDegree;
-    const JointTrajectory trajectory = planJointTrajectory(
-        *result.robot, planFeedRate(logarithmicSpiral(SpiralExperimentSpec::defaultSpiral()), feed), toolPointingDown(),
-        seed);
+    const JointTrajectory trajectory =
+        planJointTrajectory(*result.robot, planFeedRate(logarithmicSpiral(SpiralExperimentSpec::defaultSpiral()), feed),
+                            toolPointingDown(), seed);
     result.time = trajectory.time;
     result.q = trajectory.q;
     return result;
@@ -147,7 +147,10 @@ public:
     if (!instance_) throw std::runtime_error("instantiation failed");
   }
   ~Fmu() {
-    if (version_ == 2) free2_(instance_); else free3_(instance_);
+    if (version_ == 2)
+      free2_(instance_);
+    else
+      free3_(instance_);
     dlclose(library_);
   }
 
@@ -245,8 +248,13 @@ void BM_FmuSpiral(benchmark::State& state) {
   }
   reportRates(state, steps);
 }
-BENCHMARK(BM_FmuSpiral)->ArgNames({"fmi", "all_outputs"})->Args({2, 0})->Args({3, 0})->Args({2, 1})
-    ->Unit(benchmark::kMicrosecond)->MinTime(2.0);
+BENCHMARK(BM_FmuSpiral)
+    ->ArgNames({"fmi", "all_outputs"})
+    ->Args({2, 0})
+    ->Args({3, 0})
+    ->Args({2, 1})
+    ->Unit(benchmark::kMicrosecond)
+    ->MinTime(2.0);
 
 // The FMI layer alone: a step's set of the inputs and get of the outputs, with nothing to compute (the
 // values are those already set, the outputs already up to date). What the layer adds to each step
@@ -299,7 +307,8 @@ void BM_DirectSpiral(benchmark::State& state) {
       state.ResumeTiming();
     }
     const double t = s.time[k];
-    const JointVector v = has_last ? JointVector((s.q[k] - last_q) / (t - last_t)) : JointVector(JointVector::Zero(kDof));
+    const JointVector v =
+        has_last ? JointVector((s.q[k] - last_q) / (t - last_t)) : JointVector(JointVector::Zero(kDof));
     ctx.q = s.q[k];
     ctx.velocity = v;
     ctx.time = t;
@@ -349,7 +358,8 @@ int main(int argc, char** argv) {
   }
   if (direct > 0.0) {
     std::printf("\nRX170 spiral, 1 ms communication step, stiffness + kinematic compensation (CPU time per step)\n");
-    std::printf("  %-40s %7.2f us/step %6.0fx real time\n", "direct (plant + compensator)", direct, kStep * 1e6 / direct);
+    std::printf("  %-40s %7.2f us/step %6.0fx real time\n", "direct (plant + compensator)", direct,
+                kStep * 1e6 / direct);
     for (const auto& [name, us] : reporter.per_step) {
       if (name.rfind("BM_FmuSpiral", 0) != 0) continue;
       std::printf("  %-40s %7.2f us/step %6.0fx real time, FMI layer %+.2f us/step (%+.1f %%)\n", name.c_str(), us,

@@ -44,7 +44,6 @@
 #include "model/robot/dynamics.hpp"
 #include "model/robot/load_urdf.hpp"
 
-
 namespace {
 
 using namespace jointcomp;
@@ -57,8 +56,8 @@ const char* const kParameters = JOINTCOMP_DATA_DIR "/params/rx170.json";
 using jointcomp::bench::AllocationCounter;
 
 struct Sample {
-  std::vector<double> y;           // plant state [q, qd, p, pd, integral]
-  JointVector q, qd, tau;          // forward-dynamics inputs
+  std::vector<double> y;   // plant state [q, qd, p, pd, integral]
+  JointVector q, qd, tau;  // forward-dynamics inputs
   KDL::JntArray kq, kqd, ktau;
 };
 
@@ -100,7 +99,8 @@ std::unique_ptr<Fixture> buildFixture() {
   const Robot& robot = *f->robot;
   const int n = robot.dof();
   if (static_cast<int>(f->chain.getNrOfJoints()) != n) fail("KDL's chain and ours differ in joint count");
-  f->fd = std::make_unique<KDL::ChainFdSolver_RNE>(f->chain, KDL::Vector(robot.gravity.x(), robot.gravity.y(), robot.gravity.z()));
+  f->fd = std::make_unique<KDL::ChainFdSolver_RNE>(
+      f->chain, KDL::Vector(robot.gravity.x(), robot.gravity.y(), robot.gravity.z()));
   f->no_wrenches.assign(f->chain.getNrOfSegments(), KDL::Wrench::Zero());
 
   std::mt19937_64 random(kSeed);

@@ -54,7 +54,6 @@
 #include "model/robot/robot.hpp"
 #include "model/robot/workspace.hpp"
 
-
 namespace {
 
 using jointcomp::Jacobian;
@@ -307,18 +306,17 @@ double relativeDifference(const Eigen::MatrixXd& ours, const Eigen::MatrixXd& kd
   return (ours - kdl).cwiseAbs().maxCoeff() / std::max(1.0, kdl.cwiseAbs().maxCoeff());
 }
 
-void expectClose(const char* what, int sample, const Eigen::MatrixXd& ours, const Eigen::MatrixXd& kdl,
-                 double& worst) {
+void expectClose(const char* what, int sample, const Eigen::MatrixXd& ours, const Eigen::MatrixXd& kdl, double& worst) {
   if (ours.rows() != kdl.rows() || ours.cols() != kdl.cols()) {
     fail(std::string("cross-check: ") + what + " has different sizes in ours and KDL");
   }
   const double difference = relativeDifference(ours, kdl);
   worst = std::max(worst, difference);
   if (!(difference <= kTolerance)) {
-    fail(std::string("cross-check FAILED (") + g_checking + "): " + what + " at configuration " + std::to_string(sample) +
-         " differs from KDL by " + scientific(difference) + " (relative, max norm; tolerance 1e-9)\nours:\n" +
-         format(ours) + "\nKDL:\n" + format(kdl) + "\nours - KDL:\n" + format(ours - kdl) +
-         "\nThe benchmark is not run on models that disagree.");
+    fail(std::string("cross-check FAILED (") + g_checking + "): " + what + " at configuration " +
+         std::to_string(sample) + " differs from KDL by " + scientific(difference) +
+         " (relative, max norm; tolerance 1e-9)\nours:\n" + format(ours) + "\nKDL:\n" + format(kdl) +
+         "\nours - KDL:\n" + format(ours - kdl) + "\nThe benchmark is not run on models that disagree.");
   }
 }
 
@@ -334,8 +332,8 @@ void crossCheck(const std::string& label, Fixture& f) {
   KdlModel& kdl = f.kdl;
   const int n = robot.dof();
   RobotWorkspace ws(robot);
-  double worst_pose = 0, worst_jacobian = 0, worst_gravity = 0, worst_gravity_dp = 0, worst_rnea = 0,
-         worst_mass = 0, worst_fd = 0;
+  double worst_pose = 0, worst_jacobian = 0, worst_gravity = 0, worst_gravity_dp = 0, worst_rnea = 0, worst_mass = 0,
+         worst_fd = 0;
   const int checks[] = {0, 1, 2, 3, 17, 42, 63};
   for (int k : checks) {
     const Sample& s = f.samples[k];
@@ -385,12 +383,13 @@ void crossCheck(const std::string& label, Fixture& f) {
     double round_trip = 0;
     expectClose("forward dynamics of inverse dynamics (ours) vs the sampled qdd", k, qdd, s.qdd, round_trip);
   }
-  std::fprintf(stderr,
-               "robot_bench: cross-check against KDL passed for %s at %zu configurations (largest relative differences: "
-               "pose %.1e, Jacobian %.1e, gravity %.1e (RNE) %.1e (DynParam), RNEA %.1e, mass matrix %.1e, "
-               "forward dynamics %.1e; tolerance 1e-9)\n",
-               label.c_str(), sizeof(checks) / sizeof(checks[0]), worst_pose, worst_jacobian, worst_gravity, worst_gravity_dp,
-               worst_rnea, worst_mass, worst_fd);
+  std::fprintf(
+      stderr,
+      "robot_bench: cross-check against KDL passed for %s at %zu configurations (largest relative differences: "
+      "pose %.1e, Jacobian %.1e, gravity %.1e (RNE) %.1e (DynParam), RNEA %.1e, mass matrix %.1e, "
+      "forward dynamics %.1e; tolerance 1e-9)\n",
+      label.c_str(), sizeof(checks) / sizeof(checks[0]), worst_pose, worst_jacobian, worst_gravity, worst_gravity_dp,
+      worst_rnea, worst_mass, worst_fd);
 }
 
 // ---------------------------------------------------------------------------------------------------
@@ -398,16 +397,16 @@ void crossCheck(const std::string& label, Fixture& f) {
 
 using jointcomp::bench::AllocationCounter;
 
-#define BENCH_PROLOGUE                              \
-  Fixture& f = *g_fixture;                          \
-  const Robot& robot = f.robot;                     \
-  KdlModel& kdl = f.kdl;                            \
-  const int n = robot.dof();                        \
-  const std::vector<Sample>& samples = f.samples;   \
-  unsigned index = 0;                               \
-  (void)robot;                                      \
-  (void)kdl;                                        \
-  (void)n;                                          \
+#define BENCH_PROLOGUE                            \
+  Fixture& f = *g_fixture;                        \
+  const Robot& robot = f.robot;                   \
+  KdlModel& kdl = f.kdl;                          \
+  const int n = robot.dof();                      \
+  const std::vector<Sample>& samples = f.samples; \
+  unsigned index = 0;                             \
+  (void)robot;                                    \
+  (void)kdl;                                      \
+  (void)n;                                        \
   (void)samples
 
 #define NEXT_SAMPLE samples[index++ & (kConfigurations - 1)]
@@ -646,8 +645,7 @@ public:
       // Single runs and means (allocation counts are not negative, so a zero mean means none); the
       // spread aggregates (stddev, cv) say nothing about it.
       const bool counts = run.run_type == Run::RT_Iteration || run.aggregate_name == "mean";
-      if (counts && name.rfind("BM_Ours_", 0) == 0 && counter != run.counters.end() &&
-          counter->second.value != 0.0) {
+      if (counts && name.rfind("BM_Ours_", 0) == 0 && counter != run.counters.end() && counter->second.value != 0.0) {
         offenders_ += " " + name;
       }
     }

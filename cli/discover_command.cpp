@@ -12,8 +12,8 @@
 #include <string>
 #include <vector>
 
-#include <nlohmann/json.hpp>
 #include <sys/stat.h>
+#include <nlohmann/json.hpp>
 
 #include "cli/commands.hpp"
 #include "cli/options.hpp"
@@ -36,7 +36,8 @@ int runDiscover(int argc, char** argv) {
     const std::string arg = argv[i];
     if (arg == "--campaign" || arg == "--holdout") {
       if (i + 1 >= argc) throw std::invalid_argument("option " + arg + " needs a value");
-      for (const std::string& item : splitCommaList(argv[++i])) (arg == "--campaign" ? campaigns : holdouts).push_back(item);
+      for (const std::string& item : splitCommaList(argv[++i]))
+        (arg == "--campaign" ? campaigns : holdouts).push_back(item);
       continue;
     }
     rest.push_back(argv[i]);
@@ -46,7 +47,8 @@ int runDiscover(int argc, char** argv) {
                          "loss", "min-cv-gain", "no-plot"},
                         {"no-plot"});
   if (campaigns.empty() || !options.has("out")) {
-    throw std::invalid_argument("discover needs --campaign FILE[,FILE..] and --out DIR (and --urdf, --params, --holdout)");
+    throw std::invalid_argument(
+        "discover needs --campaign FILE[,FILE..] and --out DIR (and --urdf, --params, --holdout)");
   }
   const RobotSetup setup = loadRobotSetup(options, JOINTCOMP_DATA_DIR "/robots/ur10.urdf");
   const std::string& urdf = setup.urdf;
@@ -57,7 +59,8 @@ int runDiscover(int argc, char** argv) {
   DiscoveryOptions discovery;
   discovery.calibration.loss = parseRobustLoss(options.get("loss", "huber"));
   const std::string base = options.get("base", "frame");
-  if (base != "frame" && base != "textbook") throw std::invalid_argument("--base must be frame or textbook, not '" + base + "'");
+  if (base != "frame" && base != "textbook")
+    throw std::invalid_argument("--base must be frame or textbook, not '" + base + "'");
   discovery.base_geometry = base == "textbook";
   discovery.max_steps = std::stoi(options.get("max-steps", "8"));
   discovery.max_harmonic_order = std::stoi(options.get("orders", "4"));

@@ -34,12 +34,12 @@ int integerOption(const Options& options, const std::string& name, int fallback)
   return value;
 }
 
-
 }  // namespace
 
 int runIdentify(int argc, char** argv) {
   if (argc < 2 || std::string(argv[1]).rfind("--", 0) == 0) {
-    throw std::invalid_argument("identify needs a kind: jointcomp identify stiffness|transmission --campaign FILE --out DIR");
+    throw std::invalid_argument(
+        "identify needs a kind: jointcomp identify stiffness|transmission --campaign FILE --out DIR");
   }
   const std::string kind = argv[1];
   if (kind != "stiffness" && kind != "transmission") {
@@ -52,8 +52,8 @@ int runIdentify(int argc, char** argv) {
     throw std::invalid_argument("identify " + kind + " needs --campaign FILE and --out DIR");
   }
   const std::string campaign_path = options.get("campaign", "");
-  const RobotSetup setup =
-      loadRobotSetup(options, JOINTCOMP_DATA_DIR "/robots/rx170.urdf", "params", JOINTCOMP_DATA_DIR "/params/rx170.json");
+  const RobotSetup setup = loadRobotSetup(options, JOINTCOMP_DATA_DIR "/robots/rx170.urdf", "params",
+                                          JOINTCOMP_DATA_DIR "/params/rx170.json");
   const std::string& urdf = setup.urdf;
   const std::string& params = setup.params;
   const std::string out = options.get("out", "");
@@ -65,7 +65,8 @@ int runIdentify(int argc, char** argv) {
   const std::vector<DriveParameters>& drives = setup.parameters.drives;  // kept in the updated file
   const MeasurementCampaign campaign = readCampaignFile(campaign_path);
   std::unique_ptr<JointErrorModel> truth;
-  if (options.has("truth")) truth = std::make_unique<JointErrorModel>(loadParameterFile(options.get("truth", ""), robot));
+  if (options.has("truth"))
+    truth = std::make_unique<JointErrorModel>(loadParameterFile(options.get("truth", ""), robot));
 
   std::filesystem::create_directories(out);
   ReportSources sources;

@@ -16,7 +16,8 @@ int runKinematics(int argc, char** argv) {
   std::printf("robot '%s' from %s: %d joints, tool link '%s'\n", robot.name.c_str(), urdf.c_str(), robot.dof(),
               robot.tip_link.c_str());
   const double deg = 3.14159265358979323846 / 180.0;
-  const double poses[][6] = {{0, 0, 0, 0, 0, 0}, {0, 90, 0, 0, 0, 0}, {30, 45, 60, 0, 45, 0}, {-20, 60, 30, 90, -45, 10}};
+  const double poses[][6] = {
+      {0, 0, 0, 0, 0, 0}, {0, 90, 0, 0, 0, 0}, {30, 45, 60, 0, 45, 0}, {-20, 60, 30, 90, -45, 10}};
   std::printf("%-36s %-30s %s\n", "q [deg]", "tool position [mm]", "gravity torque [N m]");
   for (const auto& pose : poses) {
     JointVector q(robot.dof());

@@ -32,7 +32,8 @@ inline std::vector<double> numberList(const std::string& text, const std::string
     } catch (const std::exception&) {
       used = 0;
     }
-    if (used == 0 || used != item.size()) throw std::invalid_argument("--" + option + ": '" + item + "' is not a number");
+    if (used == 0 || used != item.size())
+      throw std::invalid_argument("--" + option + ": '" + item + "' is not a number");
     values.push_back(value);
   }
   return values;

@@ -6,8 +6,8 @@
 #include <memory>
 #include <sstream>
 
-#include <nlohmann/json.hpp>
 #include <sys/stat.h>
+#include <nlohmann/json.hpp>
 
 #include "cli/commands.hpp"
 #include "cli/options.hpp"
@@ -62,15 +62,16 @@ std::string summaryJson(const SpiralExperimentResult& result, const SpiralExperi
   summary["simulated_robot"] = result.dynamic ? "flexible-joint plant (CVODE)" : "quasi-static";
   for (int r = 0; r < 3; ++r) {
     const SpiralRun& run = result.runs[r];
-    summary["runs"].push_back({{"name", run.name},
-                               {"ra_mm", run.metrics.ra * 1e3},
-                               {"rz_mm", run.metrics.rz * 1e3},
-                               {"rms_3d_mm", run.metrics.rms * 1e3},
-                               {"max_3d_mm", run.metrics.max * 1e3},
-                               {"paper_ra_mm", kPaperRa[r]},
-                               {"paper_rz_mm", kPaperRz[r]},
-                               {"compensation_max_iterations", run.compensation.max_iterations},
-                               {"compensation_max_correction_deg", run.compensation.max_correction * 180.0 / 3.14159265358979323846}});
+    summary["runs"].push_back(
+        {{"name", run.name},
+         {"ra_mm", run.metrics.ra * 1e3},
+         {"rz_mm", run.metrics.rz * 1e3},
+         {"rms_3d_mm", run.metrics.rms * 1e3},
+         {"max_3d_mm", run.metrics.max * 1e3},
+         {"paper_ra_mm", kPaperRa[r]},
+         {"paper_rz_mm", kPaperRz[r]},
+         {"compensation_max_iterations", run.compensation.max_iterations},
+         {"compensation_max_correction_deg", run.compensation.max_correction * 180.0 / 3.14159265358979323846}});
   }
 
   return summary.dump(2) + "\n";
@@ -80,10 +81,11 @@ std::string summaryJson(const SpiralExperimentResult& result, const SpiralExperi
 void printTable(const SpiralExperimentResult& result) {
   if (result.dynamic) {
     const PlantStatistics& st = result.plant_statistics;
-    std::printf("  plant: %.1fx real time (%.3f s for 3 x %.1f s of motion); CVODE %ld steps, %ld right-hand sides, "
-                "%ld Jacobians\n",
-                3.0 * result.planned.time.back() / result.simulation_seconds, result.simulation_seconds,
-                result.planned.time.back(), st.steps, st.rhs_evaluations, st.jacobian_evaluations);
+    std::printf(
+        "  plant: %.1fx real time (%.3f s for 3 x %.1f s of motion); CVODE %ld steps, %ld right-hand sides, "
+        "%ld Jacobians\n",
+        3.0 * result.planned.time.back() / result.simulation_seconds, result.simulation_seconds,
+        result.planned.time.back(), st.steps, st.rhs_evaluations, st.jacobian_evaluations);
   }
   std::printf("\nTable II analogue (%zu samples, %.1f s of motion; errors measured by a simulated tracker)\n",
               result.planned.size(), result.planned.time.back());
@@ -91,14 +93,14 @@ void printTable(const SpiralExperimentResult& result) {
               "paper Ra", "paper Rz");
   for (int r = 0; r < 3; ++r) {
     const AccuracyMetrics& m = result.runs[r].metrics;
-    std::printf("%-36s %9.4f %9.4f %11.4f %11.4f %10.4f %10.4f\n", result.runs[r].name.c_str(), m.ra * 1e3,
-                m.rz * 1e3, m.rms * 1e3, m.max * 1e3, kPaperRa[r], kPaperRz[r]);
+    std::printf("%-36s %9.4f %9.4f %11.4f %11.4f %10.4f %10.4f\n", result.runs[r].name.c_str(), m.ra * 1e3, m.rz * 1e3,
+                m.rms * 1e3, m.max * 1e3, kPaperRa[r], kPaperRz[r]);
   }
   const double ra_gain = 1.0 - result.runs[2].metrics.ra / result.runs[0].metrics.ra;
   const double rz_gain = 1.0 - result.runs[2].metrics.rz / result.runs[0].metrics.rz;
   std::printf("reduction with both corrections: Ra %.0f %% (paper %.0f %%), Rz %.0f %% (paper %.0f %%)\n",
-              ra_gain * 100, (1 - kPaperRa[2] / kPaperRa[0]) * 100, rz_gain * 100, (1 - kPaperRz[2] / kPaperRz[0]) * 100);
-
+              ra_gain * 100, (1 - kPaperRa[2] / kPaperRa[0]) * 100, rz_gain * 100,
+              (1 - kPaperRz[2] / kPaperRz[0]) * 100);
 }
 
 // The FMUs of this build, handed out beside the results.
@@ -124,7 +126,8 @@ SpiralExperimentSpec specFromOptions(const Options& options, const ParameterSet&
   SpiralExperimentSpec spec;
   if (!options.has("quasi-static")) {
     if (!parameters.hasDrives()) {
-      throw ParameterError(path + ": no \"plant\" object (drives and controller gains) for the plant (or --quasi-static)");
+      throw ParameterError(path +
+                           ": no \"plant\" object (drives and controller gains) for the plant (or --quasi-static)");
     }
     spec.drives = parameters.drives;
   }
@@ -149,17 +152,19 @@ int runPaper(int argc, char** argv) {
   const auto started = std::chrono::steady_clock::now();
 
   std::printf("jointcomp paper: the spiral test of Olabi et al. (IEEE ICIT 2012), simulated\n");
-  const RobotSetup setup =
-      loadRobotSetup(options, JOINTCOMP_DATA_DIR "/robots/rx170.urdf", "params", JOINTCOMP_DATA_DIR "/params/rx170.json");
+  const RobotSetup setup = loadRobotSetup(options, JOINTCOMP_DATA_DIR "/robots/rx170.urdf", "params",
+                                          JOINTCOMP_DATA_DIR "/params/rx170.json");
   std::printf("  robot %s\n  parameters %s\n", setup.urdf.c_str(), setup.params.c_str());
   const JointErrorModel& nominal = setup.parameters.model;
   const SpiralExperimentSpec spec = specFromOptions(options, setup.parameters, setup.params);
-  std::printf("  simulated robot: %s\n", spec.drives.empty() ? "quasi-static (kinematics, elastostatics, transmission error)"
-                                                             : "flexible-joint plant integrated by CVODE");
-  std::printf("  truth: nominal parameters moved by up to %.0f %% (stiffness), %.0f %% (harmonic amplitudes), "
-              "%.2f rad (phases); seed %llu\n",
-              spec.truth.stiffness_relative * 100, spec.truth.amplitude_relative * 100, spec.truth.phase_absolute_rad,
-              static_cast<unsigned long long>(spec.truth.seed));
+  std::printf("  simulated robot: %s\n", spec.drives.empty()
+                                             ? "quasi-static (kinematics, elastostatics, transmission error)"
+                                             : "flexible-joint plant integrated by CVODE");
+  std::printf(
+      "  truth: nominal parameters moved by up to %.0f %% (stiffness), %.0f %% (harmonic amplitudes), "
+      "%.2f rad (phases); seed %llu\n",
+      spec.truth.stiffness_relative * 100, spec.truth.amplitude_relative * 100, spec.truth.phase_absolute_rad,
+      static_cast<unsigned long long>(spec.truth.seed));
   const SpiralExperimentResult result = runSpiralExperiment(nominal, spec, [&](const std::string& what) {
     const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
     std::printf("  [%6.2f s] %s\n", elapsed, what.c_str());
@@ -173,7 +178,9 @@ int runPaper(int argc, char** argv) {
   printTable(result);
   std::printf("wrote %s/spiral_runs.csv and %s/summary.json\n", out.c_str(), out.c_str());
   handOutFmus();
-  if (!options.has("no-plot")) drawPlot("plot_spiral_runs.py", out + "/spiral_runs.csv", out + "/spiral_z_error.png", " (in the manner of the paper's Fig. 13)");
+  if (!options.has("no-plot"))
+    drawPlot("plot_spiral_runs.py", out + "/spiral_runs.csv", out + "/spiral_z_error.png",
+             " (in the manner of the paper's Fig. 13)");
 
   return 0;
 }

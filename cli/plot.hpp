@@ -10,6 +10,7 @@ namespace jointcomp::cli {
 
 // Runs /usr/bin/python3 <cli/plots/SCRIPT> INPUT OUTPUT and prints what happened: "wrote OUTPUT<note>" or
 // "no plot: <why>". Returns true when the plot was written.
-bool drawPlot(const std::string& script, const std::string& input, const std::string& output, const std::string& note = "");
+bool drawPlot(const std::string& script, const std::string& input, const std::string& output,
+              const std::string& note = "");
 
 }  // namespace jointcomp::cli

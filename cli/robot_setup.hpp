@@ -13,8 +13,8 @@
 namespace jointcomp::cli {
 
 struct RobotSetup {
-  std::string urdf;        // the URDF read
-  std::string params;      // the parameter file read; "" when there was none
+  std::string urdf;    // the URDF read
+  std::string params;  // the parameter file read; "" when there was none
   std::shared_ptr<const Robot> robot;
   ParameterSet parameters;  // without a file: no effects, a direct gear train, no drives
 };

@@ -30,8 +30,8 @@ double numberOption(const Options& options, const std::string& name, double fall
 
 int runSimulate(int argc, char** argv) {
   const Options options(argc, argv,
-                        {"protocol", "truth", "urdf", "seed", "out", "perturb", "plant", "target", "joint", "from", "to",
-                         "step", "settle", "cycles", "count", "pose", "no-noise", "global-poses", "warm-up"},
+                        {"protocol", "truth", "urdf", "seed", "out", "perturb", "plant", "target", "joint", "from",
+                         "to", "step", "settle", "cycles", "count", "pose", "no-noise", "global-poses", "warm-up"},
                         {"plant", "no-noise"});
   if (!options.has("protocol") || !options.has("truth")) {
     throw std::invalid_argument(
@@ -53,7 +53,8 @@ int runSimulate(int argc, char** argv) {
     std::filesystem::path truth_file(out);
     truth_file.replace_extension(".truth.json");
     truth_written = truth_file.string();
-    spec.metadata["truth"] = truth_written + " (" + truth_path + " perturbed with seed " + options.get("perturb", "") + ")";
+    spec.metadata["truth"] =
+        truth_written + " (" + truth_path + " perturbed with seed " + options.get("perturb", "") + ")";
   }
   spec.seed = options.has("seed") ? std::stoull(options.get("seed", "1")) : 1;
   spec.noise = !options.has("no-noise");
@@ -82,12 +83,14 @@ int runSimulate(int argc, char** argv) {
   spec.stiffness.global_poses = static_cast<int>(numberOption(options, "global-poses", spec.stiffness.global_poses));
   if (options.has("warm-up")) {
     const std::vector<double> warm_up = numberList(options.get("warm-up", ""), "warm-up");
-    if (warm_up.empty() || warm_up.size() > 3) throw std::invalid_argument("--warm-up takes RISE_DEGC[,TAU_S[,START_DEGC]]");
+    if (warm_up.empty() || warm_up.size() > 3)
+      throw std::invalid_argument("--warm-up takes RISE_DEGC[,TAU_S[,START_DEGC]]");
     spec.temperature.enabled = true;
     spec.temperature.rise_degc = warm_up[0];
     if (warm_up.size() > 1) spec.temperature.time_constant_s = warm_up[1];
     if (warm_up.size() > 2) spec.temperature.start_degc = warm_up[2];
-    if (!(spec.temperature.time_constant_s > 0.0)) throw std::invalid_argument("--warm-up: the time constant must be positive");
+    if (!(spec.temperature.time_constant_s > 0.0))
+      throw std::invalid_argument("--warm-up: the time constant must be positive");
   }
   if (options.has("plant")) {
     if (!setup.parameters.hasDrives()) {
@@ -98,10 +101,11 @@ int runSimulate(int argc, char** argv) {
 
   std::printf("jointcomp simulate: %s campaign of robot '%s'\n  truth %s\n", protocolName(spec.protocol).c_str(),
               robot->name.c_str(), spec.metadata["truth"].c_str());
-  std::printf("  instruments: tracker 1 sigma = %.1f um + %.1f um/m from (%.0f, %.0f, %.0f) mm; levels 1 sigma = %.4f deg%s\n",
-              spec.tracker.constant_m * 1e6, spec.tracker.per_metre * 1e6, spec.tracker.tracker_position.x() * 1e3,
-              spec.tracker.tracker_position.y() * 1e3, spec.tracker.tracker_position.z() * 1e3,
-              spec.level.sigma_rad / kDegree, spec.noise ? "" : " (noise off)");
+  std::printf(
+      "  instruments: tracker 1 sigma = %.1f um + %.1f um/m from (%.0f, %.0f, %.0f) mm; levels 1 sigma = %.4f deg%s\n",
+      spec.tracker.constant_m * 1e6, spec.tracker.per_metre * 1e6, spec.tracker.tracker_position.x() * 1e3,
+      spec.tracker.tracker_position.y() * 1e3, spec.tracker.tracker_position.z() * 1e3, spec.level.sigma_rad / kDegree,
+      spec.noise ? "" : " (noise off)");
   const MeasurementCampaign campaign = simulateCampaign(truth, spec, [](const std::string& what) {
     std::printf("  %s\n", what.c_str());
     std::fflush(stdout);

@@ -57,14 +57,14 @@ JOINTCOMP_FMI2_EXPORT const char* fmi2GetTypesPlatform(void);
 JOINTCOMP_FMI2_EXPORT const char* fmi2GetVersion(void);
 JOINTCOMP_FMI2_EXPORT fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean loggingOn, size_t nCategories,
                                                      const fmi2String categories[]);
-JOINTCOMP_FMI2_EXPORT fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType,
-                                                    fmi2String fmuGUID, fmi2String fmuResourceLocation,
+JOINTCOMP_FMI2_EXPORT fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2String fmuGUID,
+                                                    fmi2String fmuResourceLocation,
                                                     const fmi2CallbackFunctions* functions, fmi2Boolean visible,
                                                     fmi2Boolean loggingOn);
 JOINTCOMP_FMI2_EXPORT void fmi2FreeInstance(fmi2Component c);
-JOINTCOMP_FMI2_EXPORT fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined,
-                                                     fmi2Real tolerance, fmi2Real startTime,
-                                                     fmi2Boolean stopTimeDefined, fmi2Real stopTime);
+JOINTCOMP_FMI2_EXPORT fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined, fmi2Real tolerance,
+                                                     fmi2Real startTime, fmi2Boolean stopTimeDefined,
+                                                     fmi2Real stopTime);
 JOINTCOMP_FMI2_EXPORT fmi2Status fmi2EnterInitializationMode(fmi2Component c);
 JOINTCOMP_FMI2_EXPORT fmi2Status fmi2ExitInitializationMode(fmi2Component c);
 JOINTCOMP_FMI2_EXPORT fmi2Status fmi2Terminate(fmi2Component c);
@@ -88,16 +88,13 @@ JOINTCOMP_FMI2_EXPORT fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueR
 JOINTCOMP_FMI2_EXPORT fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate* FMUstate);
 JOINTCOMP_FMI2_EXPORT fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate);
 JOINTCOMP_FMI2_EXPORT fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate* FMUstate);
-JOINTCOMP_FMI2_EXPORT fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate FMUstate,
-                                                            size_t* size);
+JOINTCOMP_FMI2_EXPORT fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate FMUstate, size_t* size);
 JOINTCOMP_FMI2_EXPORT fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate FMUstate,
                                                        fmi2Byte serializedState[], size_t size);
-JOINTCOMP_FMI2_EXPORT fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedState[],
-                                                         size_t size, fmi2FMUstate* FMUstate);
-JOINTCOMP_FMI2_EXPORT fmi2Status fmi2GetDirectionalDerivative(fmi2Component c,
-                                                              const fmi2ValueReference vUnknown_ref[],
-                                                              size_t nUnknown,
-                                                              const fmi2ValueReference vKnown_ref[],
+JOINTCOMP_FMI2_EXPORT fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedState[], size_t size,
+                                                         fmi2FMUstate* FMUstate);
+JOINTCOMP_FMI2_EXPORT fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReference vUnknown_ref[],
+                                                              size_t nUnknown, const fmi2ValueReference vKnown_ref[],
                                                               size_t nKnown, const fmi2Real dvKnown[],
                                                               fmi2Real dvUnknown[]);
 JOINTCOMP_FMI2_EXPORT fmi2Status fmi2EnterEventMode(fmi2Component c);
@@ -112,25 +109,19 @@ JOINTCOMP_FMI2_EXPORT fmi2Status fmi2SetContinuousStates(fmi2Component c, const 
 JOINTCOMP_FMI2_EXPORT fmi2Status fmi2GetDerivatives(fmi2Component c, fmi2Real derivatives[], size_t nx);
 JOINTCOMP_FMI2_EXPORT fmi2Status fmi2GetEventIndicators(fmi2Component c, fmi2Real eventIndicators[], size_t ni);
 JOINTCOMP_FMI2_EXPORT fmi2Status fmi2GetContinuousStates(fmi2Component c, fmi2Real x[], size_t nx);
-JOINTCOMP_FMI2_EXPORT fmi2Status fmi2GetNominalsOfContinuousStates(fmi2Component c, fmi2Real x_nominal[],
-                                                                   size_t nx);
-JOINTCOMP_FMI2_EXPORT fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference vr[],
-                                                             size_t nvr, const fmi2Integer order[],
-                                                             const fmi2Real value[]);
+JOINTCOMP_FMI2_EXPORT fmi2Status fmi2GetNominalsOfContinuousStates(fmi2Component c, fmi2Real x_nominal[], size_t nx);
+JOINTCOMP_FMI2_EXPORT fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
+                                                             const fmi2Integer order[], const fmi2Real value[]);
 JOINTCOMP_FMI2_EXPORT fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReference vr[],
-                                                              size_t nvr, const fmi2Integer order[],
-                                                              fmi2Real value[]);
+                                                              size_t nvr, const fmi2Integer order[], fmi2Real value[]);
 JOINTCOMP_FMI2_EXPORT fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint,
                                             fmi2Real communicationStepSize,
                                             fmi2Boolean noSetFMUStatePriorToCurrentPoint);
 JOINTCOMP_FMI2_EXPORT fmi2Status fmi2CancelStep(fmi2Component c);
 JOINTCOMP_FMI2_EXPORT fmi2Status fmi2GetStatus(fmi2Component c, const fmi2StatusKind s, fmi2Status* value);
 JOINTCOMP_FMI2_EXPORT fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind s, fmi2Real* value);
-JOINTCOMP_FMI2_EXPORT fmi2Status fmi2GetIntegerStatus(fmi2Component c, const fmi2StatusKind s,
-                                                      fmi2Integer* value);
-JOINTCOMP_FMI2_EXPORT fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind s,
-                                                      fmi2Boolean* value);
-JOINTCOMP_FMI2_EXPORT fmi2Status fmi2GetStringStatus(fmi2Component c, const fmi2StatusKind s,
-                                                     fmi2String* value);
+JOINTCOMP_FMI2_EXPORT fmi2Status fmi2GetIntegerStatus(fmi2Component c, const fmi2StatusKind s, fmi2Integer* value);
+JOINTCOMP_FMI2_EXPORT fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind s, fmi2Boolean* value);
+JOINTCOMP_FMI2_EXPORT fmi2Status fmi2GetStringStatus(fmi2Component c, const fmi2StatusKind s, fmi2String* value);
 
 }  // extern "C"

@@ -29,8 +29,8 @@ constexpr std::uint64_t kComponentMagic = 0x6a63666d69324330ULL;  // "jcfmi2C0"
 constexpr const char* kCoSimulationOnly = "this FMU is for co-simulation only (no model exchange)";
 
 // Phases in which each group of functions is allowed (FMI 2.0, 4.2.4, the co-simulation state machine).
-constexpr unsigned kGetPhases = fmu::kInitializationMode | fmu::kStepMode | fmu::kStepDiscarded | fmu::kTerminated |
-                                fmu::kErrorState;
+constexpr unsigned kGetPhases =
+    fmu::kInitializationMode | fmu::kStepMode | fmu::kStepDiscarded | fmu::kTerminated | fmu::kErrorState;
 constexpr unsigned kSetPhases = fmu::kInstantiated | fmu::kInitializationMode | fmu::kStepMode;
 constexpr unsigned kStatePhases = fmu::kAnyPhase & ~fmu::kErrorState;
 constexpr unsigned kStatusPhases = fmu::kStepMode | fmu::kStepDiscarded | fmu::kTerminated;
@@ -131,23 +131,23 @@ bool blank(const char* text) {
 }  // namespace
 
 // The prologue of every function of an instance: a valid component, the call allowed in its state.
-#define FMI2_BEGIN(function, phases)                                          \
-  Component* component = componentOf(c);                                      \
-  if (!component) return fmi2Error;                                           \
-  Instance& instance = *component->instance;                                  \
-  if (!instance.allowed(function, phases)) return fmi2Error;                  \
+#define FMI2_BEGIN(function, phases)                         \
+  Component* component = componentOf(c);                     \
+  if (!component) return fmi2Error;                          \
+  Instance& instance = *component->instance;                 \
+  if (!instance.allowed(function, phases)) return fmi2Error; \
   try {
-#define FMI2_END(function)                                                    \
-  }                                                                           \
-  catch (const std::exception& error) {                                       \
-    return to2(instance.internalError(function, error.what()));              \
-  }                                                                           \
-  catch (...) {                                                               \
-    return to2(instance.internalError(function, "unknown exception"));       \
+#define FMI2_END(function)                                             \
+  }                                                                    \
+  catch (const std::exception& error) {                                \
+    return to2(instance.internalError(function, error.what()));        \
+  }                                                                    \
+  catch (...) {                                                        \
+    return to2(instance.internalError(function, "unknown exception")); \
   }
-#define FMI2_UNSUPPORTED(function, why)                                       \
-  Component* component = componentOf(c);                                      \
-  if (!component) return fmi2Error;                                           \
+#define FMI2_UNSUPPORTED(function, why)  \
+  Component* component = componentOf(c); \
+  if (!component) return fmi2Error;      \
   return to2(component->instance->unsupported(function, why));
 
 // ---- Common functions ------------------------------------------------------------------------------
@@ -166,7 +166,7 @@ FMI2_EXPORT fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean loggingO
 FMI2_EXPORT fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2String fmuGUID,
                                           fmi2String fmuResourceLocation, const fmi2CallbackFunctions* functions,
                                           fmi2Boolean visible, fmi2Boolean loggingOn) {
-  (void)visible;  // batch mode either way: the FMU has no user interface
+  (void)visible;                   // batch mode either way: the FMU has no user interface
   if (!functions) return nullptr;  // no logger to say why
   const char* name = instanceName && *instanceName ? instanceName : "jointcomp";
   auto refuse = [&](const std::string& why) -> fmi2Component {
@@ -244,15 +244,13 @@ FMI2_EXPORT fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[
   FMI2_END("fmi2GetReal")
 }
 
-FMI2_EXPORT fmi2Status fmi2GetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
-                                      fmi2Integer value[]) {
+FMI2_EXPORT fmi2Status fmi2GetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2Integer value[]) {
   FMI2_BEGIN("fmi2GetInteger", kGetPhases)
   return to2(instance.get("fmi2GetInteger", fmu::kInteger | fmu::kEnumeration, vr, nvr, value));
   FMI2_END("fmi2GetInteger")
 }
 
-FMI2_EXPORT fmi2Status fmi2GetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
-                                      fmi2Boolean value[]) {
+FMI2_EXPORT fmi2Status fmi2GetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2Boolean value[]) {
   FMI2_BEGIN("fmi2GetBoolean", kGetPhases)
   return to2(instance.get("fmi2GetBoolean", fmu::kBoolean, vr, nvr, value));
   FMI2_END("fmi2GetBoolean")
@@ -265,8 +263,7 @@ FMI2_EXPORT fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference v
   FMI2_END("fmi2GetString")
 }
 
-FMI2_EXPORT fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
-                                   const fmi2Real value[]) {
+FMI2_EXPORT fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2Real value[]) {
   FMI2_BEGIN("fmi2SetReal", kSetPhases)
   return to2(instance.set("fmi2SetReal", fmu::kReal, vr, nvr, value));
   FMI2_END("fmi2SetReal")
@@ -338,22 +335,22 @@ FMI2_EXPORT fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2V
                                                     size_t nUnknown, const fmi2ValueReference vKnown_ref[],
                                                     size_t nKnown, const fmi2Real dvKnown[], fmi2Real dvUnknown[]) {
   (void)vUnknown_ref, (void)nUnknown, (void)vKnown_ref, (void)nKnown, (void)dvKnown, (void)dvUnknown;
-  FMI2_UNSUPPORTED("fmi2GetDirectionalDerivative", "directional derivatives are not provided "
-                                                   "(providesDirectionalDerivative is false)")
+  FMI2_UNSUPPORTED("fmi2GetDirectionalDerivative",
+                   "directional derivatives are not provided "
+                   "(providesDirectionalDerivative is false)")
 }
 
 // ---- Model exchange: not provided ----------------------------------------------------------------------
 
-FMI2_EXPORT fmi2Status fmi2EnterEventMode(fmi2Component c) { FMI2_UNSUPPORTED("fmi2EnterEventMode", kCoSimulationOnly) }
+FMI2_EXPORT fmi2Status fmi2EnterEventMode(fmi2Component c){FMI2_UNSUPPORTED("fmi2EnterEventMode", kCoSimulationOnly)}
 
 FMI2_EXPORT fmi2Status fmi2NewDiscreteStates(fmi2Component c, fmi2EventInfo* fmi2eventInfo) {
   (void)fmi2eventInfo;
   FMI2_UNSUPPORTED("fmi2NewDiscreteStates", kCoSimulationOnly)
 }
 
-FMI2_EXPORT fmi2Status fmi2EnterContinuousTimeMode(fmi2Component c) {
-  FMI2_UNSUPPORTED("fmi2EnterContinuousTimeMode", kCoSimulationOnly)
-}
+FMI2_EXPORT fmi2Status fmi2EnterContinuousTimeMode(fmi2Component c){
+    FMI2_UNSUPPORTED("fmi2EnterContinuousTimeMode", kCoSimulationOnly)}
 
 FMI2_EXPORT fmi2Status fmi2CompletedIntegratorStep(fmi2Component c, fmi2Boolean noSetFMUStatePriorToCurrentPoint,
                                                    fmi2Boolean* enterEventMode, fmi2Boolean* terminateSimulation) {
@@ -402,7 +399,8 @@ FMI2_EXPORT fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2Va
 FMI2_EXPORT fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                                                     const fmi2Integer order[], fmi2Real value[]) {
   (void)vr, (void)nvr, (void)order, (void)value;
-  FMI2_UNSUPPORTED("fmi2GetRealOutputDerivatives", "output derivatives are not provided (maxOutputDerivativeOrder is 0)")
+  FMI2_UNSUPPORTED("fmi2GetRealOutputDerivatives",
+                   "output derivatives are not provided (maxOutputDerivativeOrder is 0)")
 }
 
 FMI2_EXPORT fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2Real communicationStepSize,
@@ -413,9 +411,8 @@ FMI2_EXPORT fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunication
   FMI2_END("fmi2DoStep")
 }
 
-FMI2_EXPORT fmi2Status fmi2CancelStep(fmi2Component c) {
-  FMI2_UNSUPPORTED("fmi2CancelStep", "steps are never asynchronous (canRunAsynchronuously is false)")
-}
+FMI2_EXPORT fmi2Status fmi2CancelStep(fmi2Component c){
+    FMI2_UNSUPPORTED("fmi2CancelStep", "steps are never asynchronous (canRunAsynchronuously is false)")}
 
 FMI2_EXPORT fmi2Status fmi2GetStatus(fmi2Component c, const fmi2StatusKind s, fmi2Status* value) {
   (void)s, (void)value;
@@ -441,7 +438,8 @@ FMI2_EXPORT fmi2Status fmi2GetIntegerStatus(fmi2Component c, const fmi2StatusKin
 FMI2_EXPORT fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind s, fmi2Boolean* value) {
   FMI2_BEGIN("fmi2GetBooleanStatus", kStatusPhases)
   if (!value) return to2(instance.nullArgument("fmi2GetBooleanStatus", "value"));
-  if (s != fmi2Terminated) return to2(instance.unsupported("fmi2GetBooleanStatus", "only fmi2Terminated is a boolean status"));
+  if (s != fmi2Terminated)
+    return to2(instance.unsupported("fmi2GetBooleanStatus", "only fmi2Terminated is a boolean status"));
   *value = 0;  // the FMU never asks to end the simulation
   return fmi2OK;
   FMI2_END("fmi2GetBooleanStatus")

@@ -73,64 +73,64 @@ fmi3Instance refuse(fmi3InstanceEnvironment environment, fmi3LogMessageCallback 
 
 }  // namespace
 
-#define FMI3_BEGIN(function, phases)                                          \
-  Component* component = componentOf(instance);                               \
-  if (!component) return fmi3Error;                                           \
-  Instance& self = *component->instance;                                      \
-  if (!self.allowed(function, phases)) return fmi3Error;                      \
+#define FMI3_BEGIN(function, phases)                     \
+  Component* component = componentOf(instance);          \
+  if (!component) return fmi3Error;                      \
+  Instance& self = *component->instance;                 \
+  if (!self.allowed(function, phases)) return fmi3Error; \
   try {
-#define FMI3_END(function)                                                    \
-  }                                                                           \
-  catch (const std::exception& error) {                                       \
-    return to3(self.internalError(function, error.what()));                  \
-  }                                                                           \
-  catch (...) {                                                               \
-    return to3(self.internalError(function, "unknown exception"));           \
+#define FMI3_END(function)                                         \
+  }                                                                \
+  catch (const std::exception& error) {                            \
+    return to3(self.internalError(function, error.what()));        \
+  }                                                                \
+  catch (...) {                                                    \
+    return to3(self.internalError(function, "unknown exception")); \
   }
-#define FMI3_UNSUPPORTED(function, why)                                       \
-  Component* component = componentOf(instance);                               \
-  if (!component) return fmi3Error;                                           \
+#define FMI3_UNSUPPORTED(function, why)         \
+  Component* component = componentOf(instance); \
+  if (!component) return fmi3Error;             \
   return to3(component->instance->unsupported(function, why));
 // Scalars only: one value per value reference.
-#define FMI3_CHECK_COUNT(function)                                                                      \
-  if (nValues != nValueReferences) {                                                                    \
+#define FMI3_CHECK_COUNT(function)                                                                             \
+  if (nValues != nValueReferences) {                                                                           \
     return to3(self.badArgument(function, "nValues must equal nValueReferences (all variables are scalars)")); \
   }
 
 // Typed access for the types the FMU has variables of, and refusal for the others.
-#define FMI3_GET(Name, Type, types)                                                                         \
-  FMI3_EXPORT fmi3Status fmi3Get##Name(fmi3Instance instance, const fmi3ValueReference valueReferences[],   \
-                                       size_t nValueReferences, Type values[], size_t nValues) {            \
-    FMI3_BEGIN("fmi3Get" #Name, kGetPhases)                                                                 \
-    FMI3_CHECK_COUNT("fmi3Get" #Name)                                                                       \
-    return to3(self.get("fmi3Get" #Name, types, valueReferences, nValueReferences, values));               \
-    FMI3_END("fmi3Get" #Name)                                                                               \
+#define FMI3_GET(Name, Type, types)                                                                       \
+  FMI3_EXPORT fmi3Status fmi3Get##Name(fmi3Instance instance, const fmi3ValueReference valueReferences[], \
+                                       size_t nValueReferences, Type values[], size_t nValues) {          \
+    FMI3_BEGIN("fmi3Get" #Name, kGetPhases)                                                               \
+    FMI3_CHECK_COUNT("fmi3Get" #Name)                                                                     \
+    return to3(self.get("fmi3Get" #Name, types, valueReferences, nValueReferences, values));              \
+    FMI3_END("fmi3Get" #Name)                                                                             \
   }
-#define FMI3_SET(Name, Type, types)                                                                         \
-  FMI3_EXPORT fmi3Status fmi3Set##Name(fmi3Instance instance, const fmi3ValueReference valueReferences[],   \
-                                       size_t nValueReferences, const Type values[], size_t nValues) {      \
-    FMI3_BEGIN("fmi3Set" #Name, kSetPhases)                                                                 \
-    FMI3_CHECK_COUNT("fmi3Set" #Name)                                                                       \
-    return to3(self.set("fmi3Set" #Name, types, valueReferences, nValueReferences, values));               \
-    FMI3_END("fmi3Set" #Name)                                                                               \
+#define FMI3_SET(Name, Type, types)                                                                       \
+  FMI3_EXPORT fmi3Status fmi3Set##Name(fmi3Instance instance, const fmi3ValueReference valueReferences[], \
+                                       size_t nValueReferences, const Type values[], size_t nValues) {    \
+    FMI3_BEGIN("fmi3Set" #Name, kSetPhases)                                                               \
+    FMI3_CHECK_COUNT("fmi3Set" #Name)                                                                     \
+    return to3(self.set("fmi3Set" #Name, types, valueReferences, nValueReferences, values));              \
+    FMI3_END("fmi3Set" #Name)                                                                             \
   }
-#define FMI3_NO_GET(Name, Type)                                                                             \
-  FMI3_EXPORT fmi3Status fmi3Get##Name(fmi3Instance instance, const fmi3ValueReference valueReferences[],   \
-                                       size_t nValueReferences, Type values[], size_t nValues) {            \
-    FMI3_BEGIN("fmi3Get" #Name, kGetPhases)                                                                 \
-    FMI3_CHECK_COUNT("fmi3Get" #Name)                                                                       \
-    if (nValueReferences > 0 && !values) return to3(self.nullArgument("fmi3Get" #Name, "values[]"));       \
-    return to3(self.noVariablesOfType("fmi3Get" #Name, #Name, valueReferences, nValueReferences));         \
-    FMI3_END("fmi3Get" #Name)                                                                               \
+#define FMI3_NO_GET(Name, Type)                                                                           \
+  FMI3_EXPORT fmi3Status fmi3Get##Name(fmi3Instance instance, const fmi3ValueReference valueReferences[], \
+                                       size_t nValueReferences, Type values[], size_t nValues) {          \
+    FMI3_BEGIN("fmi3Get" #Name, kGetPhases)                                                               \
+    FMI3_CHECK_COUNT("fmi3Get" #Name)                                                                     \
+    if (nValueReferences > 0 && !values) return to3(self.nullArgument("fmi3Get" #Name, "values[]"));      \
+    return to3(self.noVariablesOfType("fmi3Get" #Name, #Name, valueReferences, nValueReferences));        \
+    FMI3_END("fmi3Get" #Name)                                                                             \
   }
-#define FMI3_NO_SET(Name, Type)                                                                             \
-  FMI3_EXPORT fmi3Status fmi3Set##Name(fmi3Instance instance, const fmi3ValueReference valueReferences[],   \
-                                       size_t nValueReferences, const Type values[], size_t nValues) {      \
-    FMI3_BEGIN("fmi3Set" #Name, kSetPhases)                                                                 \
-    FMI3_CHECK_COUNT("fmi3Set" #Name)                                                                       \
-    if (nValueReferences > 0 && !values) return to3(self.nullArgument("fmi3Set" #Name, "values[]"));       \
-    return to3(self.noVariablesOfType("fmi3Set" #Name, #Name, valueReferences, nValueReferences));         \
-    FMI3_END("fmi3Set" #Name)                                                                               \
+#define FMI3_NO_SET(Name, Type)                                                                           \
+  FMI3_EXPORT fmi3Status fmi3Set##Name(fmi3Instance instance, const fmi3ValueReference valueReferences[], \
+                                       size_t nValueReferences, const Type values[], size_t nValues) {    \
+    FMI3_BEGIN("fmi3Set" #Name, kSetPhases)                                                               \
+    FMI3_CHECK_COUNT("fmi3Set" #Name)                                                                     \
+    if (nValueReferences > 0 && !values) return to3(self.nullArgument("fmi3Set" #Name, "values[]"));      \
+    return to3(self.noVariablesOfType("fmi3Set" #Name, #Name, valueReferences, nValueReferences));        \
+    FMI3_END("fmi3Set" #Name)                                                                             \
   }
 
 // ---- Common functions ------------------------------------------------------------------------------
@@ -146,18 +146,19 @@ FMI3_EXPORT fmi3Status fmi3SetDebugLogging(fmi3Instance instance, fmi3Boolean lo
 
 FMI3_EXPORT fmi3Instance fmi3InstantiateModelExchange(fmi3String instanceName, fmi3String instantiationToken,
                                                       fmi3String resourcePath, fmi3Boolean visible,
-                                                      fmi3Boolean loggingOn, fmi3InstanceEnvironment instanceEnvironment,
+                                                      fmi3Boolean loggingOn,
+                                                      fmi3InstanceEnvironment instanceEnvironment,
                                                       fmi3LogMessageCallback logMessage) {
   (void)instanceName, (void)instantiationToken, (void)resourcePath, (void)visible, (void)loggingOn;
   return refuse(instanceEnvironment, logMessage, "fmi3InstantiateModelExchange", kCoSimulationOnly);
 }
 
-FMI3_EXPORT fmi3Instance fmi3InstantiateCoSimulation(
-    fmi3String instanceName, fmi3String instantiationToken, fmi3String resourcePath, fmi3Boolean visible,
-    fmi3Boolean loggingOn, fmi3Boolean eventModeUsed, fmi3Boolean earlyReturnAllowed,
-    const fmi3ValueReference requiredIntermediateVariables[], size_t nRequiredIntermediateVariables,
-    fmi3InstanceEnvironment instanceEnvironment, fmi3LogMessageCallback logMessage,
-    fmi3IntermediateUpdateCallback intermediateUpdate) {
+FMI3_EXPORT fmi3Instance
+fmi3InstantiateCoSimulation(fmi3String instanceName, fmi3String instantiationToken, fmi3String resourcePath,
+                            fmi3Boolean visible, fmi3Boolean loggingOn, fmi3Boolean eventModeUsed,
+                            fmi3Boolean earlyReturnAllowed, const fmi3ValueReference requiredIntermediateVariables[],
+                            size_t nRequiredIntermediateVariables, fmi3InstanceEnvironment instanceEnvironment,
+                            fmi3LogMessageCallback logMessage, fmi3IntermediateUpdateCallback intermediateUpdate) {
   (void)visible, (void)requiredIntermediateVariables;
   (void)intermediateUpdate;  // never called: the FMU provides no intermediate update
   const char* function = "fmi3InstantiateCoSimulation";
@@ -171,7 +172,8 @@ FMI3_EXPORT fmi3Instance fmi3InstantiateCoSimulation(
                       " (modelDescription.xml from another build?)");
   }
   if (!resourcePath) {
-    return refuse(instanceEnvironment, logMessage, function, "resourcePath is null; the FMU needs its resources/ folder");
+    return refuse(instanceEnvironment, logMessage, function,
+                  "resourcePath is null; the FMU needs its resources/ folder");
   }
   try {
     auto component = std::make_unique<Component>();
@@ -182,16 +184,18 @@ FMI3_EXPORT fmi3Instance fmi3InstantiateCoSimulation(
     Instance& self = *component->instance;
     // Declined, gracefully: the instance works without them.
     if (eventModeUsed) {
-      self.log(Status::Warning, "%s: eventModeUsed is true but %s; fmi3DoStep never asks for event handling",
-               function, kNoEventMode);
+      self.log(Status::Warning, "%s: eventModeUsed is true but %s; fmi3DoStep never asks for event handling", function,
+               kNoEventMode);
     }
     if (earlyReturnAllowed) {
       self.log(Status::Warning, "%s: earlyReturnAllowed is true but this FMU never returns early from fmi3DoStep",
                function);
     }
     if (nRequiredIntermediateVariables > 0) {
-      self.log(Status::Warning, "%s: %zu intermediate variables requested but this FMU provides no intermediate "
-               "update (providesIntermediateUpdate is false); they are ignored", function, nRequiredIntermediateVariables);
+      self.log(Status::Warning,
+               "%s: %zu intermediate variables requested but this FMU provides no intermediate "
+               "update (providesIntermediateUpdate is false); they are ignored",
+               function, nRequiredIntermediateVariables);
     }
     return component.release();
   } catch (const std::exception& error) {
@@ -219,7 +223,8 @@ FMI3_EXPORT fmi3Status fmi3EnterInitializationMode(fmi3Instance instance, fmi3Bo
                                                    fmi3Boolean stopTimeDefined, fmi3Float64 stopTime) {
   const char* function = "fmi3EnterInitializationMode";
   FMI3_BEGIN(function, fmu::kInstantiated)
-  const Status status = self.setupExperiment(function, toleranceDefined, tolerance, startTime, stopTimeDefined, stopTime);
+  const Status status =
+      self.setupExperiment(function, toleranceDefined, tolerance, startTime, stopTimeDefined, stopTime);
   if (status != Status::OK) return to3(status);
   return to3(self.enterInitializationMode(function));
   FMI3_END(function)
@@ -231,7 +236,7 @@ FMI3_EXPORT fmi3Status fmi3ExitInitializationMode(fmi3Instance instance) {
   FMI3_END("fmi3ExitInitializationMode")
 }
 
-FMI3_EXPORT fmi3Status fmi3EnterEventMode(fmi3Instance instance) { FMI3_UNSUPPORTED("fmi3EnterEventMode", kNoEventMode) }
+FMI3_EXPORT fmi3Status fmi3EnterEventMode(fmi3Instance instance){FMI3_UNSUPPORTED("fmi3EnterEventMode", kNoEventMode)}
 
 FMI3_EXPORT fmi3Status fmi3Terminate(fmi3Instance instance) {
   FMI3_BEGIN("fmi3Terminate", fmu::kStepMode | fmu::kStepDiscarded)
@@ -327,8 +332,8 @@ FMI3_EXPORT fmi3Status fmi3GetVariableDependencies(fmi3Instance instance, fmi3Va
   if (nDependencies != inputs.size()) {
     return to3(self.badArgument(function, "nDependencies must be what fmi3GetNumberOfVariableDependencies returned"));
   }
-  if (nDependencies > 0 && (!elementIndicesOfDependent || !independents || !elementIndicesOfIndependents ||
-                            !dependencyKinds)) {
+  if (nDependencies > 0 &&
+      (!elementIndicesOfDependent || !independents || !elementIndicesOfIndependents || !dependencyKinds)) {
     return to3(self.nullArgument(function, "an output array"));
   }
   for (std::size_t k = 0; k < inputs.size(); ++k) {
@@ -375,14 +380,15 @@ FMI3_EXPORT fmi3Status fmi3SerializeFMUState(fmi3Instance instance, fmi3FMUState
 FMI3_EXPORT fmi3Status fmi3DeserializeFMUState(fmi3Instance instance, const fmi3Byte serializedState[], size_t size,
                                                fmi3FMUState* FMUState) {
   FMI3_BEGIN("fmi3DeserializeFMUState", fmu::kAnyPhase)
-  return to3(self.deserialize("fmi3DeserializeFMUState", serializedState, size, reinterpret_cast<Snapshot**>(FMUState)));
+  return to3(
+      self.deserialize("fmi3DeserializeFMUState", serializedState, size, reinterpret_cast<Snapshot**>(FMUState)));
   FMI3_END("fmi3DeserializeFMUState")
 }
 
 FMI3_EXPORT fmi3Status fmi3GetDirectionalDerivative(fmi3Instance instance, const fmi3ValueReference unknowns[],
-                                                    size_t nUnknowns, const fmi3ValueReference knowns[],
-                                                    size_t nKnowns, const fmi3Float64 seed[], size_t nSeed,
-                                                    fmi3Float64 sensitivity[], size_t nSensitivity) {
+                                                    size_t nUnknowns, const fmi3ValueReference knowns[], size_t nKnowns,
+                                                    const fmi3Float64 seed[], size_t nSeed, fmi3Float64 sensitivity[],
+                                                    size_t nSensitivity) {
   (void)unknowns, (void)nUnknowns, (void)knowns, (void)nKnowns, (void)seed, (void)nSeed, (void)sensitivity,
       (void)nSensitivity;
   FMI3_UNSUPPORTED("fmi3GetDirectionalDerivative", "directional derivatives are not provided")
@@ -397,24 +403,22 @@ FMI3_EXPORT fmi3Status fmi3GetAdjointDerivative(fmi3Instance instance, const fmi
   FMI3_UNSUPPORTED("fmi3GetAdjointDerivative", "adjoint derivatives are not provided")
 }
 
-FMI3_EXPORT fmi3Status fmi3EnterConfigurationMode(fmi3Instance instance) {
-  FMI3_UNSUPPORTED("fmi3EnterConfigurationMode", "this FMU has no structural parameters")
-}
+FMI3_EXPORT fmi3Status fmi3EnterConfigurationMode(fmi3Instance instance){
+    FMI3_UNSUPPORTED("fmi3EnterConfigurationMode", "this FMU has no structural parameters")}
 
-FMI3_EXPORT fmi3Status fmi3ExitConfigurationMode(fmi3Instance instance) {
-  FMI3_UNSUPPORTED("fmi3ExitConfigurationMode", "this FMU has no structural parameters")
-}
+FMI3_EXPORT fmi3Status fmi3ExitConfigurationMode(fmi3Instance instance){
+    FMI3_UNSUPPORTED("fmi3ExitConfigurationMode", "this FMU has no structural parameters")}
 
-FMI3_EXPORT fmi3Status fmi3GetIntervalDecimal(fmi3Instance instance, const fmi3ValueReference valueReferences[],
-                                              size_t nValueReferences, fmi3Float64 intervals[],
-                                              fmi3IntervalQualifier qualifiers[]) {
+FMI3_EXPORT fmi3Status
+    fmi3GetIntervalDecimal(fmi3Instance instance, const fmi3ValueReference valueReferences[], size_t nValueReferences,
+                           fmi3Float64 intervals[], fmi3IntervalQualifier qualifiers[]) {
   (void)valueReferences, (void)nValueReferences, (void)intervals, (void)qualifiers;
   FMI3_UNSUPPORTED("fmi3GetIntervalDecimal", kNoClocks)
 }
 
 FMI3_EXPORT fmi3Status fmi3GetIntervalFraction(fmi3Instance instance, const fmi3ValueReference valueReferences[],
-                                               size_t nValueReferences, fmi3UInt64 counters[],
-                                               fmi3UInt64 resolutions[], fmi3IntervalQualifier qualifiers[]) {
+                                               size_t nValueReferences, fmi3UInt64 counters[], fmi3UInt64 resolutions[],
+                                               fmi3IntervalQualifier qualifiers[]) {
   (void)valueReferences, (void)nValueReferences, (void)counters, (void)resolutions, (void)qualifiers;
   FMI3_UNSUPPORTED("fmi3GetIntervalFraction", kNoClocks)
 }
@@ -457,15 +461,14 @@ FMI3_EXPORT fmi3Status fmi3SetShiftFraction(fmi3Instance instance, const fmi3Val
   FMI3_UNSUPPORTED("fmi3SetShiftFraction", kNoClocks)
 }
 
-FMI3_EXPORT fmi3Status fmi3EvaluateDiscreteStates(fmi3Instance instance) {
-  FMI3_UNSUPPORTED("fmi3EvaluateDiscreteStates", kNoEventMode)
-}
+FMI3_EXPORT fmi3Status fmi3EvaluateDiscreteStates(fmi3Instance instance){
+    FMI3_UNSUPPORTED("fmi3EvaluateDiscreteStates", kNoEventMode)}
 
-FMI3_EXPORT fmi3Status fmi3UpdateDiscreteStates(fmi3Instance instance, fmi3Boolean* discreteStatesNeedUpdate,
-                                                fmi3Boolean* terminateSimulation,
-                                                fmi3Boolean* nominalsOfContinuousStatesChanged,
-                                                fmi3Boolean* valuesOfContinuousStatesChanged,
-                                                fmi3Boolean* nextEventTimeDefined, fmi3Float64* nextEventTime) {
+FMI3_EXPORT fmi3Status
+    fmi3UpdateDiscreteStates(fmi3Instance instance, fmi3Boolean* discreteStatesNeedUpdate,
+                             fmi3Boolean* terminateSimulation, fmi3Boolean* nominalsOfContinuousStatesChanged,
+                             fmi3Boolean* valuesOfContinuousStatesChanged, fmi3Boolean* nextEventTimeDefined,
+                             fmi3Float64* nextEventTime) {
   (void)discreteStatesNeedUpdate, (void)terminateSimulation, (void)nominalsOfContinuousStatesChanged,
       (void)valuesOfContinuousStatesChanged, (void)nextEventTimeDefined, (void)nextEventTime;
   FMI3_UNSUPPORTED("fmi3UpdateDiscreteStates", kNoEventMode)
@@ -473,9 +476,8 @@ FMI3_EXPORT fmi3Status fmi3UpdateDiscreteStates(fmi3Instance instance, fmi3Boole
 
 // ---- Model exchange: not provided ----------------------------------------------------------------------
 
-FMI3_EXPORT fmi3Status fmi3EnterContinuousTimeMode(fmi3Instance instance) {
-  FMI3_UNSUPPORTED("fmi3EnterContinuousTimeMode", kCoSimulationOnly)
-}
+FMI3_EXPORT fmi3Status fmi3EnterContinuousTimeMode(fmi3Instance instance){
+    FMI3_UNSUPPORTED("fmi3EnterContinuousTimeMode", kCoSimulationOnly)}
 
 FMI3_EXPORT fmi3Status fmi3CompletedIntegratorStep(fmi3Instance instance, fmi3Boolean noSetFMUStatePriorToCurrentPoint,
                                                    fmi3Boolean* enterEventMode, fmi3Boolean* terminateSimulation) {
@@ -530,14 +532,14 @@ FMI3_EXPORT fmi3Status fmi3GetNumberOfContinuousStates(fmi3Instance instance, si
 
 // ---- Co-simulation -------------------------------------------------------------------------------------
 
-FMI3_EXPORT fmi3Status fmi3EnterStepMode(fmi3Instance instance) {
-  FMI3_UNSUPPORTED("fmi3EnterStepMode", "there is no event mode to leave (hasEventMode is false): "
-                                        "fmi3ExitInitializationMode enters step mode")
-}
+FMI3_EXPORT fmi3Status fmi3EnterStepMode(fmi3Instance instance){
+    FMI3_UNSUPPORTED("fmi3EnterStepMode",
+                     "there is no event mode to leave (hasEventMode is false): "
+                     "fmi3ExitInitializationMode enters step mode")}
 
-FMI3_EXPORT fmi3Status fmi3GetOutputDerivatives(fmi3Instance instance, const fmi3ValueReference valueReferences[],
-                                                size_t nValueReferences, const fmi3Int32 orders[], fmi3Float64 values[],
-                                                size_t nValues) {
+FMI3_EXPORT fmi3Status
+    fmi3GetOutputDerivatives(fmi3Instance instance, const fmi3ValueReference valueReferences[], size_t nValueReferences,
+                             const fmi3Int32 orders[], fmi3Float64 values[], size_t nValues) {
   (void)valueReferences, (void)nValueReferences, (void)orders, (void)values, (void)nValues;
   FMI3_UNSUPPORTED("fmi3GetOutputDerivatives", "output derivatives are not provided (maxOutputDerivativeOrder is 0)")
 }

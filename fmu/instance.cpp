@@ -109,11 +109,9 @@ Vector6 wrenchOf(const std::vector<double>& values) {
 
 }  // namespace
 
-
 // ------------------------------------------------------------------------------------------------
 
-Instance::Instance(std::string name, const std::string& resource_dir, LogSink sink, void* sink_context,
-                   bool logging_on)
+Instance::Instance(std::string name, const std::string& resource_dir, LogSink sink, void* sink_context, bool logging_on)
     : name_(std::move(name)), sink_(sink), sink_context_(sink_context) {
   for (bool& on : logging_) on = logging_on;
   logging_[kLogCalls] = false;  // verbose: only when asked for by name
@@ -292,7 +290,8 @@ Status Instance::ensureReference(const char* function) {
     const FixedPointReport report = m.compensator->compensate(ctx, reference_);
     if (!report.converged) {
       char text[160];
-      std::snprintf(text, sizeof text, "the compensation did not converge at t = %.9g s (residual %g rad after %d iterations)",
+      std::snprintf(text, sizeof text,
+                    "the compensation did not converge at t = %.9g s (residual %g rad after %d iterations)",
                     state_.time, report.residual, report.iterations);
       return fail(Status::Discard, function, text);
     }
@@ -416,14 +415,17 @@ Status Instance::exitInitializationMode(const char* function) {
 Status Instance::doStep(const char* function, double current_time, double step, double* last_successful_time) {
   if (!std::isfinite(current_time) || !std::isfinite(step) || !(step > 0.0)) {
     char text[160];
-    std::snprintf(text, sizeof text, "currentCommunicationPoint (%g) and communicationStepSize (%g) must be finite, "
-                  "the step size positive", current_time, step);
+    std::snprintf(text, sizeof text,
+                  "currentCommunicationPoint (%g) and communicationStepSize (%g) must be finite, "
+                  "the step size positive",
+                  current_time, step);
     return fail(Status::Error, function, text);
   }
   const double tolerance = 1e-9 * std::max(1.0, std::abs(state_.time));
   if (std::abs(current_time - state_.time) > tolerance) {
     char text[160];
-    std::snprintf(text, sizeof text, "currentCommunicationPoint %.17g is not the FMU's time %.17g", current_time, state_.time);
+    std::snprintf(text, sizeof text, "currentCommunicationPoint %.17g is not the FMU's time %.17g", current_time,
+                  state_.time);
     return fail(Status::Error, function, text);
   }
   const double end = current_time + step;
@@ -512,7 +514,8 @@ Status Instance::checkValue(const char* function, int index, double value) {
     case table::Type::Integer:
     case table::Type::Enumeration:
       if (value != std::floor(value) || value < -2147483648.0 || value > 9.2e18) {
-        std::snprintf(text, sizeof text, "value %.17g for %s is not an integer in range", value, describeVariable(index).c_str());
+        std::snprintf(text, sizeof text, "value %.17g for %s is not an integer in range", value,
+                      describeVariable(index).c_str());
         return fail(Status::Error, function, text);
       }
       if (v.type == table::Type::Enumeration && (value < v.min || value > v.max)) {
@@ -524,8 +527,8 @@ Status Instance::checkValue(const char* function, int index, double value) {
     case table::Type::Boolean: break;
   }
   if (value < v.min || value > v.max) {
-    std::snprintf(text, sizeof text, "value %.17g for %s is outside [%g, %g]; not set", value, describeVariable(index).c_str(),
-                  v.min, v.max);
+    std::snprintf(text, sizeof text, "value %.17g for %s is outside [%g, %g]; not set", value,
+                  describeVariable(index).c_str(), v.min, v.max);
     return fail(Status::Discard, function, text);
   }
   return Status::OK;
@@ -540,10 +543,12 @@ Status Instance::get(const char* function, unsigned types, const std::uint32_t v
   bool outputs = false;
   for (std::size_t i = 0; i < count; ++i) {
     const int index = indexOf(vrs[i]);
-    if (index < 0) return fail(Status::Error, function, "vr " + std::to_string(vrs[i]) + " is not a variable of this FMU");
+    if (index < 0)
+      return fail(Status::Error, function, "vr " + std::to_string(vrs[i]) + " is not a variable of this FMU");
     const table::Variable& v = kVariables[index];
     if (!(typeBit(v.type) & types)) {
-      return fail(Status::Error, function, describeVariable(index) + " is of type " + typeName(v.type) + "; use its own function");
+      return fail(Status::Error, function,
+                  describeVariable(index) + " is of type " + typeName(v.type) + "; use its own function");
     }
     if (v.causality == table::Causality::Output || v.causality == table::Causality::Independent) {
       if (state_.phase == kInstantiated) {
@@ -585,20 +590,24 @@ Status Instance::set(const char* function, unsigned types, const std::uint32_t v
   // Everything is checked before anything is set: a refused call changes nothing.
   for (std::size_t i = 0; i < count; ++i) {
     const int index = indexOf(vrs[i]);
-    if (index < 0) return fail(Status::Error, function, "vr " + std::to_string(vrs[i]) + " is not a variable of this FMU");
+    if (index < 0)
+      return fail(Status::Error, function, "vr " + std::to_string(vrs[i]) + " is not a variable of this FMU");
     const table::Variable& v = kVariables[index];
     if (!(typeBit(v.type) & types)) {
-      return fail(Status::Error, function, describeVariable(index) + " is of type " + typeName(v.type) + "; use its own function");
+      return fail(Status::Error, function,
+                  describeVariable(index) + " is of type " + typeName(v.type) + "; use its own function");
     }
     switch (v.causality) {
       case table::Causality::Output:
         return fail(Status::Error, function, describeVariable(index) + " is an output; it cannot be set");
       case table::Causality::Independent:
-        return fail(Status::Error, function, describeVariable(index) + " is the independent variable; it cannot be set");
+        return fail(Status::Error, function,
+                    describeVariable(index) + " is the independent variable; it cannot be set");
       case table::Causality::Parameter:
         if (!before_step && v.variability != table::Variability::Tunable) {
-          return fail(Status::Error, function,
-                      describeVariable(index) + " is a fixed parameter; it can be set only before exitInitializationMode");
+          return fail(
+              Status::Error, function,
+              describeVariable(index) + " is a fixed parameter; it can be set only before exitInitializationMode");
         }
         break;
       case table::Causality::Input: break;
@@ -635,7 +644,8 @@ Status Instance::noVariablesOfType(const char* function, const char* type_name, 
   if (count == 0) return Status::OK;
   if (!vrs) return nullArgument(function, "valueReferences[]");
   const int index = indexOf(vrs[0]);
-  if (index < 0) return fail(Status::Error, function, "vr " + std::to_string(vrs[0]) + " is not a variable of this FMU");
+  if (index < 0)
+    return fail(Status::Error, function, "vr " + std::to_string(vrs[0]) + " is not a variable of this FMU");
   return fail(Status::Error, function,
               describeVariable(index) + " is of type " + typeName(kVariables[index].type) + ", not " + type_name +
                   " (this FMU has no " + type_name + " variables)");

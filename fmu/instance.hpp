@@ -38,7 +38,6 @@ namespace jointcomp::fmu {
 // The status values of FMI 2 and FMI 3 agree for these five.
 enum class Status : int { OK = 0, Warning = 1, Discard = 2, Error = 3, Fatal = 4 };
 
-
 // Accepted variable types for a typed get or set, as bits.
 enum TypeMask : unsigned {
   kReal = 1u << 0,

@@ -160,19 +160,23 @@ InstanceState deserializeState(const unsigned char bytes[], std::size_t size) {
   for (char& c : magic) c = r.get<char>("the header");
   if (std::memcmp(magic, kMagic, sizeof kMagic) != 0) throw Error("not a jointcomp FMU state (wrong magic bytes)");
   const auto format = r.get<std::uint32_t>("the header");
-  if (format != kStateFormat) throw Error("state format " + std::to_string(format) + ", expected " + std::to_string(kStateFormat));
+  if (format != kStateFormat)
+    throw Error("state format " + std::to_string(format) + ", expected " + std::to_string(kStateFormat));
   const auto total = r.get<std::uint64_t>("the header");
-  if (total != size) throw Error("the state says it has " + std::to_string(total) + " bytes, given " + std::to_string(size));
+  if (total != size)
+    throw Error("the state says it has " + std::to_string(total) + " bytes, given " + std::to_string(size));
   std::uint64_t stored_checksum;  // the last 8 bytes; the header read above has more than that
   std::memcpy(&stored_checksum, bytes + size - sizeof stored_checksum, sizeof stored_checksum);
   if (fnv1a(bytes, size - sizeof stored_checksum) != stored_checksum) {
     throw Error("the checksum does not match: the bytes were changed or truncated");
   }
   const auto token_length = r.get<std::uint32_t>("the header");
-  if (token_length != std::strlen(table::kInstantiationToken)) throw Error("the state is from another FMU (instantiation token)");
+  if (token_length != std::strlen(table::kInstantiationToken))
+    throw Error("the state is from another FMU (instantiation token)");
   std::string token;
   for (std::uint32_t i = 0; i < token_length; ++i) token += r.get<char>("the header");
-  if (token != table::kInstantiationToken) throw Error("the state is from another FMU (instantiation token " + token + ")");
+  if (token != table::kInstantiationToken)
+    throw Error("the state is from another FMU (instantiation token " + token + ")");
   if (r.get<std::uint32_t>("the header") != static_cast<std::uint32_t>(table::kCount) ||
       r.get<std::uint32_t>("the header") != static_cast<std::uint32_t>(table::kDof)) {
     throw Error("the state has another variable table");

@@ -16,25 +16,25 @@ namespace jointcomp::fmu {
 enum Phase : unsigned {
   kInstantiated = 1u << 0,
   kInitializationMode = 1u << 1,
-  kStepMode = 1u << 2,         // FMI 2: slave initialised, step complete
-  kStepDiscarded = 1u << 3,    // the last step was discarded (FMI 2: step failed)
+  kStepMode = 1u << 2,       // FMI 2: slave initialised, step complete
+  kStepDiscarded = 1u << 3,  // the last step was discarded (FMI 2: step failed)
   kTerminated = 1u << 4,
-  kErrorState = 1u << 5,       // a call failed in a way that leaves the instance unusable until reset
+  kErrorState = 1u << 5,  // a call failed in a way that leaves the instance unusable until reset
   kAnyPhase = (1u << 6) - 1,
 };
 const char* phaseName(unsigned phase);
 
 struct InstanceState {
   unsigned phase = kInstantiated;
-  std::vector<double> values;       // every variable, in table order
-  double time = 0.0;                // s, the FMU's time
+  std::vector<double> values;  // every variable, in table order
+  double time = 0.0;           // s, the FMU's time
   double start_time = 0.0;
   bool stop_time_defined = false;
   double stop_time = 0.0;
-  bool initialized = false;         // the plant holds the state of this instance
-  PlantState plant;                 // in an FMU state taken after initialisation: the plant's state
-  bool has_last_step = false;       // a step was done since initialisation: the velocity can be estimated
-  JointVector last_q_desired;       // q_desired and time of that step
+  bool initialized = false;    // the plant holds the state of this instance
+  PlantState plant;            // in an FMU state taken after initialisation: the plant's state
+  bool has_last_step = false;  // a step was done since initialisation: the velocity can be estimated
+  JointVector last_q_desired;  // q_desired and time of that step
   double last_step_time = 0.0;
   Vector6 applied_wrench = Vector6::Zero();  // what the plant was last given
 

@@ -73,8 +73,7 @@ int run(const std::string& urdf, const std::string& parameters, const std::strin
 
 int main(int argc, char** argv) {
   if (argc != 5) {
-    std::fprintf(stderr,
-                 "usage: %s <robot.urdf> <parameters.json> <out robot.json> <out parameter-values.json>\n",
+    std::fprintf(stderr, "usage: %s <robot.urdf> <parameters.json> <out robot.json> <out parameter-values.json>\n",
                  argc > 0 ? argv[0] : "jointcomp_fmu_resources");
     return 2;
   }

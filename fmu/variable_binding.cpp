@@ -32,7 +32,8 @@ VariableBinding::VariableBinding(const ParameterSet& base, const Robot& robot, c
           if (found != names.end()) slot = {e, static_cast<int>(found - names.begin())};
         }
         if (slot.effect < 0) {
-          throw ParameterError(parameter_path + ": no effect parameter '" + v.key + "' (FMU variable '" + v.name + "')");
+          throw ParameterError(parameter_path + ": no effect parameter '" + v.key + "' (FMU variable '" + v.name +
+                               "')");
         }
         break;
       }

@@ -23,8 +23,8 @@ public:
   VariableBinding(const ParameterSet& base, const Robot& robot, const std::string& parameter_path);
 
   struct Models {
-    JointErrorModel truth;     // the plant's joint-error model
-    JointErrorModel nominal;   // the compensator's
+    JointErrorModel truth;    // the plant's joint-error model
+    JointErrorModel nominal;  // the compensator's
     std::vector<DriveParameters> drives;
     PlantOptions options;
   };

@@ -22,8 +22,8 @@ std::uint64_t allocationCount() { return g_allocations.load(std::memory_order_re
 
 void AllocationCounter::report(benchmark::State& state) const {
   const std::uint64_t made = allocationCount() - start;
-  state.counters["allocs_per_call"] =
-      benchmark::Counter(state.iterations() > 0 ? static_cast<double>(made) / static_cast<double>(state.iterations()) : 0.0);
+  state.counters["allocs_per_call"] = benchmark::Counter(
+      state.iterations() > 0 ? static_cast<double>(made) / static_cast<double>(state.iterations()) : 0.0);
 }
 
 }  // namespace jointcomp::bench

@@ -18,10 +18,10 @@
 
 // Every handle starts with a magic number naming its kind; free overwrites it, so that a handle of the
 // wrong kind or an already freed one is recognised as long as its memory has not been reused.
-constexpr std::uint64_t kRobotMagic = 0x6a63'726f'626f'7431ULL;  // "jcrobot1"
-constexpr std::uint64_t kPlantMagic = 0x6a63'706c'616e'7431ULL;  // "jcplant1"
+constexpr std::uint64_t kRobotMagic = 0x6a63'726f'626f'7431ULL;   // "jcrobot1"
+constexpr std::uint64_t kPlantMagic = 0x6a63'706c'616e'7431ULL;   // "jcplant1"
 constexpr std::uint64_t kReportMagic = 0x6a63'7265'706f'7274ULL;  // "jcreport"
-constexpr std::uint64_t kFreedMagic = 0x6a63'6672'6565'6421ULL;  // "jcfreed!"
+constexpr std::uint64_t kFreedMagic = 0x6a63'6672'6565'6421ULL;   // "jcfreed!"
 
 struct jc_robot {
   jc_robot(std::shared_ptr<const jointcomp::Robot> loaded, jointcomp::JointErrorModel nominal,
@@ -54,7 +54,7 @@ struct jc_report {
       : json(std::move(json_text)), summary(std::move(summary_text)) {}
 
   std::uint64_t magic = kReportMagic;
-  const std::string json;     // immutable once made: no lock needed
+  const std::string json;  // immutable once made: no lock needed
   const std::string summary;
 };
 

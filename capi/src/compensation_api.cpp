@@ -32,7 +32,8 @@ std::int64_t pointCount(std::int32_t length, int dof, const char* name) {
 }
 
 std::int32_t sampleCount(std::size_t samples) {
-  if (samples > static_cast<std::size_t>(INT32_MAX / 16)) invalid("the spiral has too many samples for int32_t lengths");
+  if (samples > static_cast<std::size_t>(INT32_MAX / 16))
+    invalid("the spiral has too many samples for int32_t lengths");
   return static_cast<std::int32_t>(samples);
 }
 
@@ -162,8 +163,8 @@ jc_status jc_spiral_plan(jc_robot* robot, double* time, int32_t time_len, double
   });
 }
 
-jc_status jc_spiral_experiment(jc_robot* robot, int32_t use_plant, double* metrics, int32_t metrics_len,
-                               double* errors, int32_t errors_len) {
+jc_status jc_spiral_experiment(jc_robot* robot, int32_t use_plant, double* metrics, int32_t metrics_len, double* errors,
+                               int32_t errors_len) {
   return CAPI_ENTRY({
     const jc_robot& handle = robotHandle(robot);
     if (use_plant != 0 && use_plant != 1) invalid("use_plant is " + std::to_string(use_plant) + ", must be 0 or 1");

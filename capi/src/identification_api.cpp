@@ -12,8 +12,8 @@
 
 #include "api_support.hpp"
 #include "model/common/json_fields.hpp"
-#include "model/identify/calibration_report.hpp"
 #include "model/experiment/campaign_simulation.hpp"
+#include "model/identify/calibration_report.hpp"
 #include "model/identify/discovery_report.hpp"
 #include "model/identify/identification_report.hpp"
 #include "model/io/measurement_campaign.hpp"
@@ -31,8 +31,8 @@ constexpr double kDegree = 3.14159265358979323846 / 180.0;
 // keys and bad values become JC_ERROR_INVALID_ARGUMENT naming the key (e.g. "options_json.seed: ...").
 template <class Read>
 void readOptions(const char* options_json, Read&& read) {
-  const nlohmann::json options = options_json ? nlohmann::json::parse(options_json, nullptr, false)
-                                              : nlohmann::json::object();
+  const nlohmann::json options =
+      options_json ? nlohmann::json::parse(options_json, nullptr, false) : nlohmann::json::object();
   if (options.is_discarded()) invalid("options_json is not valid JSON");
   if (!options.is_object()) invalid("options_json must be a JSON object, like {\"seed\": 3}");
   try {
@@ -54,7 +54,8 @@ int positiveInteger(JsonFields& fields, const std::string& key) {
 
 RobustLoss lossOption(JsonFields& fields) {
   const std::string name = fields.text("loss");
-  if (name != "none" && name != "huber" && name != "cauchy") fields.fail("loss", "must be \"huber\", \"cauchy\" or \"none\"");
+  if (name != "none" && name != "huber" && name != "cauchy")
+    fields.fail("loss", "must be \"huber\", \"cauchy\" or \"none\"");
   return parseRobustLoss(name);
 }
 
@@ -128,14 +129,16 @@ jc_status jc_simulate_campaign(jc_robot* truth, const char* options_json, const 
       spec = defaultCampaignSpec(protocolFromName(fields.text("protocol")));
       if (fields.has("seed")) {
         const double seed = fields.number("seed");
-        if (seed < 0.0 || seed != static_cast<double>(static_cast<std::uint64_t>(seed)) || seed > 9.007199254740992e15) {
+        if (seed < 0.0 || seed != static_cast<double>(static_cast<std::uint64_t>(seed)) ||
+            seed > 9.007199254740992e15) {
           fields.fail("seed", "must be a whole number from 0 to 2^53");
         }
         spec.seed = static_cast<std::uint64_t>(seed);
       }
       spec.noise = fields.flagOr("noise", true);
       if (fields.flagOr("plant", false)) {
-        if (handle.drives.empty()) fields.fail("plant", "needs drives: the robot's parameters have no \"plant\" object");
+        if (handle.drives.empty())
+          fields.fail("plant", "needs drives: the robot's parameters have no \"plant\" object");
         spec.drives = handle.drives;
       }
       const int dof = handle.robot->dof();
@@ -152,7 +155,8 @@ jc_status jc_simulate_campaign(jc_robot* truth, const char* options_json, const 
       if (fields.has("count")) spec.random.count = positiveInteger(fields, "count");
       if (fields.has("warm_up")) {
         const std::vector<double> warm_up = fields.numbers("warm_up");
-        if (warm_up.empty() || warm_up.size() > 3) fields.fail("warm_up", "takes [rise_degc, time_constant_s, start_degc] (1 to 3 numbers)");
+        if (warm_up.empty() || warm_up.size() > 3)
+          fields.fail("warm_up", "takes [rise_degc, time_constant_s, start_degc] (1 to 3 numbers)");
         spec.temperature.enabled = true;
         spec.temperature.rise_degc = warm_up[0];
         if (warm_up.size() > 1) spec.temperature.time_constant_s = warm_up[1];
@@ -195,9 +199,8 @@ jc_status jc_identify_stiffness(jc_robot* nominal, const char* campaign_path, co
     sources.parameters = robotSource(handle);
     sources.robot = handle.robot->name;
     sources.method_used = method;
-    auto updated = std::make_unique<jc_robot>(handle.robot,
-                                              withIdentifiedStiffness(handle.model, result, method == "global", path),
-                                              handle.drives);
+    auto updated = std::make_unique<jc_robot>(
+        handle.robot, withIdentifiedStiffness(handle.model, result, method == "global", path), handle.drives);
     auto made = std::make_unique<jc_report>(stiffnessReportJson(result, sources, nullptr).dump(2),
                                             stiffnessSummary(result, sources, nullptr));
     deliver(std::move(updated), identified, std::move(made), report);
@@ -232,8 +235,8 @@ jc_status jc_identify_transmission_error(jc_robot* nominal, const char* campaign
     sources.campaign = path;
     sources.parameters = robotSource(handle);
     sources.robot = handle.robot->name;
-    auto updated = std::make_unique<jc_robot>(handle.robot, withIdentifiedHarmonics(handle.model, result, path),
-                                              handle.drives);
+    auto updated =
+        std::make_unique<jc_robot>(handle.robot, withIdentifiedHarmonics(handle.model, result, path), handle.drives);
     auto made = std::make_unique<jc_report>(transmissionReportJson(result, sources, nullptr).dump(2),
                                             transmissionSummary(result, sources, nullptr));
     deliver(std::move(updated), identified, std::move(made), report);

@@ -124,15 +124,18 @@ jc_status jc_plant_time(jc_plant* plant, double* time) {
 }
 
 jc_status jc_plant_link_positions(jc_plant* plant, double* values, int32_t values_len) {
-  return CAPI_ENTRY({ readJoints(plant, values, values_len, [](FlexibleJointPlant& p) { return p.linkPositions(); }); });
+  return CAPI_ENTRY(
+      { readJoints(plant, values, values_len, [](FlexibleJointPlant& p) { return p.linkPositions(); }); });
 }
 
 jc_status jc_plant_link_velocities(jc_plant* plant, double* values, int32_t values_len) {
-  return CAPI_ENTRY({ readJoints(plant, values, values_len, [](FlexibleJointPlant& p) { return p.linkVelocities(); }); });
+  return CAPI_ENTRY(
+      { readJoints(plant, values, values_len, [](FlexibleJointPlant& p) { return p.linkVelocities(); }); });
 }
 
 jc_status jc_plant_motor_positions(jc_plant* plant, double* values, int32_t values_len) {
-  return CAPI_ENTRY({ readJoints(plant, values, values_len, [](FlexibleJointPlant& p) { return p.motorPositions(); }); });
+  return CAPI_ENTRY(
+      { readJoints(plant, values, values_len, [](FlexibleJointPlant& p) { return p.motorPositions(); }); });
 }
 
 jc_status jc_plant_motor_velocities(jc_plant* plant, double* values, int32_t values_len) {

@@ -26,8 +26,7 @@ std::string formatNumber(double value) {
 
 void requirePositiveFinite(double value, const char* field) {
   if (!std::isfinite(value) || !(value > 0.0)) {
-    throw InvalidArgument(std::string(field) + " must be positive and finite, got " +
-                          formatNumber(value));
+    throw InvalidArgument(std::string(field) + " must be positive and finite, got " + formatNumber(value));
   }
 }
 
@@ -67,8 +66,7 @@ SCurveProfile::SCurveProfile(double distance, const FeedRateSpec& spec) {
   if (distance_ >= 2.0 * accel * ramp_speed / jerk_) {
     // Acceleration limit still reached: v (accel / jerk + v / accel) = distance, a quadratic in v,
     // solved in the form that does not cancel.
-    peak_speed_ = 2.0 * accel * distance_ /
-                  (ramp_speed + std::sqrt(ramp_speed * ramp_speed + 4.0 * accel * distance_));
+    peak_speed_ = 2.0 * accel * distance_ / (ramp_speed + std::sqrt(ramp_speed * ramp_speed + 4.0 * accel * distance_));
     jerk_time_ = accel / jerk_;
     accel_time_ = jerk_time_ + peak_speed_ / accel;
   } else {
@@ -90,8 +88,7 @@ SCurveProfile::State SCurveProfile::accelerating(double t) const {
   }
   // Last ramp, written from its end (peak speed, zero acceleration) backwards.
   const double to_end = accel_time_ - t;
-  return {peak_speed_ * accel_time_ / 2.0 - peak_speed_ * to_end +
-              jerk_ * to_end * to_end * to_end / 6.0,
+  return {peak_speed_ * accel_time_ / 2.0 - peak_speed_ * to_end + jerk_ * to_end * to_end * to_end / 6.0,
           peak_speed_ - jerk_ * to_end * to_end / 2.0, jerk_ * to_end};
 }
 
@@ -118,10 +115,9 @@ std::vector<FeedRateSample> planFeedRate(const Path& path, const FeedRateSpec& s
   const double duration = profile.duration();
   const double periods = std::ceil(duration / spec.controller_period - kPeriodCountTolerance);
   if (!(periods < kMaxSamples)) {
-    throw InvalidArgument("FeedRateSpec.controller_period = " + formatNumber(spec.controller_period) +
-                          " s gives " + formatNumber(periods) + " samples over the " +
-                          formatNumber(duration) + " s motion; more than " +
-                          formatNumber(kMaxSamples) + " is taken for a unit mistake");
+    throw InvalidArgument("FeedRateSpec.controller_period = " + formatNumber(spec.controller_period) + " s gives " +
+                          formatNumber(periods) + " samples over the " + formatNumber(duration) +
+                          " s motion; more than " + formatNumber(kMaxSamples) + " is taken for a unit mistake");
   }
   const auto last = static_cast<long long>(std::max(periods, 1.0));
 
@@ -138,8 +134,7 @@ std::vector<FeedRateSample> planFeedRate(const Path& path, const FeedRateSpec& s
     sample.position = path.pointAt(state.s);
     const Eigen::Vector3d tangent = path.tangentAt(state.s);
     sample.velocity = tangent * state.s_dot;
-    sample.acceleration =
-        tangent * state.s_ddot + path.curvatureVectorAt(state.s) * (state.s_dot * state.s_dot);
+    sample.acceleration = tangent * state.s_ddot + path.curvatureVectorAt(state.s) * (state.s_dot * state.s_dot);
     samples.push_back(sample);
   }
   return samples;

@@ -12,8 +12,8 @@
 namespace jointcomp {
 
 struct FeedRateSpec {
-  double speed = 0.03;              // m/s, cruise tool speed (the paper's test)
-  double acceleration = 0.1;        // m/s^2, limit on |s_ddot| (the paper's test)
+  double speed = 0.03;        // m/s, cruise tool speed (the paper's test)
+  double acceleration = 0.1;  // m/s^2, limit on |s_ddot| (the paper's test)
   // m/s^3, limit on |s_dddot|. Our choice, the paper gives none: with 0.1 m/s^2 the acceleration
   // ramps take 0.1 s, short next to the 30 s spiral yet enough to keep joint torques smooth.
   double jerk = 1.0;
@@ -39,9 +39,9 @@ public:
   double duration() const { return 2.0 * accel_time_ + cruise_time_; }  // s
   double peakSpeed() const { return peak_speed_; }                      // m/s, <= spec.speed
   double peakAcceleration() const { return jerk_ * jerk_time_; }        // m/s^2, <= spec.acceleration
-  double jerkTime() const { return jerk_time_; }          // s, length of each constant-jerk phase
-  double accelerationTime() const { return accel_time_; }  // s, rest to peak speed
-  double cruiseTime() const { return cruise_time_; }       // s, at peak speed
+  double jerkTime() const { return jerk_time_; }                        // s, length of each constant-jerk phase
+  double accelerationTime() const { return accel_time_; }               // s, rest to peak speed
+  double cruiseTime() const { return cruise_time_; }                    // s, at peak speed
 
   // State at time t (s). Before 0 the profile is at rest at 0, after duration() at rest at distance();
   // at t = duration() exactly s == distance(). Throws InvalidArgument for a non-finite t.
@@ -59,10 +59,10 @@ private:
 };
 
 struct FeedRateSample {
-  double t = 0.0;       // s, a whole number of controller periods
-  double s = 0.0;       // m, arc length along the path
-  double s_dot = 0.0;   // m/s
-  double s_ddot = 0.0;  // m/s^2
+  double t = 0.0;                                          // s, a whole number of controller periods
+  double s = 0.0;                                          // m, arc length along the path
+  double s_dot = 0.0;                                      // m/s
+  double s_ddot = 0.0;                                     // m/s^2
   Eigen::Vector3d position = Eigen::Vector3d::Zero();      // m
   Eigen::Vector3d velocity = Eigen::Vector3d::Zero();      // m/s, tangent * s_dot
   Eigen::Vector3d acceleration = Eigen::Vector3d::Zero();  // m/s^2, tangent s_ddot + curvature s_dot^2

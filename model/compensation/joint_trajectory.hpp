@@ -10,10 +10,10 @@
 namespace jointcomp {
 
 struct JointTrajectory {
-  std::vector<double> time;                      // s
-  std::vector<Eigen::Vector3d> tool_position;    // m, the planned tool point
-  std::vector<JointVector> q;                    // rad
-  std::vector<JointVector> qd;                   // rad/s, central differences
+  std::vector<double> time;                    // s
+  std::vector<Eigen::Vector3d> tool_position;  // m, the planned tool point
+  std::vector<JointVector> q;                  // rad
+  std::vector<JointVector> qd;                 // rad/s, central differences
   std::size_t size() const { return time.size(); }
 };
 

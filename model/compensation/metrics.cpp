@@ -16,8 +16,7 @@ void requireValidDeviations(const std::vector<double>& z_deviations, const char*
   }
   for (std::size_t k = 0; k < z_deviations.size(); ++k) {
     if (!std::isfinite(z_deviations[k])) {
-      throw InvalidArgument(std::string(function) + ": z_deviations[" + std::to_string(k) +
-                            "] is not finite");
+      throw InvalidArgument(std::string(function) + ": z_deviations[" + std::to_string(k) + "] is not finite");
     }
   }
 }

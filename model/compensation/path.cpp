@@ -109,14 +109,13 @@ double Path::clampedArcLength(double s, const char* argument) const {
 // end accurate.
 double Path::spiralAngleAt(const Spiral& spiral, double s) const {
   const double b = spiral.spec.b;
-  return spiral.spec.theta_start +
-         std::log1p(s * b / (spiral.speed_factor * spiral.start_growth)) / b;
+  return spiral.spec.theta_start + std::log1p(s * b / (spiral.speed_factor * spiral.start_growth)) / b;
 }
 
 std::size_t Path::polylineSegmentAt(const Polyline& line, double s) const {
   const auto after = std::upper_bound(line.arc_length.begin(), line.arc_length.end(), s);
-  const auto index = static_cast<std::size_t>(std::max<std::ptrdiff_t>(
-      0, std::distance(line.arc_length.begin(), after) - 1));
+  const auto index =
+      static_cast<std::size_t>(std::max<std::ptrdiff_t>(0, std::distance(line.arc_length.begin(), after) - 1));
   return std::min(index, line.points.size() - 2);
 }
 
@@ -129,8 +128,7 @@ Eigen::Vector3d Path::pointAt(double s) const {
   }
   const auto& line = std::get<Polyline>(geometry_);
   const std::size_t i = polylineSegmentAt(line, arc);
-  const double fraction =
-      (arc - line.arc_length[i]) / (line.arc_length[i + 1] - line.arc_length[i]);
+  const double fraction = (arc - line.arc_length[i]) / (line.arc_length[i + 1] - line.arc_length[i]);
   return line.points[i] + fraction * (line.points[i + 1] - line.points[i]);
 }
 
@@ -183,8 +181,7 @@ Path logarithmicSpiral(const SpiralSpec& spec) {
   }
   if (!(spec.theta_end > spec.theta_start)) {
     throw InvalidArgument("SpiralSpec.theta_end (" + formatNumber(spec.theta_end) +
-                          ") must be greater than SpiralSpec.theta_start (" +
-                          formatNumber(spec.theta_start) + ")");
+                          ") must be greater than SpiralSpec.theta_start (" + formatNumber(spec.theta_start) + ")");
   }
 
   Path::Spiral spiral;
@@ -192,13 +189,12 @@ Path logarithmicSpiral(const SpiralSpec& spec) {
   spiral.speed_factor = spec.a * std::sqrt(1.0 + spec.b * spec.b);
   spiral.start_growth = std::exp(spec.b * spec.theta_start);
   // expm1 keeps short theta ranges and small b accurate.
-  const double length = spiral.speed_factor * spiral.start_growth *
-                        std::expm1(spec.b * (spec.theta_end - spec.theta_start)) / spec.b;
+  const double length =
+      spiral.speed_factor * spiral.start_growth * std::expm1(spec.b * (spec.theta_end - spec.theta_start)) / spec.b;
   if (!std::isfinite(length) || !(length > 0.0) || !(spiral.start_growth > 0.0) ||
       !std::isfinite(spiral.start_growth)) {
     throw InvalidArgument("SpiralSpec: a = " + formatNumber(spec.a) + ", b = " + formatNumber(spec.b) +
-                          " and theta in [" + formatNumber(spec.theta_start) + ", " +
-                          formatNumber(spec.theta_end) +
+                          " and theta in [" + formatNumber(spec.theta_start) + ", " + formatNumber(spec.theta_end) +
                           "] give an arc length that is not a positive finite number");
   }
   return Path(std::move(spiral), length);
@@ -215,8 +211,7 @@ Path polyline(std::vector<Eigen::Vector3d> points) {
                            [](const Eigen::Vector3d& p, const Eigen::Vector3d& q) { return p == q; }),
                points.end());
   if (points.size() < 2) {
-    throw InvalidArgument(
-        "polyline: points must hold at least 2 distinct points (a path of positive length)");
+    throw InvalidArgument("polyline: points must hold at least 2 distinct points (a path of positive length)");
   }
   Path::Polyline line;
   line.arc_length.reserve(points.size());
@@ -293,8 +288,8 @@ Path polylineFromCsv(const std::string& file_path) {
               ? "column " + std::to_string(column) + " ('" + header[column - 1] + "') is missing"
               : "column " + std::to_string(column) + " is not in the header";
       throw InvalidArgument(at_line(line_number) + "expected " + std::to_string(header.size()) +
-                            " cells as in the header (line " + std::to_string(header_line) +
-                            "), found " + std::to_string(cells.size()) + ": " + problem);
+                            " cells as in the header (line " + std::to_string(header_line) + "), found " +
+                            std::to_string(cells.size()) + ": " + problem);
     }
     Eigen::Vector3d point;
     for (std::size_t axis = 0; axis < 3; ++axis) {
@@ -302,10 +297,8 @@ Path polylineFromCsv(const std::string& file_path) {
       double value = 0.0;
       const CellParse result = parseCell(cells[column], value);
       if (result != CellParse::ok) {
-        throw InvalidArgument(at_line(line_number) + "column " + std::to_string(column + 1) + " ('" +
-                              kAxisNames[axis] + "'): " +
-                              (result == CellParse::not_finite ? "non-finite value '"
-                                                               : "non-numeric cell '") +
+        throw InvalidArgument(at_line(line_number) + "column " + std::to_string(column + 1) + " ('" + kAxisNames[axis] +
+                              "'): " + (result == CellParse::not_finite ? "non-finite value '" : "non-numeric cell '") +
                               std::string(cells[column]) + "'");
       }
       point[static_cast<Eigen::Index>(axis)] = value * kMillimetre;
@@ -319,19 +312,17 @@ Path polylineFromCsv(const std::string& file_path) {
   }
 
   if (header.empty()) {
-    throw InvalidArgument(at_line(line_number) +
-                          "no header row found (columns x, y, z in millimetres are required)");
+    throw InvalidArgument(at_line(line_number) + "no header row found (columns x, y, z in millimetres are required)");
   }
   if (points.size() < 2) {
     throw InvalidArgument(at_line(line_number) + "only " + std::to_string(points.size()) +
                           " data point(s) after the header on line " + std::to_string(header_line) +
                           " (columns x, y, z); a path needs at least 2");
   }
-  const bool all_coincide = std::all_of(points.begin(), points.end(),
-                                        [&](const Eigen::Vector3d& p) { return p == points.front(); });
+  const bool all_coincide =
+      std::all_of(points.begin(), points.end(), [&](const Eigen::Vector3d& p) { return p == points.front(); });
   if (all_coincide) {
-    throw InvalidArgument(file_path + ":" + std::to_string(first_point_line) + "-" +
-                          std::to_string(last_point_line) +
+    throw InvalidArgument(file_path + ":" + std::to_string(first_point_line) + "-" + std::to_string(last_point_line) +
                           ": all points (columns x, y, z) coincide, the path has zero length");
   }
   return polyline(std::move(points));

@@ -13,10 +13,10 @@ namespace jointcomp {
 // Logarithmic spiral R = a exp(b theta) in the XY plane through `centre` (the paper's test path).
 // Defaults are the paper's: a = 24 mm, b = 0.15, theta from 0 to 4 pi. The caller sets the centre.
 struct SpiralSpec {
-  double a = 0.024;                           // m, radius at theta = 0
-  double b = 0.15;                            // growth rate per radian; negative winds inwards
-  double theta_start = 0.0;                   // rad
-  double theta_end = 4.0 * EIGEN_PI;          // rad, must exceed theta_start
+  double a = 0.024;                                  // m, radius at theta = 0
+  double b = 0.15;                                   // growth rate per radian; negative winds inwards
+  double theta_start = 0.0;                          // rad
+  double theta_end = 4.0 * EIGEN_PI;                 // rad, must exceed theta_start
   Eigen::Vector3d centre = Eigen::Vector3d::Zero();  // m; the spiral lies in the plane z = centre.z()
 };
 

@@ -26,7 +26,7 @@ BacklashEffect::BacklashEffect(const Robot& robot, const std::vector<double>& wi
 }
 
 std::unique_ptr<Effect> BacklashEffect::fromJson(const nlohmann::json& json, const Robot& robot, const GearTrain&,
-                                          const std::string& path) {
+                                                 const std::string& path) {
   JsonFields fields(json, path);
   fields.text("type");
   const std::vector<double> width = readFields(fields, layout(), robot.dof());

@@ -14,8 +14,8 @@
 
 #include "model/effects/discovery_family.hpp"
 #include "model/effects/effect.hpp"
-#include "model/effects/per_joint_effect.hpp"
 #include "model/effects/gear_train.hpp"
+#include "model/effects/per_joint_effect.hpp"
 
 namespace jointcomp {
 
@@ -24,7 +24,8 @@ public:
   static constexpr const char* kType = "backlash";
   static constexpr double kDefaultVelocityScale = 1e-3;  // rad/s
   // Throws ParameterError for the wrong number of widths, a width that is not finite or a scale <= 0.
-  BacklashEffect(const Robot& robot, const std::vector<double>& width_rad, double velocity_scale = kDefaultVelocityScale);
+  BacklashEffect(const Robot& robot, const std::vector<double>& width_rad,
+                 double velocity_scale = kDefaultVelocityScale);
   static std::unique_ptr<Effect> fromJson(const nlohmann::json& json, const Robot& robot, const GearTrain& gears,
                                           const std::string& path);
 
@@ -39,7 +40,7 @@ public:
 
 private:
   static const std::vector<Scalar>& scalarLayout();  // velocity_scale_rad_per_s
-  static const std::vector<Field>& layout();  // "<joint>.backlash_width_rad"
+  static const std::vector<Field>& layout();         // "<joint>.backlash_width_rad"
 };
 
 // Discovery: "backlash", one column per joint, -tanh(v_j / v_s) / 2 with v_j from the command sequence.

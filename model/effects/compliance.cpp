@@ -20,7 +20,8 @@ ComplianceEffect::ComplianceEffect(const Robot& robot, const std::vector<double>
   setParameters(stiffness_nm_per_rad);
 }
 
-std::unique_ptr<Effect> ComplianceEffect::fromJson(const nlohmann::json& json, const Robot& robot, const std::string& path) {
+std::unique_ptr<Effect> ComplianceEffect::fromJson(const nlohmann::json& json, const Robot& robot,
+                                                   const std::string& path) {
   JsonFields fields(json, path);
   fields.text("type");
   const std::vector<double> stiffness = readFields(fields, layout(), robot.dof());
@@ -40,6 +41,5 @@ void ComplianceEffect::parametersChanged() {
 void ComplianceEffect::addJointError(const Robot&, const JointContext& ctx, JointVector& dq) const {
   dq -= ctx.load_torque.cwiseProduct(compliance_);
 }
-
 
 }  // namespace jointcomp

@@ -31,7 +31,8 @@ void CalibrationParameterDiscovery::offer(const DiscoveryData& data, int joint,
   candidates.push_back(std::move(candidate));
 }
 
-void PerJointFeatureDiscovery::offer(const DiscoveryData& data, int joint, std::vector<DiscoveryCandidate>& candidates) const {
+void PerJointFeatureDiscovery::offer(const DiscoveryData& data, int joint,
+                                     std::vector<DiscoveryCandidate>& candidates) const {
   if (joint < 0 || (needs_torque_ && !data.torque_known)) return;
   DiscoveryCandidate candidate;
   candidate.type = name_;

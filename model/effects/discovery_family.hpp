@@ -42,14 +42,13 @@ struct DiscoveryData {
   int rows() const { return static_cast<int>(command.size()); }
 };
 
-
 struct DiscoveryCandidate {
-  std::string type;      // the family's name in the vocabulary
-  int joint = -1;        // -1: the whole robot
-  int stage = 0;         // gear part: 1 = motor ... stageCount + 1 = output (harmonics)
-  std::string part;      // "motor", "stage_k", "output"; or the variant ("temperature", "time")
-  double cycles = 0.0;   // harmonic order (cycles per revolution of the part)
-  std::string detail;    // appended to the label, e.g. " motor order 2"
+  std::string type;     // the family's name in the vocabulary
+  int joint = -1;       // -1: the whole robot
+  int stage = 0;        // gear part: 1 = motor ... stageCount + 1 = output (harmonics)
+  std::string part;     // "motor", "stage_k", "output"; or the variant ("temperature", "time")
+  double cycles = 0.0;  // harmonic order (cycles per revolution of the part)
+  std::string detail;   // appended to the label, e.g. " motor order 2"
   std::vector<CalibrationParameter> releases;
   // rows x coefficients; through_compliance: rows x (coefficients * dof), block k holding the load torque
   // of every joint per unit of coefficient k.
@@ -115,7 +114,8 @@ class PerJointFeatureDiscovery : public DiscoveryFamily {
 public:
   std::string name() const override { return name_; }
   void offer(const DiscoveryData& data, int joint, std::vector<DiscoveryCandidate>& candidates) const override;
-  std::unique_ptr<Effect> makeEffect(const DiscoveryData& data, const std::vector<FittedCandidate>& accepted) const override;
+  std::unique_ptr<Effect> makeEffect(const DiscoveryData& data,
+                                     const std::vector<FittedCandidate>& accepted) const override;
   std::vector<NamedEstimate> describe(const FittedCandidate& fitted, const JointErrorModel& model) const override;
 
 protected:

@@ -73,7 +73,8 @@ GearTrain GearTrain::fromJson(const nlohmann::json& gears_json, const Robot& rob
 
 nlohmann::json GearTrain::toJson(const Robot& robot) const {
   nlohmann::json joints = nlohmann::json::array();
-  for (int j = 0; j < dof(); ++j) joints.push_back({{"joint", robot.joints[j].name}, {"stage_ratios", stage_ratios_[j]}});
+  for (int j = 0; j < dof(); ++j)
+    joints.push_back({{"joint", robot.joints[j].name}, {"stage_ratios", stage_ratios_[j]}});
   nlohmann::json coupling = nlohmann::json::array();
   for (int m = 0; m < dof(); ++m) {
     for (int j = 0; j < dof(); ++j) {

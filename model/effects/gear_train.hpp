@@ -32,7 +32,7 @@ public:
 
 private:
   std::vector<std::vector<double>> stage_ratios_;  // per joint, motor side first
-  std::vector<std::vector<double>> ratio_before_;   // product of the ratios before each stage input
+  std::vector<std::vector<double>> ratio_before_;  // product of the ratios before each stage input
   JointMatrix motor_from_joint_;
   void updateDerived();
 };

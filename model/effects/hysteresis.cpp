@@ -26,7 +26,7 @@ HysteresisEffect::HysteresisEffect(const Robot& robot, const std::vector<double>
 }
 
 std::unique_ptr<Effect> HysteresisEffect::fromJson(const nlohmann::json& json, const Robot& robot, const GearTrain&,
-                                          const std::string& path) {
+                                                   const std::string& path) {
   JsonFields fields(json, path);
   fields.text("type");
   const std::vector<double> width = readFields(fields, layout(), robot.dof());
@@ -51,7 +51,8 @@ double HysteresisDiscovery::feature(const DiscoveryData& data, int row, int join
   return HysteresisEffect::feature(data.velocity[row][joint], data.load_torque[row][joint], data.velocity_scale);
 }
 
-std::unique_ptr<Effect> HysteresisDiscovery::effectOf(const DiscoveryData& data, const std::vector<double>& width) const {
+std::unique_ptr<Effect> HysteresisDiscovery::effectOf(const DiscoveryData& data,
+                                                      const std::vector<double>& width) const {
   return std::make_unique<HysteresisEffect>(*data.robot, width, data.velocity_scale);
 }
 

@@ -24,8 +24,8 @@
 
 #include "model/effects/discovery_family.hpp"
 #include "model/effects/effect.hpp"
-#include "model/effects/per_joint_effect.hpp"
 #include "model/effects/gear_train.hpp"
+#include "model/effects/per_joint_effect.hpp"
 
 namespace jointcomp {
 
@@ -34,7 +34,8 @@ public:
   static constexpr const char* kType = "hysteresis";
   static constexpr double kDefaultVelocityScale = 1e-3;  // rad/s, as backlash
   // Throws ParameterError for the wrong number of widths, a width that is not finite or a scale <= 0.
-  HysteresisEffect(const Robot& robot, const std::vector<double>& width_rad_per_nm, double velocity_scale = kDefaultVelocityScale);
+  HysteresisEffect(const Robot& robot, const std::vector<double>& width_rad_per_nm,
+                   double velocity_scale = kDefaultVelocityScale);
   static std::unique_ptr<Effect> fromJson(const nlohmann::json& json, const Robot& robot, const GearTrain& gears,
                                           const std::string& path);
 
@@ -51,7 +52,7 @@ public:
 
 private:
   static const std::vector<Scalar>& scalarLayout();  // velocity_scale_rad_per_s
-  static const std::vector<Field>& layout();  // "<joint>.hysteresis_width_rad_per_nm"
+  static const std::vector<Field>& layout();         // "<joint>.hysteresis_width_rad_per_nm"
 };
 
 // Discovery: "hysteresis", one column per joint, -|tau_j| tanh(v_j / v_s) / 2 (needs the load torque).

@@ -14,7 +14,8 @@ const std::vector<PerJointEffect::Field>& JointOffsetEffect::layout() {
   return fields;
 }
 
-JointOffsetEffect::JointOffsetEffect(const Robot& robot, const std::vector<double>& offsets_rad) : PerJointEffect(robot, layout()) {
+JointOffsetEffect::JointOffsetEffect(const Robot& robot, const std::vector<double>& offsets_rad)
+    : PerJointEffect(robot, layout()) {
   setParameters(offsets_rad);
 }
 
@@ -34,6 +35,5 @@ void JointOffsetEffect::addJointError(const Robot&, const JointContext&, JointVe
   const std::vector<double>& offsets = field(0);
   for (std::size_t i = 0; i < offsets.size(); ++i) dq[static_cast<int>(i)] += offsets[i];
 }
-
 
 }  // namespace jointcomp

@@ -5,8 +5,8 @@
 
 #include "model/effects/discovery_family.hpp"
 #include "model/effects/effect.hpp"
-#include "model/effects/per_joint_effect.hpp"
 #include "model/effects/gear_train.hpp"
+#include "model/effects/per_joint_effect.hpp"
 
 namespace jointcomp {
 

@@ -1,6 +1,3 @@
 #include "model/effects/joint_placement.hpp"
 
-namespace jointcomp {
-
-
-}  // namespace jointcomp
+namespace jointcomp {}  // namespace jointcomp

@@ -44,7 +44,8 @@ double NonlinearComplianceDiscovery::feature(const DiscoveryData& data, int row,
   return NonlinearComplianceEffect::feature(data.load_torque[row][joint]);
 }
 
-std::unique_ptr<Effect> NonlinearComplianceDiscovery::effectOf(const DiscoveryData& data, const std::vector<double>& width) const {
+std::unique_ptr<Effect> NonlinearComplianceDiscovery::effectOf(const DiscoveryData& data,
+                                                               const std::vector<double>& width) const {
   return std::make_unique<NonlinearComplianceEffect>(*data.robot, width);
 }
 

@@ -6,8 +6,8 @@
 
 #include "model/effects/discovery_family.hpp"
 #include "model/effects/effect.hpp"
-#include "model/effects/per_joint_effect.hpp"
 #include "model/effects/gear_train.hpp"
+#include "model/effects/per_joint_effect.hpp"
 
 namespace jointcomp {
 
@@ -33,7 +33,8 @@ private:
 // Discovery: "nonlinear_compliance", one column per joint, tau_j^3 (needs the load torque).
 class NonlinearComplianceDiscovery : public PerJointFeatureDiscovery {
 public:
-  NonlinearComplianceDiscovery() : PerJointFeatureDiscovery("nonlinear_compliance", "cubic_compliance_rad_per_nm3", true) {}
+  NonlinearComplianceDiscovery()
+      : PerJointFeatureDiscovery("nonlinear_compliance", "cubic_compliance_rad_per_nm3", true) {}
 
 protected:
   double feature(const DiscoveryData& data, int row, int joint) const override;

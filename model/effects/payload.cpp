@@ -5,13 +5,14 @@
 #include <nlohmann/json.hpp>
 
 #include "model/common/errors.hpp"
-#include "model/effects/joint_error_model.hpp"
 #include "model/common/json_fields.hpp"
+#include "model/effects/joint_error_model.hpp"
 #include "model/robot/kinematics.hpp"
 
 namespace jointcomp {
 
-PayloadEffect::PayloadEffect(const Robot&, double mass_kg, const Eigen::Vector3d& com_m) : mass_(0.0), com_(Eigen::Vector3d::Zero()) {
+PayloadEffect::PayloadEffect(const Robot&, double mass_kg, const Eigen::Vector3d& com_m)
+    : mass_(0.0), com_(Eigen::Vector3d::Zero()) {
   setParameters({mass_kg, com_m.x(), com_m.y(), com_m.z()});
 }
 
@@ -99,7 +100,8 @@ std::unique_ptr<Effect> PayloadDiscovery::makeEffect(const DiscoveryData& data,
   return std::make_unique<PayloadEffect>(*data.robot, payload[0], com);
 }
 
-std::vector<NamedEstimate> PayloadDiscovery::describe(const FittedCandidate& fitted, const JointErrorModel& model) const {
+std::vector<NamedEstimate> PayloadDiscovery::describe(const FittedCandidate& fitted,
+                                                      const JointErrorModel& model) const {
   const auto& effect = static_cast<const PayloadEffect&>(model.effect(model.findEffect(PayloadEffect::kType)));
   const double m = effect.mass();
   std::vector<NamedEstimate> estimates{{"payload.mass_kg", m, fitted.sigma[0]}};

@@ -54,7 +54,8 @@ class PayloadDiscovery : public DiscoveryFamily {
 public:
   std::string name() const override { return "payload"; }
   void offer(const DiscoveryData& data, int joint, std::vector<DiscoveryCandidate>& candidates) const override;
-  std::unique_ptr<Effect> makeEffect(const DiscoveryData& data, const std::vector<FittedCandidate>& accepted) const override;
+  std::unique_ptr<Effect> makeEffect(const DiscoveryData& data,
+                                     const std::vector<FittedCandidate>& accepted) const override;
   // The model's payload (every accepted payload candidate adds to it): m and c = (m c) / m, with the
   // first-order sigma of the ratio (the covariance of m and m c left out).
   std::vector<NamedEstimate> describe(const FittedCandidate& fitted, const JointErrorModel& model) const override;

@@ -17,7 +17,8 @@ PerJointEffect::PerJointEffect(const Robot& robot, std::vector<Field> fields, st
 }
 
 void PerJointEffect::setScalars(const std::vector<double>& values) {
-  if (values.size() != scalars_.size()) throw ParameterError(type() + ": expected " + std::to_string(scalars_.size()) + " scalars");
+  if (values.size() != scalars_.size())
+    throw ParameterError(type() + ": expected " + std::to_string(scalars_.size()) + " scalars");
   for (std::size_t k = 0; k < values.size(); ++k) {
     const std::string& key = scalars_[k].json_key;
     if (!std::isfinite(values[k])) throw ParameterError(type() + ": " + key + " must be finite");
@@ -55,15 +56,16 @@ void PerJointEffect::setParameters(const std::vector<double>& values) {
   const std::size_t n = joint_names_.size();
   if (values.size() != fields_.size() * n) {
     throw ParameterError(type() + ": expected " + std::to_string(fields_.size() * n) + " parameters (" +
-                         fields_.front().parameter + (fields_.size() > 1 ? ", ..." : "") + " of " +
-                         std::to_string(n) + " joints), found " + std::to_string(values.size()));
+                         fields_.front().parameter + (fields_.size() > 1 ? ", ..." : "") + " of " + std::to_string(n) +
+                         " joints), found " + std::to_string(values.size()));
   }
   // Check everything before changing anything.
   for (std::size_t f = 0; f < fields_.size(); ++f) {
     for (std::size_t j = 0; j < n; ++j) {
       const double value = values[f * n + j];
       const std::string name = type() + ": " + joint_names_[j] + "." + fields_[f].parameter;
-      if (fields_[f].check != Check::PositiveOrRigid && !std::isfinite(value)) throw ParameterError(name + " must be finite");
+      if (fields_[f].check != Check::PositiveOrRigid && !std::isfinite(value))
+        throw ParameterError(name + " must be finite");
       if (fields_[f].check == Check::Positive && !(value > 0.0)) throw ParameterError(name + " must be positive");
       if (fields_[f].check == Check::PositiveOrRigid && (std::isnan(value) || !(value > 0.0))) {
         throw ParameterError(name + " must be positive (+infinity for a rigid joint)");

@@ -19,14 +19,14 @@ public:
     Positive,         // finite and positive
   };
   struct Field {
-    std::string json_key;    // "width_rad"
-    std::string parameter;   // "backlash_width_rad", named "<joint>.backlash_width_rad"
+    std::string json_key;   // "width_rad"
+    std::string parameter;  // "backlash_width_rad", named "<joint>.backlash_width_rad"
     Check check = Check::Finite;
-    bool optional = false;   // may be left out of the file (zeros)
+    bool optional = false;  // may be left out of the file (zeros)
   };
   // A single number of the effect beside the per-joint vectors (a velocity scale, a reference temperature).
   struct Scalar {
-    std::string json_key;  // "velocity_scale_rad_per_s"
+    std::string json_key;   // "velocity_scale_rad_per_s"
     double fallback = 0.0;  // when the file leaves it out
     Check check = Check::Finite;
   };

@@ -9,10 +9,10 @@
 namespace jointcomp {
 
 struct PerturbationSpec {
-  double stiffness_relative = 0.05;      // joint and spring stiffnesses: x (1 + U(-r, r))
-  double amplitude_relative = 0.10;      // harmonic amplitudes: x (1 + U(-r, r))
-  double phase_absolute_rad = 0.10;      // harmonic phases: + U(-p, p)
-  double geometry_relative = 0.02;       // other spring-balancer values: x (1 + U(-r, r))
+  double stiffness_relative = 0.05;  // joint and spring stiffnesses: x (1 + U(-r, r))
+  double amplitude_relative = 0.10;  // harmonic amplitudes: x (1 + U(-r, r))
+  double phase_absolute_rad = 0.10;  // harmonic phases: + U(-p, p)
+  double geometry_relative = 0.02;   // other spring-balancer values: x (1 + U(-r, r))
   std::uint64_t seed = 2012;
 };
 

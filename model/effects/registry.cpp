@@ -20,8 +20,10 @@ namespace {
 EffectRegistry makeBuiltin() {
   EffectRegistry registry;
   // Compliance and the balancer do not depend on the gear train.
-  registry.addEffectType(ComplianceEffect::kType, [](const nlohmann::json& j, const Robot& r, const GearTrain&,
-                                                     const std::string& p) { return ComplianceEffect::fromJson(j, r, p); });
+  registry.addEffectType(ComplianceEffect::kType,
+                         [](const nlohmann::json& j, const Robot& r, const GearTrain&, const std::string& p) {
+                           return ComplianceEffect::fromJson(j, r, p);
+                         });
   registry.addEffectType(SpringBalancerEffect::kType,
                          [](const nlohmann::json& j, const Robot& r, const GearTrain&, const std::string& p) {
                            return SpringBalancerEffect::fromJson(j, r, p);
@@ -72,7 +74,8 @@ void EffectRegistry::addDiscoveryFamily(std::shared_ptr<const DiscoveryFamily> f
 std::unique_ptr<Effect> EffectRegistry::create(const nlohmann::json& json, const Robot& robot, const GearTrain& gears,
                                                const std::string& path) const {
   if (!json.is_object()) throw ParameterError(path + ": expected a JSON object");
-  if (!json.contains("type") || !json.at("type").is_string()) throw ParameterError(path + ".type: missing or not a string");
+  if (!json.contains("type") || !json.at("type").is_string())
+    throw ParameterError(path + ".type: missing or not a string");
   const std::string type = json.at("type").get<std::string>();
   const auto found = factories_.find(type);
   if (found == factories_.end()) {

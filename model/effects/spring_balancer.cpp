@@ -84,7 +84,8 @@ void SpringBalancerEffect::setParameters(const std::vector<double>& values) {
   for (std::size_t i = 0; i < values.size(); ++i) {
     if (!std::isfinite(values[i])) throw ParameterError("spring_balancer: " + names[i] + " is not finite");
   }
-  if (!(values[0] > 0.0) || !(values[1] > 0.0)) throw ParameterError("spring_balancer: anchor distances must be positive");
+  if (!(values[0] > 0.0) || !(values[1] > 0.0))
+    throw ParameterError("spring_balancer: anchor distances must be positive");
   if (values[3] < 0.0 || values[4] < 0.0) {
     throw ParameterError("spring_balancer: stiffness and free length must not be negative");
   }

@@ -14,7 +14,7 @@ struct SpringBalancerGeometry {
   double anchor_distance_before_m = 0.0;  // a
   double anchor_distance_after_m = 0.0;   // b
   double angle_at_zero_rad = 0.0;
-  double stiffness_n_per_m = 0.0;         // k
+  double stiffness_n_per_m = 0.0;  // k
   double free_length_m = 0.0;
   double preload_n = 0.0;
 };

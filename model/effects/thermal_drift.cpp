@@ -5,8 +5,8 @@
 #include <nlohmann/json.hpp>
 
 #include "model/common/errors.hpp"
-#include "model/effects/joint_error_model.hpp"
 #include "model/common/json_fields.hpp"
+#include "model/effects/joint_error_model.hpp"
 
 namespace jointcomp {
 
@@ -28,7 +28,8 @@ ThermalDriftEffect::ThermalDriftEffect(const Robot& robot, const std::vector<dou
   setScalars({reference_temperature_degc, reference_time_s});
   if (coefficient_rad_per_degc.size() != jointCount() || drift_rad_per_s.size() != jointCount()) {
     throw ParameterError("thermal: expected " + std::to_string(jointCount()) + " coefficients and drifts, found " +
-                         std::to_string(coefficient_rad_per_degc.size()) + " and " + std::to_string(drift_rad_per_s.size()));
+                         std::to_string(coefficient_rad_per_degc.size()) + " and " +
+                         std::to_string(drift_rad_per_s.size()));
   }
   setParameters(joined({&coefficient_rad_per_degc, &drift_rad_per_s}));
 }
@@ -42,9 +43,9 @@ std::unique_ptr<Effect> ThermalDriftEffect::fromJson(const nlohmann::json& json,
   const std::string note = fields.textOr("estimate", "");
   fields.rejectUnknownKeys();
   const auto n = static_cast<long>(robot.dof());
-  auto effect = std::make_unique<ThermalDriftEffect>(robot, std::vector<double>(values.begin(), values.begin() + n),
-                                                     scalars[0], std::vector<double>(values.begin() + n, values.end()),
-                                                     scalars[1]);
+  auto effect =
+      std::make_unique<ThermalDriftEffect>(robot, std::vector<double>(values.begin(), values.begin() + n), scalars[0],
+                                           std::vector<double>(values.begin() + n, values.end()), scalars[1]);
   effect->estimate_note = note;
   return effect;
 }
@@ -59,7 +60,8 @@ void ThermalDriftEffect::addJointError(const Robot&, const JointContext& ctx, Jo
   }
 }
 
-void ThermalDriftDiscovery::offer(const DiscoveryData& data, int joint, std::vector<DiscoveryCandidate>& candidates) const {
+void ThermalDriftDiscovery::offer(const DiscoveryData& data, int joint,
+                                  std::vector<DiscoveryCandidate>& candidates) const {
   if (joint < 0) return;
   DiscoveryCandidate candidate;
   candidate.type = name();
@@ -87,7 +89,8 @@ std::unique_ptr<Effect> ThermalDriftDiscovery::makeEffect(const DiscoveryData& d
   return std::make_unique<ThermalDriftEffect>(*data.robot, thermal, data.temperature0, drift, data.time0);
 }
 
-std::vector<NamedEstimate> ThermalDriftDiscovery::describe(const FittedCandidate& fitted, const JointErrorModel& model) const {
+std::vector<NamedEstimate> ThermalDriftDiscovery::describe(const FittedCandidate& fitted,
+                                                           const JointErrorModel& model) const {
   const std::string& joint = model.robot().joints[static_cast<std::size_t>(fitted.candidate->joint)].name;
   const char* suffix = fitted.candidate->part == "time" ? ".drift_rad_per_s" : ".thermal_rad_per_degc";
   return {{joint + suffix, fitted.theta[0], fitted.sigma[0]}};

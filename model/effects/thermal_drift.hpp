@@ -7,8 +7,8 @@
 
 #include "model/effects/discovery_family.hpp"
 #include "model/effects/effect.hpp"
-#include "model/effects/per_joint_effect.hpp"
 #include "model/effects/gear_train.hpp"
+#include "model/effects/per_joint_effect.hpp"
 
 namespace jointcomp {
 
@@ -16,8 +16,9 @@ class ThermalDriftEffect : public PerJointEffect {
 public:
   static constexpr const char* kType = "thermal";
   // Throws ParameterError for wrong sizes or values that are not finite.
-  ThermalDriftEffect(const Robot& robot, const std::vector<double>& coefficient_rad_per_degc, double reference_temperature_degc,
-                     const std::vector<double>& drift_rad_per_s, double reference_time_s);
+  ThermalDriftEffect(const Robot& robot, const std::vector<double>& coefficient_rad_per_degc,
+                     double reference_temperature_degc, const std::vector<double>& drift_rad_per_s,
+                     double reference_time_s);
   static std::unique_ptr<Effect> fromJson(const nlohmann::json& json, const Robot& robot, const GearTrain& gears,
                                           const std::string& path);
 
@@ -43,7 +44,8 @@ class ThermalDriftDiscovery : public DiscoveryFamily {
 public:
   std::string name() const override { return "thermal"; }
   void offer(const DiscoveryData& data, int joint, std::vector<DiscoveryCandidate>& candidates) const override;
-  std::unique_ptr<Effect> makeEffect(const DiscoveryData& data, const std::vector<FittedCandidate>& accepted) const override;
+  std::unique_ptr<Effect> makeEffect(const DiscoveryData& data,
+                                     const std::vector<FittedCandidate>& accepted) const override;
   std::vector<NamedEstimate> describe(const FittedCandidate& fitted, const JointErrorModel& model) const override;
 };
 

@@ -6,8 +6,8 @@
 #include <nlohmann/json.hpp>
 
 #include "model/common/errors.hpp"
-#include "model/effects/joint_error_model.hpp"
 #include "model/common/json_fields.hpp"
+#include "model/effects/joint_error_model.hpp"
 
 namespace jointcomp {
 namespace {
@@ -194,7 +194,8 @@ std::unique_ptr<Effect> HarmonicDiscovery::makeEffect(const DiscoveryData& data,
   return std::make_unique<TransmissionErrorEffect>(*data.robot, *data.gears, harmonics);
 }
 
-std::vector<NamedEstimate> HarmonicDiscovery::describe(const FittedCandidate& fitted, const JointErrorModel& model) const {
+std::vector<NamedEstimate> HarmonicDiscovery::describe(const FittedCandidate& fitted,
+                                                       const JointErrorModel& model) const {
   const DiscoveryCandidate& c = *fitted.candidate;
   const Eigen::VectorXd& a = fitted.theta;
   const Eigen::VectorXd& s = fitted.sigma;
@@ -203,7 +204,8 @@ std::vector<NamedEstimate> HarmonicDiscovery::describe(const FittedCandidate& fi
   const std::string stem = model.robot().joints[static_cast<std::size_t>(c.joint)].name + "." + c.part + ".harmonic_" +
                            std::to_string(static_cast<int>(c.cycles));
   constexpr double kPi = 3.14159265358979323846;
-  return {{stem + ".amplitude_rad", amp, amp_sigma}, {stem + ".phase_rad", std::atan2(a[1], a[0]), amp > 0.0 ? amp_sigma / amp : kPi}};
+  return {{stem + ".amplitude_rad", amp, amp_sigma},
+          {stem + ".phase_rad", std::atan2(a[1], a[0]), amp > 0.0 ? amp_sigma / amp : kPi}};
 }
 
 }  // namespace jointcomp

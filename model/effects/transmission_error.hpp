@@ -54,7 +54,8 @@ class HarmonicDiscovery : public DiscoveryFamily {
 public:
   std::string name() const override { return "harmonic"; }
   void offer(const DiscoveryData& data, int joint, std::vector<DiscoveryCandidate>& candidates) const override;
-  std::unique_ptr<Effect> makeEffect(const DiscoveryData& data, const std::vector<FittedCandidate>& accepted) const override;
+  std::unique_ptr<Effect> makeEffect(const DiscoveryData& data,
+                                     const std::vector<FittedCandidate>& accepted) const override;
   std::vector<NamedEstimate> describe(const FittedCandidate& fitted, const JointErrorModel& model) const override;
 };
 

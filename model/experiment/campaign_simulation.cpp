@@ -12,8 +12,8 @@
 #include "model/common/errors.hpp"
 #include "model/common/random.hpp"
 #include "model/compensation/joint_trajectory.hpp"
-#include "model/experiment/spiral_experiment.hpp"
 #include "model/effects/compliance.hpp"
+#include "model/experiment/spiral_experiment.hpp"
 #include "model/identify/identification_support.hpp"
 #include "model/robot/kinematics.hpp"
 
@@ -39,17 +39,24 @@ using identify_detail::toolWrenchOf;
 class Simulator {
 public:
   Simulator(const JointErrorModel& truth, const CampaignSimulationSpec& spec)
-      : truth_(truth), robot_(truth.robot()), spec_(spec), ws_(robot_), random_(spec.seed ^ 0xA5A5A5A55A5A5A5AULL),
-        noise_(spec.seed), ctx_(robot_.dof()) {
+      : truth_(truth),
+        robot_(truth.robot()),
+        spec_(spec),
+        ws_(robot_),
+        random_(spec.seed ^ 0xA5A5A5A55A5A5A5AULL),
+        noise_(spec.seed),
+        ctx_(robot_.dof()) {
     if (!spec.target_in_flange.allFinite()) throw InvalidArgument("simulation: target_in_flange is not finite");
-    if (!(spec.tracker.constant_m >= 0.0 && spec.tracker.per_metre >= 0.0 && spec.tracker.tracker_position.allFinite())) {
+    if (!(spec.tracker.constant_m >= 0.0 && spec.tracker.per_metre >= 0.0 &&
+          spec.tracker.tracker_position.allFinite())) {
       throw InvalidArgument("simulation: tracker noise model must be non-negative and finite");
     }
     if (!(spec.level.sigma_rad >= 0.0)) throw InvalidArgument("simulation: level sigma must be non-negative");
     if (spec.temperature.enabled &&
         !(std::isfinite(spec.temperature.start_degc) && std::isfinite(spec.temperature.rise_degc) &&
           spec.temperature.time_constant_s > 0.0 && std::isfinite(spec.temperature.time_constant_s))) {
-      throw InvalidArgument("simulation: the temperature profile needs a finite start and rise and a positive time constant");
+      throw InvalidArgument(
+          "simulation: the temperature profile needs a finite start and rise and a positive time constant");
     }
     campaign_.source = "simulated " + protocolName(spec.protocol) + " campaign";
     campaign_.robot = robot_.name;
@@ -91,8 +98,8 @@ public:
       ctx_.tool_wrench = toolWrenchOf(wrench_at_target, ws_.robot, spec_.target_in_flange);
       const FixedPointReport report = settleStatically(truth_, truth_.allEffects(), ws_, ctx_);
       if (!report.converged) {
-        throw SolverError("simulation: the quasi-static robot did not settle at row " + std::to_string(campaign_.size()) +
-                          " (residual " + formatNumber(report.residual) + " rad)");
+        throw SolverError("simulation: the quasi-static robot did not settle at row " +
+                          std::to_string(campaign_.size()) + " (residual " + formatNumber(report.residual) + " rad)");
       }
       forwardKinematics(robot_, ws_.robot, ctx_.q);
     }
@@ -267,9 +274,11 @@ std::vector<int> checkedStiffnessJoints(const Simulator& sim, const CampaignSimu
     for (int j = 0; j < n; ++j) joints.push_back(j);
   }
   for (int j : joints) {
-    if (j < 0 || j >= n) throw InvalidArgument("stiffness protocol: tested joint " + std::to_string(j + 1) + " does not exist");
+    if (j < 0 || j >= n)
+      throw InvalidArgument("stiffness protocol: tested joint " + std::to_string(j + 1) + " does not exist");
   }
-  if (p.level_joint >= n) throw InvalidArgument("stiffness protocol: level_joint " + std::to_string(p.level_joint + 1) + " does not exist");
+  if (p.level_joint >= n)
+    throw InvalidArgument("stiffness protocol: level_joint " + std::to_string(p.level_joint + 1) + " does not exist");
   return joints;
 }
 
@@ -411,12 +420,13 @@ std::vector<double> sweepValues(const JointSweepSpec& s, bool back_and_forth) {
   return values;
 }
 
-void simulateSweep(Simulator& sim, const CampaignSimulationSpec& spec, bool back_and_forth, const JointErrorModel& truth,
-                   const std::function<void(const std::string&)>& progress) {
+void simulateSweep(Simulator& sim, const CampaignSimulationSpec& spec, bool back_and_forth,
+                   const JointErrorModel& truth, const std::function<void(const std::string&)>& progress) {
   const Robot& robot = sim.robot();
   const JointSweepSpec& s = spec.sweep;
   const int n = robot.dof();
-  if (s.joint < 0 || s.joint >= n) throw InvalidArgument("joint sweep: joint " + std::to_string(s.joint + 1) + " does not exist");
+  if (s.joint < 0 || s.joint >= n)
+    throw InvalidArgument("joint sweep: joint " + std::to_string(s.joint + 1) + " does not exist");
   if (!(s.settle_s > 0.0) || !(s.move_speed_rad_s > 0.0)) {
     throw InvalidArgument("joint sweep: settle_s and move_speed_rad_s must be positive");
   }
@@ -460,7 +470,8 @@ void simulateSweep(Simulator& sim, const CampaignSimulationSpec& spec, bool back
       }
       t = plant->time();
       sim.addRow(t, command, plant->linkPositions(), Vector6::Zero(), 0.0);
-      if (progress && k % 500 == 499) tell(progress, "  step " + std::to_string(k + 1) + " of " + std::to_string(values.size()));
+      if (progress && k % 500 == 499)
+        tell(progress, "  step " + std::to_string(k + 1) + " of " + std::to_string(values.size()));
     } else {
       // The settled robot is at rest; it is given the velocity of its last move so that effects which
       // depend on the direction of approach see it.
@@ -472,7 +483,8 @@ void simulateSweep(Simulator& sim, const CampaignSimulationSpec& spec, bool back
   sim.campaign().metadata["swept_joint"] = robot.joints[s.joint].name;
 }
 
-void simulateRandom(Simulator& sim, const CampaignSimulationSpec& spec, const std::function<void(const std::string&)>& progress) {
+void simulateRandom(Simulator& sim, const CampaignSimulationSpec& spec,
+                    const std::function<void(const std::string&)>& progress) {
   const Robot& robot = sim.robot();
   const RandomPosesSpec& r = spec.random;
   if (r.count < 1) throw InvalidArgument("random poses: count must be at least 1");
@@ -486,7 +498,8 @@ void simulateRandom(Simulator& sim, const CampaignSimulationSpec& spec, const st
   JointVector previous;
   for (long attempt = 0; accepted < r.count; ++attempt) {
     if (attempt > 1000L * r.count) {
-      throw SolverError("random poses: found only " + std::to_string(accepted) + " poses meeting the height and conditioning limits");
+      throw SolverError("random poses: found only " + std::to_string(accepted) +
+                        " poses meeting the height and conditioning limits");
     }
     const JointVector q_pose = randomPose(robot, sim.random(), r.limit_margin_rad);
     forwardKinematics(robot, commanded, q_pose);
@@ -497,7 +510,8 @@ void simulateRandom(Simulator& sim, const CampaignSimulationSpec& spec, const st
     ++accepted;
     // The robot arrives from the previous pose: its velocity (the mean of the move) gives each joint's
     // direction of approach, which direction-dependent effects (backlash) need; the first pose: at rest.
-    const JointVector velocity = previous.size() == q_pose.size() ? JointVector((q_pose - previous) / r.row_period_s) : rest;
+    const JointVector velocity =
+        previous.size() == q_pose.size() ? JointVector((q_pose - previous) / r.row_period_s) : rest;
     sim.addRow(t, q_pose, sim.settle(q_pose, velocity, Vector6::Zero(), 0.0, t), Vector6::Zero(), 0.0);
     previous = q_pose;
     t += r.row_period_s;
@@ -526,8 +540,8 @@ void simulateSpiral(Simulator& sim, const CampaignSimulationSpec& spec, const Jo
     }
   } else {
     for (std::size_t k = 0; k < planned.size(); k += static_cast<std::size_t>(every)) {
-      sim.addRow(planned.time[k], planned.q[k], sim.settle(planned.q[k], planned.qd[k], Vector6::Zero(), 0.0, planned.time[k]),
-                 Vector6::Zero(), 0.0);
+      sim.addRow(planned.time[k], planned.q[k],
+                 sim.settle(planned.q[k], planned.qd[k], Vector6::Zero(), 0.0, planned.time[k]), Vector6::Zero(), 0.0);
     }
   }
 }
@@ -582,8 +596,9 @@ JointVector defaultStiffnessPose(const Robot& robot) {
   for (int j = 0; j < robot.dof(); ++j) {
     const Joint& joint = robot.joints[j];
     if (pose[j] < joint.lower || pose[j] > joint.upper) {
-      pose[j] = std::isfinite(joint.lower) && std::isfinite(joint.upper) ? 0.5 * (joint.lower + joint.upper)
-                                                                          : std::clamp(pose[j], joint.lower, joint.upper);
+      pose[j] = std::isfinite(joint.lower) && std::isfinite(joint.upper)
+                    ? 0.5 * (joint.lower + joint.upper)
+                    : std::clamp(pose[j], joint.lower, joint.upper);
     }
   }
   return pose;

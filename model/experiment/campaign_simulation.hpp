@@ -58,19 +58,19 @@ struct StiffnessProtocolSpec {
   double global_force_n = 300.0;     // before scaling down to the deflection and effort limits
   double global_moment_nm = 30.0;
   double global_limit_margin_rad = 0.3;
-  double min_conditioning = 0.05;    // sigma_min / sigma_max of the scaled Jacobian of a global pose
-  double row_period_s = 5.0;         // time between rows (load change and settling)
+  double min_conditioning = 0.05;  // sigma_min / sigma_max of the scaled Jacobian of a global pose
+  double row_period_s = 5.0;       // time between rows (load change and settling)
 };
 
 struct JointSweepSpec {
-  int joint = 1;                                   // 0-based: joint 2
+  int joint = 1;  // 0-based: joint 2
   double from_rad = -50.0 * 3.14159265358979323846 / 180.0;
   double to_rad = 50.0 * 3.14159265358979323846 / 180.0;
   double step_rad = 0.05 * 3.14159265358979323846 / 180.0;
-  JointVector pose;            // the other joints; empty: defaultStiffnessPose(robot)
-  double settle_s = 1.0;       // settling time at each step
+  JointVector pose;       // the other joints; empty: defaultStiffnessPose(robot)
+  double settle_s = 1.0;  // settling time at each step
   double move_speed_rad_s = 1.0 * 3.14159265358979323846 / 180.0;  // ramp speed between steps
-  int cycles = 1;              // back-and-forth: up-and-down cycles
+  int cycles = 1;                                                  // back-and-forth: up-and-down cycles
 };
 
 struct RandomPosesSpec {
@@ -82,9 +82,9 @@ struct RandomPosesSpec {
 };
 
 struct SpiralCampaignSpec {
-  SpiralSpec spiral;           // default: the paper's, at X = 1.2 m, Z = 0.2 m (as the spiral experiment)
+  SpiralSpec spiral;  // default: the paper's, at X = 1.2 m, Z = 0.2 m (as the spiral experiment)
   FeedRateSpec feed_rate;
-  JointVector seed_posture;    // IK seed; empty: forward, elbow-up
+  JointVector seed_posture;       // IK seed; empty: forward, elbow-up
   double sample_period_s = 0.02;  // tracker rate: 50 Hz
   SpiralCampaignSpec();
 };
@@ -104,7 +104,7 @@ struct TemperatureProfile {
 struct CampaignSimulationSpec {
   CampaignProtocol protocol = CampaignProtocol::Stiffness;
   std::uint64_t seed = 1;
-  bool noise = true;           // false: exact measurements (tests)
+  bool noise = true;  // false: exact measurements (tests)
   TrackerNoiseModel tracker;
   LevelNoiseModel level;
   Eigen::Vector3d target_in_flange{0.1, 0.0, 0.15};  // m: a reflector off the flange axis, so that

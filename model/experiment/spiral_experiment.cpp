@@ -64,8 +64,8 @@ SpiralExperimentResult runSpiralExperiment(const JointErrorModel& nominal, const
     SpiralRun& run = result.runs[r];
     run.name = run_names[r];
     tell(progress, std::string("run ") + std::to_string(r + 1) + "/3: " + run.name);
-    run.compensation = compensateTrajectory(nominal, run_masks[r], result.planned.q, result.planned.qd,
-                                            run.reference, spec.compensation);
+    run.compensation = compensateTrajectory(nominal, run_masks[r], result.planned.q, result.planned.qd, run.reference,
+                                            spec.compensation);
     if (!spec.compensated_joints.empty()) {
       for (std::size_t k = 0; k < run.reference.size(); ++k) {
         for (int j = 0; j < robot.dof(); ++j) {

@@ -36,7 +36,7 @@ struct SpiralExperimentSpec {
   PerturbationSpec truth;
   TrackerNoiseModel noise = spiralExperimentTracker();
   std::uint64_t noise_seed = 7;
-  JointVector seed_posture;          // IK seed; empty: a forward, elbow-up posture
+  JointVector seed_posture;             // IK seed; empty: a forward, elbow-up posture
   std::vector<int> compensated_joints;  // empty: all joints (the paper compensated joint 2 only)
   FixedPointOptions compensation;
   // The simulated robot: the flexible-joint plant (drives not empty) or, with no drives, the
@@ -50,18 +50,18 @@ struct SpiralExperimentSpec {
 };
 
 struct SpiralRun {
-  std::string name;                         // "without correction", ...
-  std::vector<JointVector> reference;       // commanded joints
-  std::vector<JointVector> actual;          // where the simulated links went
-  std::vector<Eigen::Vector3d> measured;    // tool position measured by the tracker (with noise)
-  std::vector<Eigen::Vector3d> error;       // measured - planned
+  std::string name;                       // "without correction", ...
+  std::vector<JointVector> reference;     // commanded joints
+  std::vector<JointVector> actual;        // where the simulated links went
+  std::vector<Eigen::Vector3d> measured;  // tool position measured by the tracker (with noise)
+  std::vector<Eigen::Vector3d> error;     // measured - planned
   AccuracyMetrics metrics;
   TrajectoryCompensationReport compensation;
 };
 
 struct SpiralExperimentResult {
   JointTrajectory planned;
-  bool dynamic = false;            // the plant (true) or the quasi-static robot
+  bool dynamic = false;              // the plant (true) or the quasi-static robot
   PlantStatistics plant_statistics;  // summed over the three runs
   double simulation_seconds = 0.0;   // wall-clock time spent simulating the robot
   std::array<SpiralRun, 3> runs;

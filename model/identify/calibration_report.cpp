@@ -27,8 +27,8 @@ std::string parameterLine(const ParameterEstimate& p) {
   const char* unit = length ? "mm" : angle ? "deg" : "rad/(N m)";
   char line[320];
   if (p.identified) {
-    std::snprintf(line, sizeof(line), "  %-34s %14.6g +- %-10.3g %s (nominal %.6g)\n", p.name.c_str(),
-                  p.value * scale, p.sigma * scale, unit, p.nominal * scale);
+    std::snprintf(line, sizeof(line), "  %-34s %14.6g +- %-10.3g %s (nominal %.6g)\n", p.name.c_str(), p.value * scale,
+                  p.sigma * scale, unit, p.nominal * scale);
   } else {
     std::snprintf(line, sizeof(line), "  %-34s fixed at %.6g %s: %s\n", p.name.c_str(), p.value * scale, unit,
                   p.fixed_because.c_str());
@@ -60,8 +60,8 @@ CalibrationRun runCalibration(const JointErrorModel& prior, const MeasurementCam
   auto calibrated_robot = std::make_shared<const Robot>(correctedRobot(prior.robot(), result.estimate));
   std::vector<std::string> left_out;
   JointErrorModel calibrated = calibratedJointErrorModel(prior, calibrated_robot, result, left_out);
-  return CalibrationRun{std::move(result), std::move(runs), calibrated_robot, std::move(calibrated),
-                        std::move(left_out), seconds};
+  return CalibrationRun{std::move(result),     std::move(runs),     calibrated_robot,
+                        std::move(calibrated), std::move(left_out), seconds};
 }
 
 nlohmann::ordered_json calibrationReportJson(const CalibrationRun& run, const MeasurementCampaign& campaign,
@@ -72,7 +72,8 @@ nlohmann::ordered_json calibrationReportJson(const CalibrationRun& run, const Me
   report["format"] = "jointcomp-calibration-report/1";
   report["robot"] = run.calibrated_robot->name;
   report["urdf"] = sources.urdf;
-  report["params"] = sources.parameters.empty() ? nlohmann::ordered_json(nullptr) : nlohmann::ordered_json(sources.parameters);
+  report["params"] =
+      sources.parameters.empty() ? nlohmann::ordered_json(nullptr) : nlohmann::ordered_json(sources.parameters);
   report["campaign"] = sources.campaign;
   report["model"] =
       "measured = Exp(frame_r) * FK(q_cmd + offset - compliance .* tau(q_cmd) + other effects) * target + frame_t; "
@@ -95,8 +96,9 @@ nlohmann::ordered_json calibrationReportJson(const CalibrationRun& run, const Me
                                {"condition_number", result.condition_number}};
   nlohmann::ordered_json parameters = nlohmann::ordered_json::array();
   for (const ParameterEstimate& p : result.parameters) {
-    nlohmann::ordered_json entry = {{"name", p.name}, {"unit", p.unit}, {"nominal", p.nominal}, {"value", p.value},
-                                    {"identified", p.identified}, {"pivot", p.pivot}};
+    nlohmann::ordered_json entry = {
+        {"name", p.name},  {"unit", p.unit}, {"nominal", p.nominal}, {"value", p.value}, {"identified", p.identified},
+        {"pivot", p.pivot}};
     if (p.identified) {
       entry["sigma"] = p.sigma;
     } else {

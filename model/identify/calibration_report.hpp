@@ -15,7 +15,7 @@
 namespace jointcomp {
 
 struct CalibrationHoldoutRun {
-  std::string name;  // the campaign's file name, as given
+  std::string name;                // the campaign's file name, as given
   HoldoutEvaluation before;        // nominal robot, frame re-fitted
   HoldoutEvaluation after;         // calibrated robot, frame re-fitted
   HoldoutEvaluation shared_frame;  // calibrated robot in the calibration campaign's frame

@@ -31,8 +31,8 @@ bool wanted(const DiscoveryOptions& options, const std::string& type) {
 
 // The used rows as the families see them: commands, motor angles, the direction of approach from the
 // command sequence (the previous campaign row, used or not), load torques, times and temperatures.
-DiscoveryData discoveryData(const JointErrorModel& prior, const MeasurementCampaign& campaign, const CalibrationData& data,
-                            const DiscoveryOptions& options) {
+DiscoveryData discoveryData(const JointErrorModel& prior, const MeasurementCampaign& campaign,
+                            const CalibrationData& data, const DiscoveryOptions& options) {
   const int n = prior.robot().dof();
   const int rows = static_cast<int>(data.size());
   DiscoveryData d;
@@ -47,7 +47,8 @@ DiscoveryData discoveryData(const JointErrorModel& prior, const MeasurementCampa
   int tcount = 0;
   for (int i = 0; i < rows; ++i) {
     const std::size_t k = static_cast<std::size_t>(data.row[i]);
-    const double temperature = k < campaign.temperature.size() ? campaign.temperature[k] : std::numeric_limits<double>::quiet_NaN();
+    const double temperature =
+        k < campaign.temperature.size() ? campaign.temperature[k] : std::numeric_limits<double>::quiet_NaN();
     d.temperature.push_back(temperature);
     d.time.push_back(campaign.time[k]);
     if (std::isfinite(temperature)) {
@@ -138,20 +139,20 @@ JointErrorModel buildModel(const JointErrorModel& prior, const std::vector<Activ
 
 // The linearised problem at a calibration: residuals and the columns of every parameter and candidate.
 struct Linearised {
-  Eigen::VectorXd r;       // weighted residuals, 3 per row
-  Eigen::MatrixXd X;       // weighted, unit-norm columns
-  Eigen::VectorXd scale;   // column norms (X_raw = X * scale)
-  std::vector<int> fold;   // fold of each residual row block (per row)
+  Eigen::VectorXd r;                  // weighted residuals, 3 per row
+  Eigen::MatrixXd X;                  // weighted, unit-norm columns
+  Eigen::VectorXd scale;              // column norms (X_raw = X * scale)
+  std::vector<int> fold;              // fold of each residual row block (per row)
   std::vector<Eigen::MatrixXd> gram;  // per fold X_f^T X_f
   std::vector<Eigen::VectorXd> xr;    // per fold X_f^T r_f
   std::vector<double> rr;             // per fold r_f^T r_f
   Eigen::MatrixXd gram_total;
   Eigen::VectorXd xr_total;
   double rr_total = 0.0;
-  std::vector<int> base_columns, active_columns;            // indices into X
-  std::vector<std::vector<int>> candidate_columns;          // per candidate, empty when not offered
-  std::vector<std::vector<int>> active_of;                  // per active, its columns
-  std::vector<std::vector<double>> joint_residual;          // per joint, per row (pinv mapping)
+  std::vector<int> base_columns, active_columns;    // indices into X
+  std::vector<std::vector<int>> candidate_columns;  // per candidate, empty when not offered
+  std::vector<std::vector<int>> active_of;          // per active, its columns
+  std::vector<std::vector<double>> joint_residual;  // per joint, per row (pinv mapping)
 };
 
 // The per-fold Gram matrices X_f^T X_f, X_f^T r_f and r_f^T r_f, and their totals, for the fast
@@ -209,7 +210,10 @@ Linearised linearise(const JointErrorModel& model, const MeasurementCampaign& ca
       plan.push_back({candidate.through_compliance ? 2 : 1, c, k, candidate.joint});
     }
   };
-  for (int idx : cal.free) { lin.base_columns.push_back(static_cast<int>(plan.size())); plan.push_back({0, idx, 0, 0}); }
+  for (int idx : cal.free) {
+    lin.base_columns.push_back(static_cast<int>(plan.size()));
+    plan.push_back({0, idx, 0, 0});
+  }
   for (const Active& a : active) {
     std::vector<int> cols;
     planFeatures(a.candidate, cols, &lin.active_columns);
@@ -229,7 +233,8 @@ Linearised linearise(const JointErrorModel& model, const MeasurementCampaign& ca
   lin.r.resize(3 * rows);
   lin.X.resize(3 * rows, cols);
   lin.fold.resize(static_cast<std::size_t>(rows));
-  if (map_joints) lin.joint_residual.assign(static_cast<std::size_t>(n), std::vector<double>(static_cast<std::size_t>(rows)));
+  if (map_joints)
+    lin.joint_residual.assign(static_cast<std::size_t>(n), std::vector<double>(static_cast<std::size_t>(rows)));
   Eigen::MatrixXd J;
   for (int i = 0; i < rows; ++i) {
     const Eigen::Vector3d m =
@@ -243,10 +248,12 @@ Linearised linearise(const JointErrorModel& model, const MeasurementCampaign& ca
         continue;
       }
       const Eigen::MatrixXd& values = f.candidates[static_cast<std::size_t>(s.index)].columns;
-      if (s.kind == 1) lin.X.block<3, 1>(3 * i, c) = w * values(i, s.column) * J.col(layout.offset(s.joint));
+      if (s.kind == 1)
+        lin.X.block<3, 1>(3 * i, c) = w * values(i, s.column) * J.col(layout.offset(s.joint));
       else {
         Eigen::Vector3d column = Eigen::Vector3d::Zero();
-        for (int j = 0; j < n; ++j) column -= cal.estimate.compliance[j] * values(i, s.column * n + j) * J.col(layout.offset(j));
+        for (int j = 0; j < n; ++j)
+          column -= cal.estimate.compliance[j] * values(i, s.column * n + j) * J.col(layout.offset(j));
         lin.X.block<3, 1>(3 * i, c) = w * column;
       }
     }
@@ -281,10 +288,10 @@ Eigen::VectorXd sub(const Eigen::VectorXd& v, const std::vector<int>& s) {
 }
 
 struct Fit {
-  double rss = 0.0;     // full-data residual sum of squares after the step
-  double cv = 0.0;      // CV sum of squares
+  double rss = 0.0;  // full-data residual sum of squares after the step
+  double cv = 0.0;   // CV sum of squares
   int rank = 0;
-  Eigen::VectorXd d;    // step (scaled columns), minimises |r + X d|
+  Eigen::VectorXd d;        // step (scaled columns), minimises |r + X d|
   Eigen::MatrixXd inverse;  // pseudo-inverse of the Gram matrix (scaled)
 };
 
@@ -396,8 +403,9 @@ MeasurementCampaign concatenateCampaigns(const std::vector<MeasurementCampaign>&
       all.wrench.push_back(k < m.wrench.size() ? m.wrench[k] : Vector6::Zero());
       all.payload.push_back(k < m.payload.size() ? m.payload[k] : 0.0);
       if (all.has_measured_angles) {
-        all.measured_angles.push_back(k < m.measured_angles.size() ? m.measured_angles[k]
-                                                                    : JointVector::Constant(all.dof, std::numeric_limits<double>::quiet_NaN()));
+        all.measured_angles.push_back(k < m.measured_angles.size()
+                                          ? m.measured_angles[k]
+                                          : JointVector::Constant(all.dof, std::numeric_limits<double>::quiet_NaN()));
       }
     }
     all.source += "+" + m.source;
@@ -412,10 +420,16 @@ class DiscoveryRun {
 public:
   DiscoveryRun(const JointErrorModel& prior, const std::vector<MeasurementCampaign>& fitted,
                const std::vector<MeasurementCampaign>& heldout, const DiscoveryOptions& options)
-      : prior_(prior), fitted_(fitted), heldout_(heldout), options_(options), campaign_(concatenateCampaigns(fitted)),
-        names_(geometricParameterNames(prior.robot())), data_(discoveryData(prior, campaign_,
-                                                                             prepareCalibrationData(prior, campaign_), options)),
-        features_(offerCandidates(data_, options)), offered_(features_.candidates.size(), true), model_(prior),
+      : prior_(prior),
+        fitted_(fitted),
+        heldout_(heldout),
+        options_(options),
+        campaign_(concatenateCampaigns(fitted)),
+        names_(geometricParameterNames(prior.robot())),
+        data_(discoveryData(prior, campaign_, prepareCalibrationData(prior, campaign_), options)),
+        features_(offerCandidates(data_, options)),
+        offered_(features_.candidates.size(), true),
+        model_(prior),
         result_(prior) {
     if (options.base_geometry) {
       // The textbook base frees the calibration's parameters from the start: only feature columns compete.
@@ -509,7 +523,8 @@ private:
   // fewest parameters (an offset rather than the joint's whole placement).
   Choice choose() const {
     Choice choice;
-    for (std::size_t c = 0; c < features_.candidates.size(); ++c) choice.tried += offered_[c] && !lin_.candidate_columns[c].empty();
+    for (std::size_t c = 0; c < features_.candidates.size(); ++c)
+      choice.tried += offered_[c] && !lin_.candidate_columns[c].empty();
     if (choice.tried == 0) return choice;
     const double log_n = std::log(static_cast<double>(residuals_));
     const double penalty_m = 2.0 * std::log(static_cast<double>(choice.tried));
@@ -567,10 +582,12 @@ private:
     s.insert(s.end(), added.begin(), added.end());
     std::size_t pos = current_.size() - lin_.active_columns.size();
     for (Active& a : active_) {
-      for (int k = 0; k < a.theta.size(); ++k, ++pos) a.theta[k] += choice.fit.d[static_cast<int>(pos)] / lin_.scale[s[pos]];
+      for (int k = 0; k < a.theta.size(); ++k, ++pos)
+        a.theta[k] += choice.fit.d[static_cast<int>(pos)] / lin_.scale[s[pos]];
     }
     Active fresh{choice.index, Eigen::VectorXd::Zero(coefficients), Eigen::VectorXd::Zero(coefficients)};
-    for (int k = 0; k < coefficients; ++k, ++pos) fresh.theta[k] = choice.fit.d[static_cast<int>(pos)] / lin_.scale[s[pos]];
+    for (int k = 0; k < coefficients; ++k, ++pos)
+      fresh.theta[k] = choice.fit.d[static_cast<int>(pos)] / lin_.scale[s[pos]];
     active_.push_back(fresh);
   }
 
@@ -634,7 +651,8 @@ private:
     DiscoveryStep record;
     record.type = chosen.type;
     record.joint = chosen.joint;
-    record.joint_name = chosen.joint >= 0 ? prior_.robot().joints[static_cast<std::size_t>(chosen.joint)].name : std::string();
+    record.joint_name =
+        chosen.joint >= 0 ? prior_.robot().joints[static_cast<std::size_t>(chosen.joint)].name : std::string();
     record.stage = chosen.stage;
     record.part = chosen.part;
     record.cycles = chosen.cycles;
@@ -675,8 +693,8 @@ private:
     result_.fitted_rows = cal_.used_rows;
     std::vector<std::string> left_out;
     const Robot& robot = prior_.robot();
-    result_.model = calibratedJointErrorModel(model_, std::make_shared<const Robot>(correctedRobot(robot, cal_.estimate)),
-                                              cal_, left_out);
+    result_.model = calibratedJointErrorModel(
+        model_, std::make_shared<const Robot>(correctedRobot(robot, cal_.estimate)), cal_, left_out);
     result_.calibration = cal_;
   }
 

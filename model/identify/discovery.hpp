@@ -41,11 +41,11 @@ struct DiscoveryOptions {
   int folds = 5;
   int max_steps = 8;
   int max_harmonic_order = 4;
-  double min_cv_gain = 0.02;    // relative drop of the CV error a candidate must bring
-  double noise_floor = 0.0;     // m, 3-D RMS; 0: sqrt(3) times the campaigns' position_noise
-  int refit_iterations = 2;     // joint refits after each accepted step
-  double velocity_scale = 1e-3; // rad/s, backlash smooth sign
-  std::vector<std::string> types;  // candidate types to try; empty: all
+  double min_cv_gain = 0.02;                 // relative drop of the CV error a candidate must bring
+  double noise_floor = 0.0;                  // m, 3-D RMS; 0: sqrt(3) times the campaigns' position_noise
+  int refit_iterations = 2;                  // joint refits after each accepted step
+  double velocity_scale = 1e-3;              // rad/s, backlash smooth sign
+  std::vector<std::string> types;            // candidate types to try; empty: all
   const EffectRegistry* registry = nullptr;  // whose discovery families compete; null: the built-in one
 };
 
@@ -56,7 +56,7 @@ using DiscoveredParameter = NamedEstimate;  // e.g. "shoulder_lift_joint.backlas
 
 struct PathRoughness {
   bool held_out = false;
-  int campaign = 0;        // index among the fitted (held_out false) or held-out campaigns
+  int campaign = 0;  // index among the fitted (held_out false) or held-out campaigns
   int rows = 0;
   double ra = 0.0, rz = 0.0;  // m, of the Z error
 };
@@ -67,34 +67,34 @@ struct PathRoughness {
 bool isPathCampaign(const MeasurementCampaign& campaign);
 
 struct DiscoveryState {
-  ErrorStatistics fitted;                  // on the fitted rows (calibration's "after")
-  std::vector<ErrorStatistics> heldout;    // one per held-out campaign, frame re-fitted
-  double cv_rms = 0.0;                     // m per axis, time-blocked CV of the linearised model
-  std::vector<PathRoughness> paths;        // fitted paths first, then held-out ones; empty: no path
+  ErrorStatistics fitted;                // on the fitted rows (calibration's "after")
+  std::vector<ErrorStatistics> heldout;  // one per held-out campaign, frame re-fitted
+  double cv_rms = 0.0;                   // m per axis, time-blocked CV of the linearised model
+  std::vector<PathRoughness> paths;      // fitted paths first, then held-out ones; empty: no path
 };
 
 struct DiscoveryStep {
   std::string type;
-  int joint = -1;           // -1 for payload (the whole robot)
-  std::string joint_name;   // "" for payload
-  int stage = 0;            // harmonic: 1 = motor ... stageCount + 1 = output
-  std::string part;         // harmonic: "motor", "stage_k", "output"; thermal: "temperature" or "time"
-  double cycles = 0.0;      // harmonic order (cycles per revolution of the part)
+  int joint = -1;          // -1 for payload (the whole robot)
+  std::string joint_name;  // "" for payload
+  int stage = 0;           // harmonic: 1 = motor ... stageCount + 1 = output
+  std::string part;        // harmonic: "motor", "stage_k", "output"; thermal: "temperature" or "time"
+  double cycles = 0.0;     // harmonic order (cycles per revolution of the part)
   std::vector<DiscoveredParameter> parameters;
   double cv_rms_before = 0.0, cv_rms_after = 0.0;  // m per axis
   double delta_bic = 0.0;
   int candidates_tried = 0;
-  std::string runner_up;    // best rejected / next candidate, for the evidence
+  std::string runner_up;  // best rejected / next candidate, for the evidence
   DiscoveryState before, after;
 };
 
 struct DiscoveryResult {
-  JointErrorModel model;          // prior + discovered effects, offsets and compliance as fitted
+  JointErrorModel model;                   // prior + discovered effects, offsets and compliance as fitted
   GeometricCalibrationResult calibration;  // the final base fit (geometry, frame, target)
   std::vector<DiscoveryStep> steps;
   DiscoveryState initial, final_state;
   std::vector<double> joint_residual_rms_initial, joint_residual_rms_final;  // rad, residual mapped to joints
-  double noise_floor = 0.0;       // m, 3-D RMS
+  double noise_floor = 0.0;                                                  // m, 3-D RMS
   std::string stop_reason;
   int fitted_rows = 0;
   int candidates = 0;

@@ -31,7 +31,9 @@ nlohmann::ordered_json stateJson(const DiscoveryState& s, const DiscoverySources
                      {"ra_mm", p.ra * 1e3},
                      {"rz_mm", p.rz * 1e3}});
   }
-  return {{"fitted", errorStatisticsJson(s.fitted)}, {"held_out", held}, {"cv_rms_per_axis_mm", s.cv_rms * 1e3},
+  return {{"fitted", errorStatisticsJson(s.fitted)},
+          {"held_out", held},
+          {"cv_rms_per_axis_mm", s.cv_rms * 1e3},
           {"ra_rz_on_paths", paths}};
 }
 
@@ -61,7 +63,8 @@ nlohmann::ordered_json discoveryReportJson(const DiscoveryResult& result, const 
   report["format"] = "jointcomp-discovery-report/1";
   report["robot"] = result.model.robot().name;
   report["urdf"] = sources.urdf;
-  report["params"] = sources.parameters.empty() ? nlohmann::ordered_json(nullptr) : nlohmann::ordered_json(sources.parameters);
+  report["params"] =
+      sources.parameters.empty() ? nlohmann::ordered_json(nullptr) : nlohmann::ordered_json(sources.parameters);
   report["campaigns"] = sources.campaigns;
   report["held_out"] = sources.held_out;
   report["vocabulary"] = discoveryEffectTypes();
@@ -80,10 +83,11 @@ nlohmann::ordered_json discoveryReportJson(const DiscoveryResult& result, const 
   int index = 0;
   for (const DiscoveryStep& s : result.steps) {
     // payload belongs to no joint: joint and joint_index null.
-    nlohmann::ordered_json entry = {{"step", ++index},
-                                    {"type", s.type},
-                                    {"joint", s.joint >= 0 ? nlohmann::ordered_json(s.joint_name) : nlohmann::ordered_json(nullptr)},
-                                    {"joint_index", s.joint >= 0 ? nlohmann::ordered_json(s.joint + 1) : nlohmann::ordered_json(nullptr)}};
+    nlohmann::ordered_json entry = {
+        {"step", ++index},
+        {"type", s.type},
+        {"joint", s.joint >= 0 ? nlohmann::ordered_json(s.joint_name) : nlohmann::ordered_json(nullptr)},
+        {"joint_index", s.joint >= 0 ? nlohmann::ordered_json(s.joint + 1) : nlohmann::ordered_json(nullptr)}};
     if (s.type == "harmonic") {
       entry["part"] = s.part;
       entry["stage"] = s.stage;
@@ -91,7 +95,8 @@ nlohmann::ordered_json discoveryReportJson(const DiscoveryResult& result, const 
     }
     if (s.type == "thermal") entry["variant"] = s.part;
     nlohmann::ordered_json parameters = nlohmann::ordered_json::array();
-    for (const DiscoveredParameter& p : s.parameters) parameters.push_back({{"name", p.name}, {"value", p.value}, {"sigma", p.sigma}});
+    for (const DiscoveredParameter& p : s.parameters)
+      parameters.push_back({{"name", p.name}, {"value", p.value}, {"sigma", p.sigma}});
     entry["parameters"] = parameters;
     entry["evidence"] = {{"cv_rms_per_axis_mm_before", s.cv_rms_before * 1e3},
                          {"cv_rms_per_axis_mm_after", s.cv_rms_after * 1e3},
@@ -106,10 +111,12 @@ nlohmann::ordered_json discoveryReportJson(const DiscoveryResult& result, const 
   report["final"] = stateJson(result.final_state, sources);
   report["final"]["joint_residual_rms_rad"] = result.joint_residual_rms_final;
   report["stop_reason"] = result.stop_reason;
-  const double final_held = result.final_state.heldout.empty() ? result.final_state.fitted.rms : result.final_state.heldout[0].rms;
-  report["noise_floor"] = {{"rms_3d_mm", result.noise_floor * 1e3},
-                           {"final_over_floor", result.noise_floor > 0.0 ? nlohmann::ordered_json(final_held / result.noise_floor)
-                                                                          : nlohmann::ordered_json(nullptr)}};
+  const double final_held =
+      result.final_state.heldout.empty() ? result.final_state.fitted.rms : result.final_state.heldout[0].rms;
+  report["noise_floor"] = {
+      {"rms_3d_mm", result.noise_floor * 1e3},
+      {"final_over_floor", result.noise_floor > 0.0 ? nlohmann::ordered_json(final_held / result.noise_floor)
+                                                    : nlohmann::ordered_json(nullptr)}};
   report["not_candidates"] = nlohmann::ordered_json::array();
   report["seconds"] = seconds;
   report["outputs"] = sources.outputs;
@@ -122,22 +129,24 @@ std::string discoverySummary(const DiscoveryResult& result, const DiscoveryOptio
   summary << "jointcomp discover: " << result.model.robot().name << ", " << result.fitted_rows << " fitted rows, "
           << result.candidates << " candidates, base " << baseName(options) << "\n";
   char line[512];
-  std::snprintf(line, sizeof(line), "base model: fitted RMS %.4f mm, held-out RMS %s mm\n", result.initial.fitted.rms * 1e3,
-                heldRms(result.initial).c_str());
+  std::snprintf(line, sizeof(line), "base model: fitted RMS %.4f mm, held-out RMS %s mm\n",
+                result.initial.fitted.rms * 1e3, heldRms(result.initial).c_str());
   summary << line;
   int index = 0;
   for (const DiscoveryStep& s : result.steps) {
-    std::snprintf(line, sizeof(line),
-                  "step %d: %-44s CV %.4f -> %.4f mm/axis, dBIC %.1f; fitted RMS %.4f -> %.4f mm, held-out %s -> %s mm\n",
-                  ++index, discoveryStepLabel(s).c_str(), s.cv_rms_before * 1e3, s.cv_rms_after * 1e3, s.delta_bic,
-                  s.before.fitted.rms * 1e3, s.after.fitted.rms * 1e3, heldRms(s.before).c_str(), heldRms(s.after).c_str());
+    std::snprintf(
+        line, sizeof(line),
+        "step %d: %-44s CV %.4f -> %.4f mm/axis, dBIC %.1f; fitted RMS %.4f -> %.4f mm, held-out %s -> %s mm\n",
+        ++index, discoveryStepLabel(s).c_str(), s.cv_rms_before * 1e3, s.cv_rms_after * 1e3, s.delta_bic,
+        s.before.fitted.rms * 1e3, s.after.fitted.rms * 1e3, heldRms(s.before).c_str(), heldRms(s.after).c_str());
     summary << line;
     for (const DiscoveredParameter& p : s.parameters) {
       std::snprintf(line, sizeof(line), "    %-48s %.6g +- %.3g\n", p.name.c_str(), p.value, p.sigma);
       summary << line;
     }
   }
-  std::snprintf(line, sizeof(line), "stopped: %s\nfinal: fitted RMS %.4f mm, held-out RMS %s mm; noise floor %.4f mm (3-D RMS)%s\n",
+  std::snprintf(line, sizeof(line),
+                "stopped: %s\nfinal: fitted RMS %.4f mm, held-out RMS %s mm; noise floor %.4f mm (3-D RMS)%s\n",
                 result.stop_reason.c_str(), result.final_state.fitted.rms * 1e3, heldRms(result.final_state).c_str(),
                 result.noise_floor * 1e3, result.noise_floor > 0.0 ? "" : " (not known: give the noise floor)");
   summary << line;

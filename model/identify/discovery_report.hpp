@@ -14,8 +14,8 @@ namespace jointcomp {
 // What the report names: the inputs as the user gave them and, when written, the outputs.
 struct DiscoverySources {
   std::string urdf;
-  std::string parameters;               // empty: no parameter file
-  std::vector<std::string> campaigns;   // fitted
+  std::string parameters;              // empty: no parameter file
+  std::vector<std::string> campaigns;  // fitted
   std::vector<std::string> held_out;
   nlohmann::ordered_json outputs = nlohmann::ordered_json::object();
 };

@@ -49,7 +49,8 @@ Eigen::Matrix3d rightJacobian(const Eigen::Vector3d& r) {
   const Eigen::Matrix3d k = skew(r);
   if (angle < 1e-5) return Eigen::Matrix3d::Identity() - 0.5 * k + (1.0 / 6.0) * k * k;
   const double a2 = angle * angle;
-  return Eigen::Matrix3d::Identity() - (1.0 - std::cos(angle)) / a2 * k + (angle - std::sin(angle)) / (a2 * angle) * k * k;
+  return Eigen::Matrix3d::Identity() - (1.0 - std::cos(angle)) / a2 * k +
+         (angle - std::sin(angle)) / (a2 * angle) * k * k;
 }
 
 Eigen::Matrix3d axisRotation(const Eigen::Vector3d& axis, double angle) {
@@ -95,9 +96,8 @@ public:
     const GeometricParameters parameters = GeometricParameters::fromVector(values, robot_.dof());
     Eigen::MatrixXd block(3, layout_.size());
     for (std::size_t k = 0; k < data_.size(); ++k) {
-      const Eigen::Vector3d predicted =
-          predictMeasurement(robot_, parameters, data_.command[k], data_.load_torque[k], data_.other_error[k],
-                             jacobian ? &block : nullptr);
+      const Eigen::Vector3d predicted = predictMeasurement(robot_, parameters, data_.command[k], data_.load_torque[k],
+                                                           data_.other_error[k], jacobian ? &block : nullptr);
       const Eigen::Index row = 3 * static_cast<Eigen::Index>(k);
       residual.segment<3>(row) = predicted - data_.measured[k];
       if (jacobian) {
@@ -121,7 +121,8 @@ private:
 
 std::vector<double> rowNorms(const Eigen::VectorXd& residual) {
   std::vector<double> norms(static_cast<std::size_t>(residual.size() / 3));
-  for (std::size_t k = 0; k < norms.size(); ++k) norms[k] = residual.segment<3>(3 * static_cast<Eigen::Index>(k)).norm();
+  for (std::size_t k = 0; k < norms.size(); ++k)
+    norms[k] = residual.segment<3>(3 * static_cast<Eigen::Index>(k)).norm();
   return norms;
 }
 
@@ -160,8 +161,9 @@ FitOutcome fitSubset(const Robot& robot, const CalibrationData& data, const Eige
   if (!(scale > 0.0)) {
     LevenbergMarquardtResult least_squares = run(problem, solver);
     values = problem.full(least_squares.x);
-    scale = options.loss_scale > 0.0 ? options.loss_scale
-                                     : options.loss_scale_sigmas * median(rowNorms(least_squares.residual)) / kChi3Median;
+    scale = options.loss_scale > 0.0
+                ? options.loss_scale
+                : options.loss_scale_sigmas * median(rowNorms(least_squares.residual)) / kChi3Median;
     if (!(scale > 0.0)) {  // exact data: nothing to be robust against
       outcome.solver = std::move(least_squares);
       outcome.values = values;
@@ -261,7 +263,7 @@ GeometricParameters GeometricParameters::fromVector(const Eigen::VectorXd& v, in
 }
 
 std::vector<std::string> geometricParameterNames(const Robot& robot) {
-  std::vector<std::string> names = {"frame.tx_m", "frame.ty_m", "frame.tz_m", "frame.rx_rad", "frame.ry_rad",
+  std::vector<std::string> names = {"frame.tx_m",   "frame.ty_m", "frame.tz_m", "frame.rx_rad", "frame.ry_rad",
                                     "frame.rz_rad", "target.x_m", "target.y_m", "target.z_m"};
   for (const Joint& joint : robot.joints) names.push_back(joint.name + ".offset_rad");
   for (const Joint& joint : robot.joints) {
@@ -284,14 +286,16 @@ std::string geometricParameterUnit(const std::string& name) {
 }
 
 Robot correctedRobot(const Robot& nominal, const GeometricParameters& parameters) {
-  if (parameters.dof() != nominal.dof()) throw InvalidArgument("correctedRobot: parameters and robot differ in joint count");
+  if (parameters.dof() != nominal.dof())
+    throw InvalidArgument("correctedRobot: parameters and robot differ in joint count");
   Robot robot = nominal;
   for (int j = 0; j < robot.dof(); ++j) {
     const Vector6& c = parameters.placement[static_cast<std::size_t>(j)];
     Eigen::Isometry3d correction = Eigen::Isometry3d::Identity();
     correction.translation() = c.head<3>();
     correction.linear() = expRotation(c.tail<3>());
-    robot.joints[static_cast<std::size_t>(j)].placement = nominal.joints[static_cast<std::size_t>(j)].placement * correction;
+    robot.joints[static_cast<std::size_t>(j)].placement =
+        nominal.joints[static_cast<std::size_t>(j)].placement * correction;
   }
   return robot;
 }
@@ -301,7 +305,8 @@ Robot correctedRobot(const Robot& nominal, const GeometricParameters& parameters
 CalibrationData prepareCalibrationData(const JointErrorModel& prior, const MeasurementCampaign& campaign) {
   const Robot& robot = prior.robot();
   if (!campaign.has_position) {
-    throw MeasurementError(campaign.source + ": the campaign has no measured positions (columns x, y, z); the "
+    throw MeasurementError(campaign.source +
+                           ": the campaign has no measured positions (columns x, y, z); the "
                            "kinematic calibration needs them");
   }
   if (campaign.dof != robot.dof()) {
@@ -320,8 +325,10 @@ CalibrationData prepareCalibrationData(const JointErrorModel& prior, const Measu
   EffectMask loads = 0, others = 0;
   for (int i = 0; i < prior.effectCount(); ++i) {
     const Effect& effect = prior.effect(i);
-    if (effect.role() == EffectRole::Load) loads |= EffectMask(1) << i;
-    else if (!effect.calibrationParameter()) others |= EffectMask(1) << i;
+    if (effect.role() == EffectRole::Load)
+      loads |= EffectMask(1) << i;
+    else if (!effect.calibrationParameter())
+      others |= EffectMask(1) << i;
   }
   JointErrorWorkspace ws(robot);
   JointContext ctx(robot.dof());
@@ -338,13 +345,16 @@ CalibrationData prepareCalibrationData(const JointErrorModel& prior, const Measu
     // the mean velocity of the move into this row; the first row is at rest.
     ctx.velocity.setZero();
     if (k > 0 && campaign.command[k - 1].size() == command.size() && campaign.command[k - 1].allFinite()) {
-      const double dt = k < campaign.time.size() && campaign.time[k] > campaign.time[k - 1] ? campaign.time[k] - campaign.time[k - 1] : 1.0;
+      const double dt = k < campaign.time.size() && campaign.time[k] > campaign.time[k - 1]
+                            ? campaign.time[k] - campaign.time[k - 1]
+                            : 1.0;
       ctx.velocity = (command - campaign.command[k - 1]) / dt;
     }
     ctx.time = k < campaign.time.size() ? campaign.time[k] : 0.0;
     const double temperature = k < campaign.temperature.size() ? campaign.temperature[k] : kNaN;
     ctx.temperature = std::isfinite(temperature) ? temperature : 20.0;
-    ctx.tool_wrench = k < campaign.wrench.size() && campaign.wrench[k].allFinite() ? campaign.wrench[k] : Vector6::Zero();
+    ctx.tool_wrench =
+        k < campaign.wrench.size() && campaign.wrench[k].allFinite() ? campaign.wrench[k] : Vector6::Zero();
     ctx.payload_mass = k < campaign.payload.size() && std::isfinite(campaign.payload[k]) ? campaign.payload[k] : 0.0;
     ctx.payload_com = campaign.target_in_flange;
     updateMotorAngles(prior, ctx);
@@ -370,10 +380,10 @@ Eigen::Vector3d predictMeasurement(const Robot& robot, const GeometricParameters
   const int n = robot.dof();
   const GeometricParameterLayout layout(n);
   // Forward kinematics with the corrections, keeping what the derivatives need.
-  std::array<Eigen::Matrix3d, kMaxJoints> rotation_before;  // frame in which d_j is given
+  std::array<Eigen::Matrix3d, kMaxJoints> rotation_before;     // frame in which d_j is given
   std::array<Eigen::Matrix3d, kMaxJoints> rotation_corrected;  // frame in which r_j acts (and the joint turns)
-  std::array<Eigen::Vector3d, kMaxJoints> origin;           // joint origins, base frame
-  std::array<Eigen::Vector3d, kMaxJoints> axis;             // joint axes, base frame
+  std::array<Eigen::Vector3d, kMaxJoints> origin;              // joint origins, base frame
+  std::array<Eigen::Vector3d, kMaxJoints> axis;                // joint axes, base frame
   Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();
   Eigen::Vector3d position = Eigen::Vector3d::Zero();
   for (int j = 0; j < n; ++j) {
@@ -510,14 +520,14 @@ struct ParameterChoice {
   std::vector<std::string> reason;        // per parameter: why it is not free
   std::vector<double> pivot;              // per parameter: its relative pivot
   std::vector<std::vector<std::pair<std::string, double>>> redundant;
-  std::vector<int> free;                  // the identifiable subset
+  std::vector<int> free;  // the identifiable subset
 };
 
 // The start: the nominal robot, its frame from the closed-form rigid fit, then fitted robustly like the
 // calibration ("before"). Fills the result's nominal and its errors before the calibration.
 GeometricParameters startingPoint(const JointErrorModel& prior, const MeasurementCampaign& campaign,
-                                  const CalibrationData& data, const GeometricCalibrationOptions& options, bool fit_frame,
-                                  GeometricCalibrationResult& result) {
+                                  const CalibrationData& data, const GeometricCalibrationOptions& options,
+                                  bool fit_frame, GeometricCalibrationResult& result) {
   const Robot& robot = prior.robot();
   const int n = robot.dof();
   const int rows = static_cast<int>(data.size());
@@ -613,7 +623,8 @@ void chooseIdentifiable(const Robot& robot, const CalibrationData& data, const G
   Eigen::MatrixXd start_jacobian(3 * rows, static_cast<Eigen::Index>(candidates.size()));
   {
     Eigen::VectorXd residual(3 * rows);
-    CalibrationProblem(robot, data, start.toVector(), candidates).evaluateFull(start.toVector(), residual, &start_jacobian);
+    CalibrationProblem(robot, data, start.toVector(), candidates)
+        .evaluateFull(start.toVector(), residual, &start_jacobian);
   }
   const IdentifiabilityResult identifiability =
       analyseIdentifiability(start_jacobian, choice.priority, choice.typical, options.identifiability);
@@ -639,8 +650,9 @@ void chooseIdentifiable(const Robot& robot, const CalibrationData& data, const G
       redundant[static_cast<std::size_t>(i)].emplace_back(other, r.ratio);
       with += (with.empty() ? "" : ", ") + other;
     }
-    reason[static_cast<std::size_t>(i)] = "redundant (relative pivot " + fmt("%.1e", identifiability.pivot[static_cast<Eigen::Index>(c)]) +
-                                          ")" + (with.empty() ? std::string() : " with " + with);
+    reason[static_cast<std::size_t>(i)] = "redundant (relative pivot " +
+                                          fmt("%.1e", identifiability.pivot[static_cast<Eigen::Index>(c)]) + ")" +
+                                          (with.empty() ? std::string() : " with " + with);
   }
   if (fit_frame) {
     std::string missing;
@@ -660,15 +672,15 @@ void chooseIdentifiable(const Robot& robot, const CalibrationData& data, const G
     throw InvalidArgument(source + ": too few points: " + std::to_string(rows) + " usable rows (" +
                           std::to_string(3 * rows) + " residuals) for " + std::to_string(free.size()) +
                           " identifiable parameters; the calibration needs at least twice as many residuals as "
-                          "parameters (" + std::to_string((needed + 2) / 3) + " rows)");
+                          "parameters (" +
+                          std::to_string((needed + 2) / 3) + " rows)");
   }
-
 }
 
 // The fit; a compliance that comes out not positive is held at its nominal value and the fit repeated.
 FitOutcome fitKeepingCompliancePositive(const Robot& robot, const CalibrationData& data,
-                                        const Eigen::VectorXd& nominal_values, const GeometricCalibrationOptions& options,
-                                        ParameterChoice& choice) {
+                                        const Eigen::VectorXd& nominal_values,
+                                        const GeometricCalibrationOptions& options, ParameterChoice& choice) {
   const int n = robot.dof();
   const GeometricParameterLayout layout(n);
   std::vector<int>& free = choice.free;
@@ -708,7 +720,10 @@ void estimateCovariance(const FitOutcome& fit, int rows, const std::vector<int>&
   result.residual_sigma = std::sqrt(weighted_squares / dof_residual);
   Eigen::VectorXd norms = weighted.colwise().norm();
   for (Eigen::Index c = 0; c < k; ++c) {
-    if (norms[c] == 0.0) throw SolverError(source + ": parameter " + result.names[static_cast<std::size_t>(free[static_cast<std::size_t>(c)])] + " lost its effect during the fit");
+    if (norms[c] == 0.0)
+      throw SolverError(source + ": parameter " +
+                        result.names[static_cast<std::size_t>(free[static_cast<std::size_t>(c)])] +
+                        " lost its effect during the fit");
     weighted.col(c) /= norms[c];
   }
   std::vector<int> all(static_cast<std::size_t>(k));
@@ -716,13 +731,11 @@ void estimateCovariance(const FitOutcome& fit, int rows, const std::vector<int>&
   result.condition_number = scaledConditionNumber(weighted, all);
   const Eigen::HouseholderQR<Eigen::MatrixXd> qr(weighted);
   const Eigen::MatrixXd r_factor = qr.matrixQR().topRows(k).triangularView<Eigen::Upper>();
-  const Eigen::MatrixXd r_inverse =
-      r_factor.triangularView<Eigen::Upper>().solve(Eigen::MatrixXd::Identity(k, k));
+  const Eigen::MatrixXd r_inverse = r_factor.triangularView<Eigen::Upper>().solve(Eigen::MatrixXd::Identity(k, k));
   const Eigen::MatrixXd scaled_covariance = r_inverse * r_inverse.transpose();
   const Eigen::VectorXd inverse_norms = norms.cwiseInverse();
   result.covariance = result.residual_sigma * result.residual_sigma *
                       (inverse_norms.asDiagonal() * scaled_covariance * inverse_norms.asDiagonal());
-
 }
 
 // One estimate per parameter (free: with its sigma; fixed: with its reason), and the compliances that
@@ -774,8 +787,10 @@ GeometricCalibrationResult calibrateGeometry(const JointErrorModel& prior, const
   const int rows = static_cast<int>(data.size());
   if (rows < std::max(options.minimum_rows, 3)) {
     throw InvalidArgument(source + ": too few points: " + std::to_string(rows) + " usable rows (" +
-                          std::to_string(data.skipped_rows) + " without a measured position); the calibration needs "
-                          "at least " + std::to_string(std::max(options.minimum_rows, 3)));
+                          std::to_string(data.skipped_rows) +
+                          " without a measured position); the calibration needs "
+                          "at least " +
+                          std::to_string(std::max(options.minimum_rows, 3)));
   }
   const bool fit_frame = options.fit_frame && campaign.frame == MeasurementFrame::Instrument;
 
@@ -851,7 +866,8 @@ HoldoutEvaluation evaluateOnCampaign(const JointErrorModel& prior, const Geometr
 }
 
 JointErrorModel calibratedJointErrorModel(const JointErrorModel& prior, std::shared_ptr<const Robot> calibrated_robot,
-                                          const GeometricCalibrationResult& result, std::vector<std::string>& left_out) {
+                                          const GeometricCalibrationResult& result,
+                                          std::vector<std::string>& left_out) {
   const Robot& robot = *calibrated_robot;
   const int n = robot.dof();
   if (n != prior.robot().dof()) throw InvalidArgument("calibratedJointErrorModel: robots differ in joint count");
@@ -895,8 +911,8 @@ JointErrorModel calibratedJointErrorModel(const JointErrorModel& prior, std::sha
 }
 
 MeasurementCampaign simulateGeometricCampaign(const JointErrorModel& prior, const GeometricParameters& truth,
-                                     const std::vector<JointVector>& commands, double noise, std::uint64_t seed,
-                                     const Eigen::Vector3d& nominal_target) {
+                                              const std::vector<JointVector>& commands, double noise,
+                                              std::uint64_t seed, const Eigen::Vector3d& nominal_target) {
   const Robot& robot = prior.robot();
   MeasurementCampaign campaign;
   campaign.source = "simulated campaign (seed " + std::to_string(seed) + ")";

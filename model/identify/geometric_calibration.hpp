@@ -85,13 +85,13 @@ Robot correctedRobot(const Robot& nominal, const GeometricParameters& parameters
 // The rows of a campaign in the form the measurement model needs.
 struct CalibrationData {
   std::string source;
-  std::vector<int> row;                      // campaign row (0-based) of each used row
-  std::vector<JointVector> command;          // rad
-  std::vector<JointVector> load_torque;      // N m
-  std::vector<JointVector> other_error;      // rad, the prior's other joint-error effects
-  std::vector<Eigen::Vector3d> measured;     // m, in the campaign's frame
-  int skipped_rows = 0;                      // rows without a measured position (NaN / empty cells)
-  bool torque_known = true;                  // false when the robot has no inertials (no compliance then)
+  std::vector<int> row;                   // campaign row (0-based) of each used row
+  std::vector<JointVector> command;       // rad
+  std::vector<JointVector> load_torque;   // N m
+  std::vector<JointVector> other_error;   // rad, the prior's other joint-error effects
+  std::vector<Eigen::Vector3d> measured;  // m, in the campaign's frame
+  int skipped_rows = 0;                   // rows without a measured position (NaN / empty cells)
+  bool torque_known = true;               // false when the robot has no inertials (no compliance then)
   std::size_t size() const { return row.size(); }
 };
 
@@ -138,35 +138,35 @@ struct ParameterEstimate {
   std::string unit;
   double nominal = 0.0;
   double value = 0.0;
-  double sigma = 0.0;        // 1 sigma; 0 for a fixed parameter
-  bool identified = false;   // free in the final fit
-  double pivot = 0.0;        // relative pivot of its column at the start point
-  std::string fixed_because; // empty when identified
+  double sigma = 0.0;                                          // 1 sigma; 0 for a fixed parameter
+  bool identified = false;                                     // free in the final fit
+  double pivot = 0.0;                                          // relative pivot of its column at the start point
+  std::string fixed_because;                                   // empty when identified
   std::vector<std::pair<std::string, double>> redundant_with;  // name, ratio (see Redundancy)
 };
 
 struct GeometricCalibrationResult {
   std::vector<std::string> names;
-  GeometricParameters nominal;   // the start: prior offsets and compliance, campaign target, frame fitted
+  GeometricParameters nominal;  // the start: prior offsets and compliance, campaign target, frame fitted
   GeometricParameters estimate;
   std::vector<ParameterEstimate> parameters;
-  std::vector<int> free;                    // indices into names of the parameters of the final fit
-  Eigen::MatrixXd covariance;               // of the free parameters, in the order of `free`
-  double condition_number_at_start = 0.0;   // kept columns, unit-scaled, at the start point
-  double condition_number = 0.0;            // the same at the solution, weighted
-  double residual_sigma = 0.0;              // m per axis, sqrt(sum w r^2 / (residuals - free))
+  std::vector<int> free;                   // indices into names of the parameters of the final fit
+  Eigen::MatrixXd covariance;              // of the free parameters, in the order of `free`
+  double condition_number_at_start = 0.0;  // kept columns, unit-scaled, at the start point
+  double condition_number = 0.0;           // the same at the solution, weighted
+  double residual_sigma = 0.0;             // m per axis, sqrt(sum w r^2 / (residuals - free))
   RobustLoss loss = RobustLoss::None;
-  double loss_scale = 0.0;                  // m
+  double loss_scale = 0.0;  // m
   int used_rows = 0;
   int skipped_rows = 0;
-  int downweighted_rows = 0;                // weight below 0.999 in the final fit
-  int outlier_rows = 0;                     // weight below 0.5 (Huber: error above twice the scale)
-  std::vector<int> row;                     // campaign row of each used row
-  std::vector<double> error_before;         // m per used row: nominal robot, frame fitted
-  std::vector<double> error_after;          // m per used row: calibrated
-  std::vector<double> weight;               // final IRLS weight per used row
+  int downweighted_rows = 0;         // weight below 0.999 in the final fit
+  int outlier_rows = 0;              // weight below 0.5 (Huber: error above twice the scale)
+  std::vector<int> row;              // campaign row of each used row
+  std::vector<double> error_before;  // m per used row: nominal robot, frame fitted
+  std::vector<double> error_after;   // m per used row: calibrated
+  std::vector<double> weight;        // final IRLS weight per used row
   ErrorStatistics before, after;
-  GeometricParameters nominal_frame_fit;    // the nominal robot with its frame fitted ("before")
+  GeometricParameters nominal_frame_fit;         // the nominal robot with its frame fitted ("before")
   std::vector<std::string> compliance_left_out;  // "<joint>: reason" for the compliances not written
   int iterations = 0;
   std::string stop_reason;
@@ -195,7 +195,7 @@ struct HoldoutEvaluation {
   std::string source;
   GeometricParameters parameters;  // with the frame used
   std::vector<int> row;
-  std::vector<double> error;       // m per used row
+  std::vector<double> error;  // m per used row
   std::vector<double> weight;
   ErrorStatistics statistics;
   int skipped_rows = 0;
@@ -218,7 +218,7 @@ JointErrorModel calibratedJointErrorModel(const JointErrorModel& prior, std::sha
 // true parameters, plus normal noise of `noise` (m, per axis), seeded. frame = instrument, target = the
 // nominal target given (what the file would say), no temperature.
 MeasurementCampaign simulateGeometricCampaign(const JointErrorModel& prior, const GeometricParameters& truth,
-                                     const std::vector<JointVector>& commands, double noise, std::uint64_t seed,
-                                     const Eigen::Vector3d& nominal_target);
+                                              const std::vector<JointVector>& commands, double noise,
+                                              std::uint64_t seed, const Eigen::Vector3d& nominal_target);
 
 }  // namespace jointcomp

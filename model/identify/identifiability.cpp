@@ -39,8 +39,8 @@ IdentifiabilityResult analyseIdentifiability(const Eigen::MatrixXd& jacobian, co
                           std::to_string(n) + " columns");
   }
   if (!typical_change.empty() && static_cast<Eigen::Index>(typical_change.size()) != n) {
-    throw InvalidArgument("analyseIdentifiability: " + std::to_string(typical_change.size()) +
-                          " typical changes for " + std::to_string(n) + " columns");
+    throw InvalidArgument("analyseIdentifiability: " + std::to_string(typical_change.size()) + " typical changes for " +
+                          std::to_string(n) + " columns");
   }
   if (!jacobian.allFinite()) throw InvalidArgument("analyseIdentifiability: the Jacobian is not finite");
   if (!(options.relative_pivot_threshold > 0.0 && options.relative_pivot_threshold < 1.0)) {

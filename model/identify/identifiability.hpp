@@ -29,19 +29,19 @@ struct IdentifiabilityOptions {
 };
 
 struct Redundancy {
-  int column = 0;        // a kept column
-  double ratio = 0.0;    // a unit change of the fixed parameter does what `ratio` units of this one do
+  int column = 0;      // a kept column
+  double ratio = 0.0;  // a unit change of the fixed parameter does what `ratio` units of this one do
 };
 
 struct IdentifiabilityResult {
-  std::vector<int> kept;                // column indices, ascending
-  std::vector<int> fixed;               // column indices, ascending
-  std::vector<int> pivot_order;         // kept columns in the order the QR chose them
-  Eigen::VectorXd pivot;                // per column: relative pivot (1 = independent, 0 = no effect)
-  Eigen::VectorXd column_norm;          // per column: |J_j|
-  std::vector<bool> no_effect;          // per column
+  std::vector<int> kept;                                // column indices, ascending
+  std::vector<int> fixed;                               // column indices, ascending
+  std::vector<int> pivot_order;                         // kept columns in the order the QR chose them
+  Eigen::VectorXd pivot;                                // per column: relative pivot (1 = independent, 0 = no effect)
+  Eigen::VectorXd column_norm;                          // per column: |J_j|
+  std::vector<bool> no_effect;                          // per column
   std::vector<std::vector<Redundancy>> redundant_with;  // per column; filled for fixed columns with effect
-  double condition_number = 1.0;        // of the kept columns scaled to unit norm
+  double condition_number = 1.0;                        // of the kept columns scaled to unit norm
 };
 
 // `priority`: per column, lower values are kept first (empty: all equal). `typical_change`: per column, a

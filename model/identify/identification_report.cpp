@@ -61,7 +61,8 @@ nlohmann::ordered_json estimateJson(const StiffnessEstimate& e, bool local, doub
   } else {
     json["residual_rms_mm"] = e.residual_rms * 1e3;
   }
-  json["reduced_chi2"] = e.reduced_chi2 > 0.0 ? nlohmann::ordered_json(e.reduced_chi2) : nlohmann::ordered_json(nullptr);
+  json["reduced_chi2"] =
+      e.reduced_chi2 > 0.0 ? nlohmann::ordered_json(e.reduced_chi2) : nlohmann::ordered_json(nullptr);
   if (std::isfinite(truth) && e.identified) {
     json["interval_covers_truth"] = truth >= e.stiffness_low && truth <= e.stiffness_high;
     json["error_over_se"] = (e.stiffness - truth) / e.stiffness_se;
@@ -84,7 +85,8 @@ nlohmann::ordered_json estimateJson(const StiffnessEstimate& e, bool local, doub
 
 std::string stiffnessCell(const StiffnessEstimate& e) {
   if (!e.identified) return "-";
-  const std::string high = std::isfinite(e.stiffness_high) ? format("%.1f", e.stiffness_high / 1e3) : std::string("inf");
+  const std::string high =
+      std::isfinite(e.stiffness_high) ? format("%.1f", e.stiffness_high / 1e3) : std::string("inf");
   return format("%.1f", e.stiffness / 1e3) + " [" + format("%.1f", e.stiffness_low / 1e3) + ", " + high + "]";
 }
 
@@ -174,25 +176,28 @@ std::string stiffnessSummary(const StiffnessIdentificationResult& result, const 
   out << "  nominal parameters " << sources.parameters << ", robot " << sources.robot << "\n";
   out << "  " << result.rows << " rows: " << result.local_groups << " local tests, " << result.global_groups
       << " poses with other loads, " << result.unused_groups << " poses never loaded\n";
-  out << "  stiffness in 1e3 N m/rad, " << format("%.0f", result.confidence * 100) << " % intervals; diff = (global - local) / local\n\n";
+  out << "  stiffness in 1e3 N m/rad, " << format("%.0f", result.confidence * 100)
+      << " % intervals; diff = (global - local) / local\n\n";
   char line[256];
-  std::snprintf(line, sizeof line, "%-9s %-8s %-28s %-28s %8s %7s %10s\n", "joint", "local by", "local", "global", "diff",
-                "z", truth ? "true" : "");
+  std::snprintf(line, sizeof line, "%-9s %-8s %-28s %-28s %8s %7s %10s\n", "joint", "local by", "local", "global",
+                "diff", "z", truth ? "true" : "");
   out << line;
   for (std::size_t j = 0; j < result.joint_names.size(); ++j) {
     const double truth_k = trueStiffness(truth, static_cast<int>(j));
-    const std::string diff = std::isfinite(result.relative_difference[j]) ? format("%+.1f %%", 100 * result.relative_difference[j]) : "-";
+    const std::string diff =
+        std::isfinite(result.relative_difference[j]) ? format("%+.1f %%", 100 * result.relative_difference[j]) : "-";
     const std::string z = std::isfinite(result.z_score[j]) ? format("%+.2f", result.z_score[j]) : "-";
     std::snprintf(line, sizeof line, "%-9s %-8s %-28s %-28s %8s %7s %10s\n", result.joint_names[j].c_str(),
-                  result.local[j].identified ? result.local[j].method.c_str() : "-", stiffnessCell(result.local[j]).c_str(),
-                  stiffnessCell(result.global[j]).c_str(), diff.c_str(), z.c_str(),
-                  std::isfinite(truth_k) ? format("%.1f", truth_k / 1e3).c_str() : "");
+                  result.local[j].identified ? result.local[j].method.c_str() : "-",
+                  stiffnessCell(result.local[j]).c_str(), stiffnessCell(result.global[j]).c_str(), diff.c_str(),
+                  z.c_str(), std::isfinite(truth_k) ? format("%.1f", truth_k / 1e3).c_str() : "");
     out << line;
   }
   for (std::size_t j = 0; j < result.joint_names.size(); ++j) {
     for (const StiffnessEstimate* e : {&result.local[j], &result.global[j]}) {
       if (!e->identified && !e->reason.empty() && e->reason.rfind("no local test", 0) != 0) {
-        out << "  " << result.joint_names[j] << " (" << (e == &result.local[j] ? "local" : "global") << "): " << e->reason << "\n";
+        out << "  " << result.joint_names[j] << " (" << (e == &result.local[j] ? "local" : "global")
+            << "): " << e->reason << "\n";
       }
     }
   }
@@ -203,8 +208,8 @@ std::string stiffnessSummary(const StiffnessIdentificationResult& result, const 
   return out.str();
 }
 
-nlohmann::ordered_json transmissionReportJson(const TransmissionIdentificationResult& result, const ReportSources& sources,
-                                              const JointErrorModel* truth) {
+nlohmann::ordered_json transmissionReportJson(const TransmissionIdentificationResult& result,
+                                              const ReportSources& sources, const JointErrorModel* truth) {
   nlohmann::ordered_json json;
   json["identification"] = "transmission_error";
   json["sources"] = sourcesJson(sources);
@@ -218,8 +223,10 @@ nlohmann::ordered_json transmissionReportJson(const TransmissionIdentificationRe
   json["significance_family_wise"] = result.significance;
   json["residual_dof"] = result.dof;
   json["residual_rms_deg"] = result.residual_rms_rad / kDegree;
-  json["noise_rms_deg"] = result.noise_rms_rad > 0.0 ? nlohmann::ordered_json(result.noise_rms_rad / kDegree) : nlohmann::ordered_json(nullptr);
-  json["reduced_chi2"] = result.reduced_chi2 > 0.0 ? nlohmann::ordered_json(result.reduced_chi2) : nlohmann::ordered_json(nullptr);
+  json["noise_rms_deg"] = result.noise_rms_rad > 0.0 ? nlohmann::ordered_json(result.noise_rms_rad / kDegree)
+                                                     : nlohmann::ordered_json(nullptr);
+  json["reduced_chi2"] =
+      result.reduced_chi2 > 0.0 ? nlohmann::ordered_json(result.reduced_chi2) : nlohmann::ordered_json(nullptr);
   nlohmann::ordered_json harmonics = nlohmann::ordered_json::array();
   for (const HarmonicEstimate& h : result.harmonics) {
     harmonics.push_back(harmonicJson(h, truth, result.joint, result.stage, result.confidence));
@@ -259,8 +266,8 @@ std::string transmissionSummary(const TransmissionIdentificationResult& result, 
   std::ostringstream out;
   out << "Transmission error of " << result.joint_name << " identified from " << sources.campaign << "\n";
   out << "  " << result.samples << " points (joint angle from the " << result.angle_source << "), "
-      << format("%.2f", result.stage_revolutions) << " revolutions of " << result.part << "; harmonics per revolution of "
-      << result.part << "\n";
+      << format("%.2f", result.stage_revolutions) << " revolutions of " << result.part
+      << "; harmonics per revolution of " << result.part << "\n";
   out << "  residual RMS " << format("%.2e", result.residual_rms_rad / kDegree) << " deg";
   if (result.noise_rms_rad > 0.0) {
     out << " (stated noise " << format("%.2e", result.noise_rms_rad / kDegree) << " deg, reduced chi2 "
@@ -291,8 +298,9 @@ std::string transmissionSummary(const TransmissionIdentificationResult& result, 
     } else if (truth) {
       true_text = "none";
     }
-    std::snprintf(line, sizeof line, "%-6g %-30s %-26s %10.1f %9.1e %-24s%s\n", h.order, amplitude.c_str(), phase.c_str(),
-                  h.amplitude_to_se, h.p_value, true_text.c_str(), h.significant ? "" : "  (not significant)");
+    std::snprintf(line, sizeof line, "%-6g %-30s %-26s %10.1f %9.1e %-24s%s\n", h.order, amplitude.c_str(),
+                  phase.c_str(), h.amplitude_to_se, h.p_value, true_text.c_str(),
+                  h.significant ? "" : "  (not significant)");
     out << line;
   }
   if (!result.excluded_orders.empty()) {
@@ -301,7 +309,8 @@ std::string transmissionSummary(const TransmissionIdentificationResult& result, 
     out << "\n";
   }
   if (!sources.updated_parameters.empty()) {
-    out << "\n" << result.harmonics.size() << " significant harmonics went into " << sources.updated_parameters << ".\n";
+    out << "\n"
+        << result.harmonics.size() << " significant harmonics went into " << sources.updated_parameters << ".\n";
   }
   return out.str();
 }

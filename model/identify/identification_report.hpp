@@ -13,7 +13,7 @@
 namespace jointcomp {
 
 struct ReportSources {
-  std::string campaign;     // file names, as given
+  std::string campaign;  // file names, as given
   std::string parameters;
   std::string robot;
   std::string updated_parameters;
@@ -26,8 +26,8 @@ nlohmann::ordered_json stiffnessReportJson(const StiffnessIdentificationResult& 
 std::string stiffnessSummary(const StiffnessIdentificationResult& result, const ReportSources& sources,
                              const JointErrorModel* truth);
 
-nlohmann::ordered_json transmissionReportJson(const TransmissionIdentificationResult& result, const ReportSources& sources,
-                                              const JointErrorModel* truth);
+nlohmann::ordered_json transmissionReportJson(const TransmissionIdentificationResult& result,
+                                              const ReportSources& sources, const JointErrorModel* truth);
 std::string transmissionSummary(const TransmissionIdentificationResult& result, const ReportSources& sources,
                                 const JointErrorModel* truth);
 

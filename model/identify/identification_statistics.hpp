@@ -16,10 +16,10 @@ struct LinearFit {
   // stay honest when the stated sigma is off by a common factor.
   Eigen::MatrixXd covariance;
   Eigen::MatrixXd unscaled_covariance;  // (A^T W A)^-1: the covariance if sigma is exactly right
-  Eigen::VectorXd residuals;     // y - A x, unweighted
-  double rss = 0.0;              // weighted residual sum of squares, sum (r_k / sigma_k)^2
-  int dof = 0;                   // rows - columns
-  double scale2 = 0.0;           // rss / dof: the reduced chi-square (1 when sigma is right)
+  Eigen::VectorXd residuals;            // y - A x, unweighted
+  double rss = 0.0;                     // weighted residual sum of squares, sum (r_k / sigma_k)^2
+  int dof = 0;                          // rows - columns
+  double scale2 = 0.0;                  // rss / dof: the reduced chi-square (1 when sigma is right)
   // When rank < cols: the direction of coefficient space A cannot see (unit length, original units
   // normalised per column), to name the parameters at fault.
   Eigen::VectorXd null_direction;

@@ -39,8 +39,8 @@ void checkCampaign(const Robot& robot, const MeasurementCampaign& campaign, bool
     }
     if (campaign.has_position) {
       const Eigen::Vector3d& p = campaign.position[k];
-      if (std::isinf(p.x()) || std::isinf(p.y()) || std::isinf(p.z()) ||
-          std::isnan(p.x()) != std::isnan(p.y()) || std::isnan(p.x()) != std::isnan(p.z())) {
+      if (std::isinf(p.x()) || std::isinf(p.y()) || std::isinf(p.z()) || std::isnan(p.x()) != std::isnan(p.y()) ||
+          std::isnan(p.x()) != std::isnan(p.z())) {
         throw MeasurementError(campaign.source + ": row " + std::to_string(k + 1) +
                                ": x, y, z must be finite, or all three not measured");
       }

@@ -27,9 +27,9 @@ Vector6 toolWrenchOf(const Vector6& at_target, const RobotWorkspace& ws, const E
 // and the torque each joint carries there (gravity, payload, wrench, load effects). Throws SolverError
 // naming the row when the model does not settle.
 struct RowPrediction {
-  JointVector settled;            // link angles
-  JointVector torque;             // N m, at the settled pose
-  JointVector commanded_torque;   // N m, at the commanded pose (first order: what decides identifiability)
+  JointVector settled;           // link angles
+  JointVector torque;            // N m, at the settled pose
+  JointVector commanded_torque;  // N m, at the commanded pose (first order: what decides identifiability)
 };
 RowPrediction predictRow(const JointErrorModel& nominal, const MeasurementCampaign& campaign, std::size_t k,
                          JointErrorWorkspace& ws);

@@ -121,8 +121,10 @@ LevenbergMarquardtResult solveLevenbergMarquardt(const ResidualFunction& functio
   result.jacobian.resize(residual_count, n);
   function(result.x, result.residual, &result.jacobian);
   result.evaluations = 1;
-  if (!result.residual.allFinite()) throw SolverError("Levenberg-Marquardt: the residuals are not finite at the start point");
-  if (!result.jacobian.allFinite()) throw SolverError("Levenberg-Marquardt: the Jacobian is not finite at the start point");
+  if (!result.residual.allFinite())
+    throw SolverError("Levenberg-Marquardt: the residuals are not finite at the start point");
+  if (!result.jacobian.allFinite())
+    throw SolverError("Levenberg-Marquardt: the Jacobian is not finite at the start point");
   Weighted current = weigh(result.residual, options);
   result.initial_cost = current.cost;
 

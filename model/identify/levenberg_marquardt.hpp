@@ -35,12 +35,12 @@ double robustWeight(RobustLoss loss, double scale, double squared_norm);
 
 struct LevenbergMarquardtOptions {
   int max_iterations = 100;
-  double initial_lambda = 1e-4;        // damping relative to the (unit) diagonal of the scaled normal matrix
-  double function_tolerance = 1e-12;   // stop when an accepted step lowers the cost by less than this, relatively
-  double step_tolerance = 1e-10;       // stop when |D dx| <= tol (|D x| + tol), D the column norms of J
-  double gradient_tolerance = 1e-10;   // stop when every column of J is this close to orthogonal to r (cosine)
+  double initial_lambda = 1e-4;       // damping relative to the (unit) diagonal of the scaled normal matrix
+  double function_tolerance = 1e-12;  // stop when an accepted step lowers the cost by less than this, relatively
+  double step_tolerance = 1e-10;      // stop when |D dx| <= tol (|D x| + tol), D the column norms of J
+  double gradient_tolerance = 1e-10;  // stop when every column of J is this close to orthogonal to r (cosine)
   RobustLoss loss = RobustLoss::None;
-  double loss_scale = 1.0;             // k, in the units of the residuals
+  double loss_scale = 1.0;  // k, in the units of the residuals
   int block_size = 1;
 };
 

@@ -24,9 +24,9 @@ struct Group {
   std::size_t first = 0, last = 0;  // rows [first, last): consecutive, same pose, loads along one direction
   int pose = 0;                     // index of the pose (consecutive rows with the same command)
   GroupKind kind = GroupKind::Unused;
-  std::vector<int> level_joints;    // LocalLevels: joints with level readings
-  int joint = -1;                   // LocalTracker: the tested joint
-  std::vector<RowPrediction> row;   // per row: the nominal model's settled pose and torques there
+  std::vector<int> level_joints;   // LocalLevels: joints with level readings
+  int joint = -1;                  // LocalTracker: the tested joint
+  std::vector<RowPrediction> row;  // per row: the nominal model's settled pose and torques there
   const JointVector& torque(std::size_t k) const { return row[k - first].torque; }
 };
 
@@ -76,7 +76,8 @@ int distinctLoadLevels(const MeasurementCampaign& campaign, std::size_t first, s
     if (direction.isZero(0.0)) direction = load.normalized();
     const double level = direction.dot(load);
     bool seen = false;
-    for (double other : levels) seen = seen || std::abs(other - level) <= 1e-9 * std::max(std::abs(level), std::abs(other));
+    for (double other : levels)
+      seen = seen || std::abs(other - level) <= 1e-9 * std::max(std::abs(level), std::abs(other));
     if (!seen) levels.push_back(level);
   }
   return static_cast<int>(levels.size());
@@ -106,7 +107,8 @@ Classified classify(const JointErrorModel& nominal, const MeasurementCampaign& c
       if (campaign.has_measured_angles) {
         for (int j = 0; j < n; ++j) {
           int readings = 0;
-          for (std::size_t k = range.first; k < range.second; ++k) readings += std::isfinite(campaign.measured_angles[k][j]) ? 1 : 0;
+          for (std::size_t k = range.first; k < range.second; ++k)
+            readings += std::isfinite(campaign.measured_angles[k][j]) ? 1 : 0;
           if (readings >= 2 && spread[j] > 0.0) group.level_joints.push_back(j);
         }
       }
@@ -135,9 +137,12 @@ bool hasPosition(const MeasurementCampaign& campaign, std::size_t k) {
 }
 
 void checkOptions(const StiffnessIdentificationOptions& options) {
-  if (!(options.confidence > 0.0 && options.confidence < 1.0)) throw InvalidArgument("stiffness identification: confidence must lie in (0, 1)");
-  if (!(options.dominance_ratio > 1.0)) throw InvalidArgument("stiffness identification: dominance_ratio must exceed 1");
-  if (!(options.max_relative_error > 0.0)) throw InvalidArgument("stiffness identification: max_relative_error must be positive");
+  if (!(options.confidence > 0.0 && options.confidence < 1.0))
+    throw InvalidArgument("stiffness identification: confidence must lie in (0, 1)");
+  if (!(options.dominance_ratio > 1.0))
+    throw InvalidArgument("stiffness identification: dominance_ratio must exceed 1");
+  if (!(options.max_relative_error > 0.0))
+    throw InvalidArgument("stiffness identification: max_relative_error must be positive");
 }
 
 // K = 1/c with its interval as the image of c's.
@@ -160,7 +165,8 @@ void fillStiffness(StiffnessEstimate& e, double c, double se, double t_factor) {
 
 }  // namespace
 
-std::vector<StiffnessEstimate> identifyStiffnessLocal(const JointErrorModel& nominal, const MeasurementCampaign& campaign,
+std::vector<StiffnessEstimate> identifyStiffnessLocal(const JointErrorModel& nominal,
+                                                      const MeasurementCampaign& campaign,
                                                       const StiffnessIdentificationOptions& options) {
   checkOptions(options);
   const Robot& robot = nominal.robot();
@@ -181,7 +187,8 @@ std::vector<StiffnessEstimate> identifyStiffnessLocal(const JointErrorModel& nom
     };
     std::vector<Observation> observations;
     bool by_levels = false;
-    for (const Group& g : classified.groups) by_levels = by_levels || std::count(g.level_joints.begin(), g.level_joints.end(), j) > 0;
+    for (const Group& g : classified.groups)
+      by_levels = by_levels || std::count(g.level_joints.begin(), g.level_joints.end(), j) > 0;
     std::vector<int> intercept_of_pose(classified.poses, -1);
     int groups = 0;
     for (const Group& g : classified.groups) {
@@ -195,8 +202,9 @@ std::vector<StiffnessEstimate> identifyStiffnessLocal(const JointErrorModel& nom
         if (levels_here) {
           const double qm = campaign.measured_angles[k][j];
           if (!std::isfinite(qm)) continue;
-          observations.push_back({intercept, tau, qm - campaign.command[k][j],
-                                  campaign.angle_noise > 0.0 ? campaign.angle_noise : std::numeric_limits<double>::quiet_NaN()});
+          observations.push_back(
+              {intercept, tau, qm - campaign.command[k][j],
+               campaign.angle_noise > 0.0 ? campaign.angle_noise : std::numeric_limits<double>::quiet_NaN()});
         } else {
           if (!hasPosition(campaign, k)) continue;
           const RowPrediction& predicted = g.row[k - g.first];
@@ -204,22 +212,26 @@ std::vector<StiffnessEstimate> identifyStiffnessLocal(const JointErrorModel& nom
           forwardKinematics(robot, ws, campaign.command[k]);
           const Eigen::Vector3d nominal_target = ws.tool_pose * target;
           double lever = 0.0;
-          const double measured = angleAboutAxis(ws.axis[j], ws.origin[j], nominal_target, campaign.position[k], &lever);
+          const double measured =
+              angleAboutAxis(ws.axis[j], ws.origin[j], nominal_target, campaign.position[k], &lever);
           // What the other joints' deflections add to the angle about this axis, as the nominal model
           // predicts it (a few per cent of the signal: the load is designed for the commanded pose, the
           // links sag under gravity, and soft joints pick up the difference).
-          const double predicted_angle = angleAboutAxis(ws.axis[j], ws.origin[j], nominal_target, settled.tool_pose * target);
+          const double predicted_angle =
+              angleAboutAxis(ws.axis[j], ws.origin[j], nominal_target, settled.tool_pose * target);
           const double cross_talk = predicted_angle - (predicted.settled[j] - campaign.command[k][j]);
           const double angle = measured - cross_talk;
           if (lever < 1e-3) {
-            throw MeasurementError(campaign.source + ": local stiffness test of " + robot.joints[j].name + " (rows " +
-                                   std::to_string(g.first + 1) + "-" + std::to_string(g.last) +
-                                   "): the target is within 1 mm of the joint's axis, so the tracker cannot see it turn");
+            throw MeasurementError(
+                campaign.source + ": local stiffness test of " + robot.joints[j].name + " (rows " +
+                std::to_string(g.first + 1) + "-" + std::to_string(g.last) +
+                "): the target is within 1 mm of the joint's axis, so the tracker cannot see it turn");
           }
           observations.push_back({intercept, tau, angle, classified.sigma[k] / lever});
         }
       }
-      if (static_cast<int>(observations.size()) > before && intercept_of_pose[g.pose] < 0) intercept_of_pose[g.pose] = groups++;
+      if (static_cast<int>(observations.size()) > before && intercept_of_pose[g.pose] < 0)
+        intercept_of_pose[g.pose] = groups++;
     }
     if (groups == 0) {
       e.reason = "no local test of this joint in the campaign";
@@ -390,8 +402,10 @@ GlobalDesign globalDesign(const Robot& robot, const MeasurementCampaign& campaig
 
 }  // namespace
 
-std::vector<StiffnessEstimate> identifyStiffnessGlobal(const JointErrorModel& nominal, const MeasurementCampaign& campaign,
-                                                       const StiffnessIdentificationOptions& options, bool use_local_groups) {
+std::vector<StiffnessEstimate> identifyStiffnessGlobal(const JointErrorModel& nominal,
+                                                       const MeasurementCampaign& campaign,
+                                                       const StiffnessIdentificationOptions& options,
+                                                       bool use_local_groups) {
   checkOptions(options);
   const Robot& robot = nominal.robot();
   checkCampaign(robot, campaign, true, "global stiffness identification");
@@ -443,9 +457,10 @@ std::vector<StiffnessEstimate> identifyStiffnessGlobal(const JointErrorModel& no
         named += (named.empty() ? "" : ", ") + robot.joints[j].name;
       }
     }
-    throw MeasurementError(campaign.source + ": global stiffness identification: degenerate poses, the loads and poses " +
-                           "do not separate the compliances of " + (named.empty() ? std::string("some joints") : named) +
-                           " (use more poses, or loads in more directions)");
+    throw MeasurementError(
+        campaign.source + ": global stiffness identification: degenerate poses, the loads and poses " +
+        "do not separate the compliances of " + (named.empty() ? std::string("some joints") : named) +
+        " (use more poses, or loads in more directions)");
   }
   const double t_factor = tIntervalFactor(options.confidence, fit.dof);
   const double rms = std::sqrt(fit.residuals.squaredNorm() / equations);
@@ -486,8 +501,14 @@ StiffnessIdentificationResult identifyStiffness(const JointErrorModel& nominal, 
   for (const Group& g : classified.groups) {
     switch (g.kind) {
       case GroupKind::LocalLevels:
-      case GroupKind::LocalTracker: ++result.local_groups; any_loaded = true; break;
-      case GroupKind::Global: pose_kind[g.pose] |= 4; any_loaded = true; break;
+      case GroupKind::LocalTracker:
+        ++result.local_groups;
+        any_loaded = true;
+        break;
+      case GroupKind::Global:
+        pose_kind[g.pose] |= 4;
+        any_loaded = true;
+        break;
       case GroupKind::Unused: pose_kind[g.pose] |= 1; break;
     }
   }
@@ -496,7 +517,8 @@ StiffnessIdentificationResult identifyStiffness(const JointErrorModel& nominal, 
     result.unused_groups += kind == 1 ? 1 : 0;
   }
   if (!any_loaded) {
-    throw MeasurementError(campaign.source + ": no pose of the campaign is measured under different loads "
+    throw MeasurementError(campaign.source +
+                           ": no pose of the campaign is measured under different loads "
                            "(wrench or payload columns): nothing to identify stiffness from");
   }
   if (result.local_groups > 0) {
@@ -509,8 +531,9 @@ StiffnessIdentificationResult identifyStiffness(const JointErrorModel& nominal, 
     result.global_shares_rows = result.global_groups == 0;
     result.global = identifyStiffnessGlobal(nominal, campaign, options, false);
     if (result.global_shares_rows) {
-      result.notes.push_back("the campaign has no poses besides the local tests: the global fit uses the local tests' "
-                             "rows, so the two methods are not independent");
+      result.notes.push_back(
+          "the campaign has no poses besides the local tests: the global fit uses the local tests' "
+          "rows, so the two methods are not independent");
     }
   } else {
     result.global.assign(n, StiffnessEstimate());
@@ -527,7 +550,8 @@ StiffnessIdentificationResult identifyStiffness(const JointErrorModel& nominal, 
     }
   }
   if (result.rows_without_position > 0 && campaign.has_position) {
-    result.notes.push_back(std::to_string(result.rows_without_position) + " rows without a measured position were left out");
+    result.notes.push_back(std::to_string(result.rows_without_position) +
+                           " rows without a measured position were left out");
   }
   return result;
 }
@@ -563,14 +587,17 @@ JointErrorModel withIdentifiedStiffness(const JointErrorModel& nominal, const St
   if (!kept.empty()) {
     std::string list;
     for (const std::string& name : kept) list += (list.empty() ? "" : ", ") + name;
-    note = "not identified by " + source_note + ": " + list + (index >= 0 ? " (nominal values kept)" : " (median of the others)");
+    note = "not identified by " + source_note + ": " + list +
+           (index >= 0 ? " (nominal values kept)" : " (median of the others)");
   }
   if (index >= 0) {
     updated.effect(index).setParameters(values);
-    if (!kept.empty() && !updated.effect(index).estimate_note.empty()) note += "; before: " + updated.effect(index).estimate_note;
+    if (!kept.empty() && !updated.effect(index).estimate_note.empty())
+      note += "; before: " + updated.effect(index).estimate_note;
     updated.effect(index).estimate_note = note;
   } else {
-    std::nth_element(identified_values.begin(), identified_values.begin() + static_cast<long>(identified_values.size() / 2),
+    std::nth_element(identified_values.begin(),
+                     identified_values.begin() + static_cast<long>(identified_values.size() / 2),
                      identified_values.end());
     for (double& v : values) {
       if (!std::isfinite(v)) v = identified_values[identified_values.size() / 2];
@@ -579,7 +606,8 @@ JointErrorModel withIdentifiedStiffness(const JointErrorModel& nominal, const St
     effect->estimate_note = note;
     updated.addEffect(std::move(effect));
   }
-  updated.notes += (updated.notes.empty() ? "" : " ") + std::string("Joint stiffness identified from ") + source_note + ".";
+  updated.notes +=
+      (updated.notes.empty() ? "" : " ") + std::string("Joint stiffness identified from ") + source_note + ".";
   return updated;
 }
 

@@ -43,19 +43,19 @@ struct StiffnessIdentificationOptions {
 
 struct StiffnessEstimate {
   bool identified = false;
-  std::string method;               // "tracker", "levels", "global" or "" when not identified
-  std::string reason;               // why not identified, when not
-  double stiffness = 0.0;           // N m / rad, 1 / compliance
-  double stiffness_se = 0.0;        // delta method: compliance_se / compliance^2
-  double stiffness_low = 0.0;       // interval at `confidence` (upper may be +inf)
+  std::string method;          // "tracker", "levels", "global" or "" when not identified
+  std::string reason;          // why not identified, when not
+  double stiffness = 0.0;      // N m / rad, 1 / compliance
+  double stiffness_se = 0.0;   // delta method: compliance_se / compliance^2
+  double stiffness_low = 0.0;  // interval at `confidence` (upper may be +inf)
   double stiffness_high = 0.0;
-  double compliance = 0.0;          // rad / (N m)
+  double compliance = 0.0;  // rad / (N m)
   double compliance_se = 0.0;
   int points = 0;
   int groups = 0;
-  int dof = 0;                      // residual degrees of freedom
-  double residual_rms = 0.0;        // rad (local) or m (global)
-  double reduced_chi2 = 0.0;        // residual variance over the stated noise (1 when the noise is as stated); 0 if unknown
+  int dof = 0;                // residual degrees of freedom
+  double residual_rms = 0.0;  // rad (local) or m (global)
+  double reduced_chi2 = 0.0;  // residual variance over the stated noise (1 when the noise is as stated); 0 if unknown
   // Local only, for the plots: torque, deflection with its group intercept removed, and its sigma.
   std::vector<double> torque, deflection, deflection_sigma;
 };
@@ -68,10 +68,10 @@ struct StiffnessIdentificationResult {
   // Per joint where both are identified: (K_global - K_local) / K_local, and the z score of the difference
   // of the compliances with both standard errors (independent unless shared_rows).
   std::vector<double> relative_difference, z_score;
-  bool global_shares_rows = false;        // the global fit used the local tests' rows too
-  int local_groups = 0;   // local tests (load ladders of one joint)
-  int global_groups = 0;  // poses with other loads
-  int unused_groups = 0;  // poses never loaded
+  bool global_shares_rows = false;  // the global fit used the local tests' rows too
+  int local_groups = 0;             // local tests (load ladders of one joint)
+  int global_groups = 0;            // poses with other loads
+  int unused_groups = 0;            // poses never loaded
   int rows = 0, rows_without_position = 0;
   std::vector<std::string> notes;
 };
@@ -85,9 +85,11 @@ StiffnessIdentificationResult identifyStiffness(const JointErrorModel& nominal, 
 // local test, or a joint's tests have too few points or no torque variation. Global: throws when no pose
 // is loaded, or the poses leave compliances unseparated (naming the joints). `use_local_groups`: fit
 // every loaded group, local tests included, not only the others.
-std::vector<StiffnessEstimate> identifyStiffnessLocal(const JointErrorModel& nominal, const MeasurementCampaign& campaign,
+std::vector<StiffnessEstimate> identifyStiffnessLocal(const JointErrorModel& nominal,
+                                                      const MeasurementCampaign& campaign,
                                                       const StiffnessIdentificationOptions& options = {});
-std::vector<StiffnessEstimate> identifyStiffnessGlobal(const JointErrorModel& nominal, const MeasurementCampaign& campaign,
+std::vector<StiffnessEstimate> identifyStiffnessGlobal(const JointErrorModel& nominal,
+                                                       const MeasurementCampaign& campaign,
                                                        const StiffnessIdentificationOptions& options = {},
                                                        bool use_local_groups = false);
 

@@ -20,8 +20,8 @@ constexpr double kDegree = kPi / 180.0;
 
 void checkOptions(const Robot& robot, const GearTrain& gears, const TransmissionIdentificationOptions& o) {
   if (o.joint < 0 || o.joint >= robot.dof()) {
-    throw InvalidArgument("transmission identification: joint " + std::to_string(o.joint + 1) + " does not exist (robot '" +
-                          robot.name + "' has " + std::to_string(robot.dof()) + ")");
+    throw InvalidArgument("transmission identification: joint " + std::to_string(o.joint + 1) +
+                          " does not exist (robot '" + robot.name + "' has " + std::to_string(robot.dof()) + ")");
   }
   const int stages = gears.stageCount(o.joint);
   if (o.stage < 1 || o.stage > stages + 1) {
@@ -43,13 +43,16 @@ void checkOptions(const Robot& robot, const GearTrain& gears, const Transmission
   if (o.baseline_degree < 0 || o.baseline_degree > 12) {
     throw InvalidArgument("transmission identification: baseline_degree must lie in 0 ... 12");
   }
-  if (!(o.significance > 0.0 && o.significance < 1.0)) throw InvalidArgument("transmission identification: significance must lie in (0, 1)");
-  if (!(o.confidence > 0.0 && o.confidence < 1.0)) throw InvalidArgument("transmission identification: confidence must lie in (0, 1)");
+  if (!(o.significance > 0.0 && o.significance < 1.0))
+    throw InvalidArgument("transmission identification: significance must lie in (0, 1)");
+  if (!(o.confidence > 0.0 && o.confidence < 1.0))
+    throw InvalidArgument("transmission identification: confidence must lie in (0, 1)");
   if (!(o.min_periods > 0.0)) throw InvalidArgument("transmission identification: min_periods must be positive");
   if (!(o.spectrum_min_order > 0.0) || !(o.spectrum_max_order > o.spectrum_min_order) || !(o.spectrum_step > 0.0) ||
       (o.spectrum_max_order - o.spectrum_min_order) / o.spectrum_step > 100000.0) {
-    throw InvalidArgument("transmission identification: the spectrum needs 0 < min order < max order and a positive step "
-                          "(at most 100000 orders)");
+    throw InvalidArgument(
+        "transmission identification: the spectrum needs 0 < min order < max order and a positive step "
+        "(at most 100000 orders)");
   }
 }
 
@@ -107,15 +110,16 @@ HarmonicEstimate harmonicOf(const LinearFit& fit, int column, double order, doub
 namespace {
 
 // A sweep moves the identified joint only, and its angle is recovered from the tracker or the levels.
-void checkSweep(const Robot& robot, const MeasurementCampaign& campaign, int j, TransmissionIdentificationResult& result) {
+void checkSweep(const Robot& robot, const MeasurementCampaign& campaign, int j,
+                TransmissionIdentificationResult& result) {
   const int n = robot.dof();
   for (std::size_t k = 1; k < campaign.size(); ++k) {
     for (int i = 0; i < n; ++i) {
       if (i != j && std::abs(campaign.command[k][i] - campaign.command[0][i]) > 1e-9) {
         throw MeasurementError(campaign.source + ": row " + std::to_string(k + 1) + ": q" + std::to_string(i + 1) +
                                " moves (" + formatNumber(campaign.command[0][i] / kDegree) + " deg to " +
-                               formatNumber(campaign.command[k][i] / kDegree) + " deg): a sweep of " + result.joint_name +
-                               " moves that joint only");
+                               formatNumber(campaign.command[k][i] / kDegree) + " deg): a sweep of " +
+                               result.joint_name + " moves that joint only");
       }
     }
   }
@@ -125,7 +129,8 @@ void checkSweep(const Robot& robot, const MeasurementCampaign& campaign, int j, 
   }
   result.angle_source = by_tracker ? "tracker" : "levels";
   if (by_tracker && campaign.frame != MeasurementFrame::Base) {
-    throw MeasurementError(campaign.source + ": the transmission-error identification needs positions in the base frame");
+    throw MeasurementError(campaign.source +
+                           ": the transmission-error identification needs positions in the base frame");
   }
 }
 
@@ -168,10 +173,12 @@ std::vector<double> sweepSamples(const JointErrorModel& nominal, const Measureme
       double lever = 0.0;
       angle = angleAboutAxis(ws.robot.axis[j], ws.robot.origin[j], nominal_target, campaign.position[k], &lever);
       if (lever < 1e-3) {
-        throw MeasurementError(campaign.source + ": row " + std::to_string(k + 1) + ": the target is within 1 mm of the axis of " +
-                               result.joint_name + ": its angle cannot be recovered");
+        throw MeasurementError(campaign.source + ": row " + std::to_string(k + 1) +
+                               ": the target is within 1 mm of the axis of " + result.joint_name +
+                               ": its angle cannot be recovered");
       }
-      stiffness_error = angleAboutAxis(ws.robot.axis[j], ws.robot.origin[j], nominal_target, predicted.tool_pose * target);
+      stiffness_error =
+          angleAboutAxis(ws.robot.axis[j], ws.robot.origin[j], nominal_target, predicted.tool_pose * target);
       row_sigma = position_sigma[k] / lever;
     } else {
       angle = campaign.measured_angles[k][j] - command[j];
@@ -191,7 +198,8 @@ std::vector<double> sweepSamples(const JointErrorModel& nominal, const Measureme
 }
 
 // Which candidates the sweep can tell apart from the baseline: those it turns through min_periods.
-std::vector<double> resolvableOrders(const MeasurementCampaign& campaign, const TransmissionIdentificationOptions& options,
+std::vector<double> resolvableOrders(const MeasurementCampaign& campaign,
+                                     const TransmissionIdentificationOptions& options,
                                      TransmissionIdentificationResult& result) {
   const int samples = result.samples;
   if (samples > 0) {
@@ -266,20 +274,22 @@ void fitSignificant(const Design& design, const Eigen::Ref<const Eigen::VectorXd
   result.fitted.assign(fitted.data(), fitted.data() + samples);
   result.residual_rms_rad = std::sqrt(final_fit.residuals.squaredNorm() / samples);
   result.reduced_chi2 = noise_known ? final_fit.scale2 : 0.0;
-
 }
 
 // The spectrum: one harmonic at a time with the baseline.
-void spectrumOf(const Design& design, const Eigen::Ref<const Eigen::VectorXd>& y, const Eigen::Ref<const Eigen::VectorXd>& s,
-                const TransmissionIdentificationOptions& options, TransmissionIdentificationResult& result) {
+void spectrumOf(const Design& design, const Eigen::Ref<const Eigen::VectorXd>& y,
+                const Eigen::Ref<const Eigen::VectorXd>& s, const TransmissionIdentificationOptions& options,
+                TransmissionIdentificationResult& result) {
   const int base_columns = options.baseline_degree + 1;
-  const int steps = static_cast<int>(std::floor((options.spectrum_max_order - options.spectrum_min_order) / options.spectrum_step + 1e-9));
+  const int steps = static_cast<int>(
+      std::floor((options.spectrum_max_order - options.spectrum_min_order) / options.spectrum_step + 1e-9));
   for (int i = 0; i <= steps; ++i) {
     const double order = options.spectrum_min_order + i * options.spectrum_step;
     const LinearFit single = weightedLeastSquares(designMatrix(design, {order}), y, s);
     if (single.rank < base_columns + 2) continue;
     result.spectrum_orders.push_back(order);
-    result.spectrum_amplitude_rad.push_back(std::hypot(single.coefficients[base_columns], single.coefficients[base_columns + 1]));
+    result.spectrum_amplitude_rad.push_back(
+        std::hypot(single.coefficients[base_columns], single.coefficients[base_columns + 1]));
   }
 }
 
@@ -297,8 +307,9 @@ TransmissionIdentificationResult identifyTransmissionError(const JointErrorModel
   result.joint = j;
   result.joint_name = robot.joints[j].name;
   result.stage = options.stage;
-  result.part = options.stage == 1 ? "motor" : options.stage == gears.stageCount(j) + 1 ? "output"
-                                                                                       : "stage_" + std::to_string(options.stage);
+  result.part = options.stage == 1                         ? "motor"
+                : options.stage == gears.stageCount(j) + 1 ? "output"
+                                                           : "stage_" + std::to_string(options.stage);
   result.confidence = options.confidence;
   result.significance = options.significance;
   if (campaign.size() == 0) throw MeasurementError(campaign.source + ": the campaign has no rows");
@@ -316,9 +327,10 @@ TransmissionIdentificationResult identifyTransmissionError(const JointErrorModel
   const int base_columns = options.baseline_degree + 1;
   const int columns = base_columns + 2 * static_cast<int>(orders.size());
   if (samples < columns + 2) {
-    throw MeasurementError(campaign.source + ": " + std::to_string(samples) + " measured points of " + result.joint_name +
-                           " for " + std::to_string(columns) + " unknowns (baseline and harmonics); at least " +
-                           std::to_string(columns + 2) + " are needed");
+    throw MeasurementError(campaign.source + ": " + std::to_string(samples) + " measured points of " +
+                           result.joint_name + " for " + std::to_string(columns) +
+                           " unknowns (baseline and harmonics); at least " + std::to_string(columns + 2) +
+                           " are needed");
   }
   const auto q_range = std::minmax_element(result.command.begin(), result.command.end());
   result.baseline_centre = 0.5 * (*q_range.first + *q_range.second);

@@ -35,29 +35,29 @@
 namespace jointcomp {
 
 struct TransmissionIdentificationOptions {
-  int joint = 1;                                    // 0-based: joint 2
-  int stage = 2;                                    // 1 = motor, k = input of stage k, stageCount + 1 = output
+  int joint = 1;                                           // 0-based: joint 2
+  int stage = 2;                                           // 1 = motor, k = input of stage k, stageCount + 1 = output
   std::vector<double> candidate_orders{1, 2, 3, 4, 5, 6};  // cycles per revolution of that stage
   int baseline_degree = 3;
-  double significance = 1e-3;                       // family-wise, over the candidates
+  double significance = 1e-3;  // family-wise, over the candidates
   double confidence = 0.95;
-  double min_periods = 2.0;                         // a candidate needs this many periods in the sweep
+  double min_periods = 2.0;  // a candidate needs this many periods in the sweep
   double spectrum_min_order = 0.1;
   double spectrum_max_order = 8.0;
   double spectrum_step = 0.02;
 };
 
 struct HarmonicEstimate {
-  double order = 0.0;              // cycles per revolution of the stage
+  double order = 0.0;  // cycles per revolution of the stage
   double amplitude_rad = 0.0;
   double amplitude_se_rad = 0.0;
   double amplitude_low_rad = 0.0;  // interval at `confidence` (low clamped at 0)
   double amplitude_high_rad = 0.0;
-  double phase_rad = 0.0;          // in (-pi, pi]
+  double phase_rad = 0.0;  // in (-pi, pi]
   double phase_se_rad = 0.0;
-  double phase_low_rad = 0.0;      // phase +- t * se (not wrapped)
+  double phase_low_rad = 0.0;  // phase +- t * se (not wrapped)
   double phase_high_rad = 0.0;
-  double f_statistic = 0.0;        // of dropping this order from the full model
+  double f_statistic = 0.0;  // of dropping this order from the full model
   double p_value = 1.0;
   double amplitude_to_se = 0.0;
   bool significant = false;
@@ -67,20 +67,20 @@ struct TransmissionIdentificationResult {
   std::string joint_name;
   int joint = 0;
   int stage = 0;
-  std::string part;                // "motor", "stage_K" or "output"
-  std::string angle_source;        // "tracker" or "levels"
+  std::string part;          // "motor", "stage_K" or "output"
+  std::string angle_source;  // "tracker" or "levels"
   int samples = 0;
   double stage_revolutions = 0.0;  // how far the stage turned over the sweep
   double confidence = 0.95;
   double significance = 1e-3;
   int dof = 0;
   double residual_rms_rad = 0.0;
-  double noise_rms_rad = 0.0;      // the stated noise of the angles, RMS (0 when unknown)
-  double reduced_chi2 = 0.0;       // 0 when the noise is unknown
+  double noise_rms_rad = 0.0;  // the stated noise of the angles, RMS (0 when unknown)
+  double reduced_chi2 = 0.0;   // 0 when the noise is unknown
   // Per sample (SI): command, recovered joint angle, predicted stiffness error, kinematic error (angle
   // minus command minus stiffness error), the fit, the stage angle.
   std::vector<double> command, measured, stiffness_error, kinematic_error, fitted, stage_angle;
-  std::vector<double> baseline;    // polynomial coefficients in x = (q - centre) / half-range
+  std::vector<double> baseline;  // polynomial coefficients in x = (q - centre) / half-range
   double baseline_centre = 0.0, baseline_half_range = 1.0;
   std::vector<double> spectrum_orders, spectrum_amplitude_rad;
   std::vector<HarmonicEstimate> candidates;  // the full-model fit and tests

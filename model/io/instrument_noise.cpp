@@ -65,8 +65,9 @@ std::optional<TrackerNoiseModel> trackerNoiseOf(const MeasurementCampaign& campa
   for (const char* key : keys) present += campaign.metadata.count(key) > 0 ? 1 : 0;
   if (present == 0) return std::nullopt;
   if (present != 3) {
-    throw MeasurementError(campaign.source +
-                           ": metadata tracker_sigma_constant_mm, tracker_sigma_per_m_mm and tracker_position_mm go together");
+    throw MeasurementError(
+        campaign.source +
+        ": metadata tracker_sigma_constant_mm, tracker_sigma_per_m_mm and tracker_position_mm go together");
   }
   TrackerNoiseModel model;
   model.constant_m = metadataNumbers(campaign, keys[0], 1)[0] * 1e-3;

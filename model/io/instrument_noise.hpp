@@ -19,8 +19,8 @@
 namespace jointcomp {
 
 struct TrackerNoiseModel {
-  double constant_m = 7.5e-6;  // 15 um / 2
-  double per_metre = 3.0e-6;   // 6 um/m / 2
+  double constant_m = 7.5e-6;                        // 15 um / 2
+  double per_metre = 3.0e-6;                         // 6 um/m / 2
   Eigen::Vector3d tracker_position{3.0, -2.0, 0.5};  // m, base frame
   // 1-sigma noise per axis of a point measured at `point` (base frame).
   double sigma(const Eigen::Vector3d& point) const {

@@ -77,7 +77,8 @@ Eigen::Vector3d ipaTargetInFlange(const std::string& trafo_path) {
   Eigen::Matrix4d transform;
   for (int i = 0; i < 16; ++i) {
     std::string token;
-    if (!(stream >> token)) throw MeasurementError(trafo_path + ": expected 16 numbers (a 4x4 matrix), found " + std::to_string(i));
+    if (!(stream >> token))
+      throw MeasurementError(trafo_path + ": expected 16 numbers (a 4x4 matrix), found " + std::to_string(i));
     double value = 0.0;
     if (!parseDecimalComma(token, value)) throw MeasurementError(trafo_path + ": '" + token + "' is not a number");
     transform(i / 4, i % 4) = value;
@@ -143,12 +144,14 @@ MeasurementCampaign parseIpaUr10(const std::string& text, const std::string& mea
     if (line.empty()) continue;
     const std::vector<std::string> cells = split(line, ';');
     if (cells.size() != header.size()) {
-      fail(line_number, "row has " + std::to_string(cells.size()) + " cells, the header has " + std::to_string(header.size()));
+      fail(line_number,
+           "row has " + std::to_string(cells.size()) + " cells, the header has " + std::to_string(header.size()));
     }
     auto number = [&](const std::string& column) {
       double value = 0.0;
       const std::string& cell = cells[column_of.at(column)];
-      if (!parseDecimalComma(cell, value)) fail(line_number, "column '" + column + "': '" + cell + "' is not a finite number");
+      if (!parseDecimalComma(cell, value))
+        fail(line_number, "column '" + column + "': '" + cell + "' is not a finite number");
       return value;
     };
     JointVector command(6);

@@ -51,7 +51,8 @@ public:
     const char* end = cell.data() + cell.size();
     if (*begin == '+') ++begin;
     const auto result = std::from_chars(begin, end, value);
-    if (result.ec == std::errc::result_out_of_range) fail(line, "column '" + column + "': '" + cell + "' is not finite");
+    if (result.ec == std::errc::result_out_of_range)
+      fail(line, "column '" + column + "': '" + cell + "' is not finite");
     if (result.ec != std::errc() || result.ptr != end) {
       fail(line, "column '" + column + "': '" + cell + "' is not a number");
     }
@@ -99,8 +100,8 @@ public:
       if (line.empty()) continue;
       const std::vector<std::string> cells = splitCells(line);
       if (cells.size() != header.size()) {
-        fail(line_number, "row has " + std::to_string(cells.size()) + " cells, the header has " +
-                              std::to_string(header.size()));
+        fail(line_number,
+             "row has " + std::to_string(cells.size()) + " cells, the header has " + std::to_string(header.size()));
       }
       addRow(campaign, cells, column_of, line_number);
     }
@@ -176,7 +177,8 @@ private:
     }
     if (campaign.has_measured_angles) {
       JointVector measured(campaign.dof);
-      for (int j = 0; j < campaign.dof; ++j) measured[j] = optional("qm" + std::to_string(j + 1), kDegree, kNotMeasured);
+      for (int j = 0; j < campaign.dof; ++j)
+        measured[j] = optional("qm" + std::to_string(j + 1), kDegree, kNotMeasured);
       campaign.measured_angles.push_back(measured);
     }
     campaign.temperature.push_back(optional("temp", 1.0, kNotMeasured));
@@ -242,8 +244,10 @@ void MeasurementCampaign::validate() const {
   }
   if (!has_position && !has_measured_angles) fail("neither positions nor joint angles were measured");
   for (std::size_t k = 0; k < n; ++k) {
-    if (!std::isfinite(time[k]) || (k > 0 && time[k] < time[k - 1])) fail("time is not finite and non-decreasing at row " + std::to_string(k));
-    if (command[k].size() != dof || !command[k].allFinite()) fail("command of row " + std::to_string(k) + " is invalid");
+    if (!std::isfinite(time[k]) || (k > 0 && time[k] < time[k - 1]))
+      fail("time is not finite and non-decreasing at row " + std::to_string(k));
+    if (command[k].size() != dof || !command[k].allFinite())
+      fail("command of row " + std::to_string(k) + " is invalid");
   }
 }
 
@@ -294,7 +298,9 @@ std::string campaignToText(const MeasurementCampaign& campaign) {
   if (any_wrench) out << ",fx,fy,fz,mx,my,mz";
   if (any_payload) out << ",payload";
   out << "\n";
-  auto cell = [](double value, double scale) { return std::isnan(value) ? std::string() : formatNumber(value * scale); };
+  auto cell = [](double value, double scale) {
+    return std::isnan(value) ? std::string() : formatNumber(value * scale);
+  };
   for (std::size_t k = 0; k < campaign.size(); ++k) {
     out << formatNumber(campaign.time[k]);
     for (int j = 0; j < campaign.dof; ++j) out << ',' << formatNumber(campaign.command[k][j] / kDegree);

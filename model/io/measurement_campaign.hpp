@@ -21,19 +21,19 @@ struct MeasurementCampaign {
   MeasurementFrame frame = MeasurementFrame::Base;
   bool has_target = false;
   Eigen::Vector3d target_in_flange = Eigen::Vector3d::Zero();  // m
-  double position_noise = 0.0;  // m, 1 sigma per axis; 0 when the file does not say
-  double angle_noise = 0.0;     // rad, 1 sigma of qm; 0 when the file does not say
+  double position_noise = 0.0;                                 // m, 1 sigma per axis; 0 when the file does not say
+  double angle_noise = 0.0;                                    // rad, 1 sigma of qm; 0 when the file does not say
 
   int dof = 0;
-  std::vector<double> time;               // s, non-decreasing
-  std::vector<JointVector> command;       // rad
+  std::vector<double> time;          // s, non-decreasing
+  std::vector<JointVector> command;  // rad
   bool has_position = false;
   std::vector<Eigen::Vector3d> position;  // m (NaN where not measured)
   bool has_measured_angles = false;
   std::vector<JointVector> measured_angles;  // rad (NaN where not measured)
-  std::vector<double> temperature;        // degC (NaN where not measured or no column)
-  std::vector<Vector6> wrench;            // N, N m at the target, base frame (zero without columns)
-  std::vector<double> payload;            // kg (zero without the column)
+  std::vector<double> temperature;           // degC (NaN where not measured or no column)
+  std::vector<Vector6> wrench;               // N, N m at the target, base frame (zero without columns)
+  std::vector<double> payload;               // kg (zero without the column)
 
   std::size_t size() const { return time.size(); }
   // Throws MeasurementError when the vectors disagree in length or break the format's rules.

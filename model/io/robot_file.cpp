@@ -160,8 +160,8 @@ Robot robotFromJson(const std::string& json_text, const std::string& source_name
     const nlohmann::json& joints = fields.array("joints");
     if (joints.empty()) fields.fail("joints", "no joints");
     if (joints.size() > static_cast<std::size_t>(kMaxJoints)) {
-      fields.fail("joints", std::to_string(joints.size()) + " joints; at most " + std::to_string(kMaxJoints) +
-                                " are supported");
+      fields.fail("joints",
+                  std::to_string(joints.size()) + " joints; at most " + std::to_string(kMaxJoints) + " are supported");
     }
     for (std::size_t i = 0; i < joints.size(); ++i) {
       robot.joints.push_back(readJoint(joints[i], fields.pathOf("joints[" + std::to_string(i) + "]")));
@@ -202,8 +202,8 @@ bool sameBits(const Matrix& a, const Matrix& b) {
 
 bool sameRobot(const Robot& a, const Robot& b) {
   if (a.name != b.name || a.root_link != b.root_link || a.tip_link != b.tip_link ||
-      a.link_without_inertial != b.link_without_inertial || a.dof() != b.dof() ||
-      !sameBits(a.gravity, b.gravity) || !sameBits(a.tool.matrix(), b.tool.matrix())) {
+      a.link_without_inertial != b.link_without_inertial || a.dof() != b.dof() || !sameBits(a.gravity, b.gravity) ||
+      !sameBits(a.tool.matrix(), b.tool.matrix())) {
     return false;
   }
   for (int i = 0; i < a.dof(); ++i) {

@@ -74,7 +74,8 @@ std::string robotToUrdf(const Robot& robot, const std::string& comment) {
     requireFinite(std::isfinite(joint.body.mass) && joint.body.com.allFinite() && joint.body.inertia.allFinite(),
                   robot.name, where + " body");
     const bool continuous = std::isinf(joint.lower) && std::isinf(joint.upper) && joint.lower < 0 && joint.upper > 0;
-    if (!continuous) requireFinite(std::isfinite(joint.lower) && std::isfinite(joint.upper), robot.name, where + " limit");
+    if (!continuous)
+      requireFinite(std::isfinite(joint.lower) && std::isfinite(joint.upper), robot.name, where + " limit");
     xml << "  <joint name=\"" << escaped(joint.name) << "\" type=\"" << (continuous ? "continuous" : "revolute")
         << "\">\n";
     xml << "    <parent link=\"" << escaped(parent) << "\"/>\n";

@@ -54,7 +54,8 @@ void setDriveParameters(std::vector<DriveParameters>& drives, const Robot& robot
                            std::to_string(x) + "; it must be finite and " + (f.positive ? "positive" : "not negative"));
     }
   }
-  for (std::size_t k = 0; k < values.size(); ++k) drives[k / per_joint].*(driveFields()[k % per_joint].member) = values[k];
+  for (std::size_t k = 0; k < values.size(); ++k)
+    drives[k / per_joint].*(driveFields()[k % per_joint].member) = values[k];
 }
 
 std::vector<DriveParameters> drivesFromJson(const nlohmann::json& plant, const Robot& robot, const std::string& path) {

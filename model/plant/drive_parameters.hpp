@@ -13,22 +13,22 @@
 namespace jointcomp {
 
 struct DriveParameters {
-  double motor_inertia_kgm2 = 1.0;                // rotor (and first stage) inertia seen at the joint
-  double viscous_friction_nms_per_rad = 0.0;      // motor side, joint units
-  double coulomb_friction_nm = 0.0;               // motor side, joint units
-  double coulomb_velocity_scale_rad_per_s = 1e-3; // Coulomb friction = F tanh(v / scale): smooth at rest
-  double transmission_damping_nms_per_rad = 0.0;  // in parallel with the joint spring
-  double kp_nm_per_rad = 0.0;                     // controller: position gain on the motor
-  double ki_nm_per_rad_s = 0.0;                   // integral gain
-  double kd_nms_per_rad = 0.0;                    // velocity gain
+  double motor_inertia_kgm2 = 1.0;                 // rotor (and first stage) inertia seen at the joint
+  double viscous_friction_nms_per_rad = 0.0;       // motor side, joint units
+  double coulomb_friction_nm = 0.0;                // motor side, joint units
+  double coulomb_velocity_scale_rad_per_s = 1e-3;  // Coulomb friction = F tanh(v / scale): smooth at rest
+  double transmission_damping_nms_per_rad = 0.0;   // in parallel with the joint spring
+  double kp_nm_per_rad = 0.0;                      // controller: position gain on the motor
+  double ki_nm_per_rad_s = 0.0;                    // integral gain
+  double kd_nms_per_rad = 0.0;                     // velocity gain
 };
 
 // The fields of a drive by name: the parameter file's keys, the member, and what values are accepted
 // (positive, or not negative). One table for reading, writing and naming the parameters.
 struct DriveField {
-  const char* key;                   // "kp_nm_per_rad"
+  const char* key;  // "kp_nm_per_rad"
   double DriveParameters::*member;
-  bool positive;                     // true: > 0; false: >= 0
+  bool positive;  // true: > 0; false: >= 0
 };
 const std::vector<DriveField>& driveFields();
 

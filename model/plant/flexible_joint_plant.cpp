@@ -25,8 +25,8 @@ struct FlexibleJointPlant::Solver {
   SUNMatrix jacobian = nullptr;
   SUNLinearSolver linear_solver = nullptr;
   void* cvode = nullptr;
-  std::string last_error;     // CVODE's own message for the last failure
-  std::string rhs_error;      // why our right-hand side refused, if it did
+  std::string last_error;          // CVODE's own message for the last failure
+  std::string rhs_error;           // why our right-hand side refused, if it did
   PlantStatistics before_restart;  // counts of earlier integrator runs (a restart zeroes CVODE's)
 
   ~Solver() {
@@ -53,8 +53,8 @@ std::string flagName(long flag) {
 
 void captureCvodeError(int error_code, const char* module, const char* function, char* message, void* user_data) {
   auto* solver = static_cast<std::string*>(user_data);
-  *solver = std::string(module ? module : "CVODE") + "/" + (function ? function : "?") + " (" +
-            flagName(error_code) + "): " + (message ? message : "");
+  *solver = std::string(module ? module : "CVODE") + "/" + (function ? function : "?") + " (" + flagName(error_code) +
+            "): " + (message ? message : "");
 }
 
 void check(int flag, const char* call) {
@@ -74,7 +74,8 @@ FlexibleJointPlant::FlexibleJointPlant(const JointErrorModel& truth, std::vector
       solver_(std::make_unique<Solver>()) {
   const Robot& robot = truth_.robot();
   if (!robot.hasInertials()) {
-    throw InvalidArgument("plant: link '" + robot.link_without_inertial + "' has no inertial; the plant needs every mass");
+    throw InvalidArgument("plant: link '" + robot.link_without_inertial +
+                          "' has no inertial; the plant needs every mass");
   }
   if (static_cast<int>(drives_.size()) != n_) {
     throw InvalidArgument("plant: " + std::to_string(drives_.size()) + " drives for " + std::to_string(n_) + " joints");
@@ -82,9 +83,14 @@ FlexibleJointPlant::FlexibleJointPlant(const JointErrorModel& truth, std::vector
   for (int j = 0; j < n_; ++j) {
     const DriveParameters& d = drives_[j];
     const std::string where = "plant: drive of " + robot.joints[j].name + ": ";
-    const double values[] = {d.motor_inertia_kgm2, d.viscous_friction_nms_per_rad, d.coulomb_friction_nm,
-                             d.coulomb_velocity_scale_rad_per_s, d.transmission_damping_nms_per_rad,
-                             d.kp_nm_per_rad, d.ki_nm_per_rad_s, d.kd_nms_per_rad};
+    const double values[] = {d.motor_inertia_kgm2,
+                             d.viscous_friction_nms_per_rad,
+                             d.coulomb_friction_nm,
+                             d.coulomb_velocity_scale_rad_per_s,
+                             d.transmission_damping_nms_per_rad,
+                             d.kp_nm_per_rad,
+                             d.ki_nm_per_rad_s,
+                             d.kd_nms_per_rad};
     for (double v : values) {
       if (!std::isfinite(v) || v < 0.0) throw InvalidArgument(where + "every value must be finite and non-negative");
     }
@@ -94,13 +100,15 @@ FlexibleJointPlant::FlexibleJointPlant(const JointErrorModel& truth, std::vector
     }
   }
   compliance_index_ = truth_.findEffect(ComplianceEffect::kType);
-  if (compliance_index_ < 0) throw InvalidArgument("plant: the joint-error model has no compliance effect (the joint springs)");
+  if (compliance_index_ < 0)
+    throw InvalidArgument("plant: the joint-error model has no compliance effect (the joint springs)");
   const auto& compliance = static_cast<const ComplianceEffect&>(truth_.effect(compliance_index_));
   stiffness_.resize(n_);
   for (int j = 0; j < n_; ++j) {
     stiffness_[j] = compliance.stiffness(j);
     if (!std::isfinite(stiffness_[j])) {
-      throw InvalidArgument("plant: " + robot.joints[j].name + " is rigid in the compliance effect; the plant needs a "
+      throw InvalidArgument("plant: " + robot.joints[j].name +
+                            " is rigid in the compliance effect; the plant needs a "
                             "finite joint stiffness for every joint");
     }
   }
@@ -111,8 +119,7 @@ FlexibleJointPlant::FlexibleJointPlant(const JointErrorModel& truth, std::vector
     if (truth_.effect(i).role() == EffectRole::JointError && i != compliance_index_) error_mask_ |= EffectMask(1) << i;
   }
   if (!(options_.relative_tolerance > 0.0) || !(options_.absolute_tolerance > 0.0) ||
-      !(options_.velocity_tolerance_factor > 0.0) || options_.max_step < 0.0 ||
-      options_.max_steps_per_advance < 1) {
+      !(options_.velocity_tolerance_factor > 0.0) || options_.max_step < 0.0 || options_.max_steps_per_advance < 1) {
     throw InvalidArgument("plant: tolerances must be positive, max_step non-negative, max_steps_per_advance >= 1");
   }
 
@@ -347,8 +354,8 @@ int plantRightHandSide(realtype t, N_Vector y, N_Vector ydot, void* user_data) {
 
 void FlexibleJointPlant::advance(double end_time) {
   if (!std::isfinite(end_time) || !(end_time > time_)) {
-    throw InvalidArgument("plant: advance to t = " + std::to_string(end_time) + " s, which is not after the current t = " +
-                          std::to_string(time_) + " s");
+    throw InvalidArgument("plant: advance to t = " + std::to_string(end_time) +
+                          " s, which is not after the current t = " + std::to_string(time_) + " s");
   }
   Solver& s = *solver_;
   if (restart_) {
@@ -377,8 +384,7 @@ void FlexibleJointPlant::advance(double end_time) {
     time_ = reached;
     restart_ = true;
     throw SolverError("plant: CVODE failed between t = " + std::to_string(reached) + " s and " +
-                      std::to_string(end_time) + " s: " +
-                      (s.last_error.empty() ? flagName(flag) : s.last_error));
+                      std::to_string(end_time) + " s: " + (s.last_error.empty() ? flagName(flag) : s.last_error));
   }
   time_ = end_time;
 }

@@ -26,21 +26,21 @@ namespace jointcomp {
 
 struct PlantOptions {
   double relative_tolerance = 1e-6;
-  double absolute_tolerance = 1e-8;   // rad on positions and on the integral state (0.02 um at 2 m);
+  double absolute_tolerance = 1e-8;          // rad on positions and on the integral state (0.02 um at 2 m);
   double velocity_tolerance_factor = 100.0;  // velocities get absolute_tolerance * this, in rad/s: an error
                                              // of 1e-6 rad/s moves a joint 4e-9 rad in a 4 ms period
-  double max_step = 0.0;              // s, 0: CVODE's default (unbounded)
+  double max_step = 0.0;                     // s, 0: CVODE's default (unbounded)
   long max_steps_per_advance = 200000;
   // BDF order cap. The joint springs give lightly damped modes near the imaginary axis, where BDF of
   // order 4 and 5 is unstable at large steps (A(alpha)-stability 73 and 51 degrees); order 3 is not.
   int max_order = 3;
-  bool control = true;          // false: no motor torque at all (free response)
-  bool motors_locked = false;   // true: motor positions held where they are (static tests)
+  bool control = true;         // false: no motor torque at all (free response)
+  bool motors_locked = false;  // true: motor positions held where they are (static tests)
 };
 
 struct PlantStatistics {
   long steps = 0;
-  long rhs_evaluations = 0;           // right-hand sides, those of the difference-quotient Jacobians included
+  long rhs_evaluations = 0;  // right-hand sides, those of the difference-quotient Jacobians included
   long jacobian_evaluations = 0;
   long error_test_failures = 0;
   long nonlinear_convergence_failures = 0;

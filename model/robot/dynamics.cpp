@@ -49,7 +49,8 @@ void newtonEulerAtCurrentPose(const Robot& robot, RobotWorkspace& ws, const Join
   for (int i = n - 1; i >= 0; --i) {
     const double mass = robot.joints[i].body.mass;
     const Eigen::Vector3d body_force = mass * ws.acc[i];
-    const Eigen::Vector3d body_moment = ws.inertia[i] * ws.omega_dot[i] + ws.omega[i].cross(ws.inertia[i] * ws.omega[i]);
+    const Eigen::Vector3d body_moment =
+        ws.inertia[i] * ws.omega_dot[i] + ws.omega[i].cross(ws.inertia[i] * ws.omega[i]);
     if (i + 1 < n) moment += (ws.origin[i + 1] - ws.origin[i]).cross(force);
     moment += body_moment + (ws.com[i] - ws.origin[i]).cross(body_force);
     force += body_force;

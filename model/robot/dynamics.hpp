@@ -27,8 +27,7 @@ void forwardDynamics(const Robot& robot, RobotWorkspace& ws, const JointVector& 
 // tau = J^T w for a wrench w (force, then moment about the tool point; base frame): the joint torques
 // with which the tool exerts w on its surroundings, or equally those that hold the robot against a
 // wrench -w applied to the tool. At the last forwardKinematics call.
-void wrenchTorquesAtCurrentPose(const Robot& robot, const RobotWorkspace& ws, const Vector6& wrench,
-                                JointVector& tau);
+void wrenchTorquesAtCurrentPose(const Robot& robot, const RobotWorkspace& ws, const Vector6& wrench, JointVector& tau);
 
 // Potential energy of gravity (J), for tests and energy checks.
 double potentialEnergy(const Robot& robot, RobotWorkspace& ws, const JointVector& q);

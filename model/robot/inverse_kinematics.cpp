@@ -76,8 +76,8 @@ InverseKinematics::InverseKinematics(const Robot& robot, IkOptions options)
       lineDistance(ws_.origin[3], wrist_axis_[0], ws_.origin[4], wrist_axis_[1], meet45) < kGeometryTolerance &&
       lineDistance(ws_.origin[4], wrist_axis_[1], ws_.origin[5], wrist_axis_[2], meet56) < kGeometryTolerance &&
       (meet45 - meet56).norm() < kGeometryTolerance;
-  const bool planar_arm = projectOff(axis2_, point3_ - point2_).norm() > 1e-6 &&
-                          projectOff(axis2_, meet45 - point3_).norm() > 1e-6;
+  const bool planar_arm =
+      projectOff(axis2_, point3_ - point2_).norm() > 1e-6 && projectOff(axis2_, meet45 - point3_).norm() > 1e-6;
   closed_form_ = parallel23 && axis1_not_parallel_2 && wrist_meets && planar_arm;
   if (!closed_form_) return;
   wrist_centre_ = meet45;
@@ -123,7 +123,8 @@ bool InverseKinematics::wrapIntoLimits(JointVector& q, const JointVector& seed) 
 int InverseKinematics::allSolutions(const Eigen::Isometry3d& target, const JointVector& seed,
                                     std::array<IkSolution, 8>& solutions) {
   if (!closed_form_) {
-    throw InvalidArgument("robot '" + robot_.name + "' has no closed-form inverse kinematics (joints 2 and 3 "
+    throw InvalidArgument("robot '" + robot_.name +
+                          "' has no closed-form inverse kinematics (joints 2 and 3 "
                           "parallel and a spherical wrist are needed); use solve()");
   }
   checkJointVector(robot_, seed, "seed");
@@ -195,8 +196,8 @@ int InverseKinematics::allSolutions(const Eigen::Isometry3d& target, const Joint
       const double alpha = (cross45 * u5.dot(p) - u4.dot(goal)) / denominator;
       const double beta = (cross45 * u4.dot(goal) - u5.dot(p)) / denominator;
       const Eigen::Vector3d normal = u4.cross(u5);
-      double gamma_squared = (p.squaredNorm() - alpha * alpha - beta * beta - 2.0 * alpha * beta * cross45) /
-                             normal.squaredNorm();
+      double gamma_squared =
+          (p.squaredNorm() - alpha * alpha - beta * beta - 2.0 * alpha * beta * cross45) / normal.squaredNorm();
       if (gamma_squared < -1e-10) continue;  // this wrist cannot reach that orientation
       gamma_squared = std::max(0.0, gamma_squared);
       const double gamma_values[2] = {std::sqrt(gamma_squared), -std::sqrt(gamma_squared)};
@@ -207,7 +208,7 @@ int InverseKinematics::allSolutions(const Eigen::Isometry3d& target, const Joint
         const double q4 = wrist_singular ? seed[3] : rotationTaking(u4, via, goal);
         const Eigen::Matrix3d remaining = (rotation(u4, q4) * rotation(u5, q5)).transpose() * desired;
         const Eigen::Vector3d normal_to_6 = std::abs(u6.x()) < 0.9 ? u6.cross(Eigen::Vector3d::UnitX()).normalized()
-                                                                    : u6.cross(Eigen::Vector3d::UnitY()).normalized();
+                                                                   : u6.cross(Eigen::Vector3d::UnitY()).normalized();
         const double q6 = rotationTaking(u6, normal_to_6, remaining * normal_to_6);
         IkSolution solution;
         solution.q.resize(6);
@@ -256,7 +257,8 @@ IkSolution InverseKinematics::solveNumerically(const Eigen::Isometry3d& target, 
   double cost = error.squaredNorm();
   bool singular = false;
   for (int iteration = 0; iteration < options_.max_iterations; ++iteration) {
-    if (error.head<3>().norm() < options_.position_tolerance && error.tail<3>().norm() < options_.orientation_tolerance) {
+    if (error.head<3>().norm() < options_.position_tolerance &&
+        error.tail<3>().norm() < options_.orientation_tolerance) {
       IkSolution solution{q, singular};
       if (options_.respect_limits && !wrapIntoLimits(solution.q, seed)) {
         throw UnreachableError(describe(target) + " is reachable only beyond the joint limits");
@@ -271,7 +273,8 @@ IkSolution InverseKinematics::solveNumerically(const Eigen::Isometry3d& target, 
     const JointVector step = jacobian.transpose() * damped.ldlt().solve(error);
     JointVector trial = q + step;
     if (options_.respect_limits) {
-      for (int i = 0; i < n; ++i) trial[i] = std::min(robot_.joints[i].upper, std::max(robot_.joints[i].lower, trial[i]));
+      for (int i = 0; i < n; ++i)
+        trial[i] = std::min(robot_.joints[i].upper, std::max(robot_.joints[i].lower, trial[i]));
     }
     forwardKinematics(robot_, ws_, trial);
     const Vector6 trial_error = poseError(ws_.tool_pose, target);

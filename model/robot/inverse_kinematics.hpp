@@ -19,7 +19,7 @@ struct IkOptions {
   // Damped least squares: the smallest lambda^2 added to J J^T. Levenberg-Marquardt raises it when a step
   // fails; it must stay far below sigma_min^2 near singularities or convergence slows to a crawl.
   double damping = 1e-12;
-  bool respect_limits = true;            // drop solutions outside the joint limits
+  bool respect_limits = true;  // drop solutions outside the joint limits
 };
 
 struct IkSolution {
@@ -38,8 +38,7 @@ public:
 
   // All closed-form solutions within the limits (if respect_limits), each wrapped by 2 pi to lie as
   // close to `seed` as the limits allow. Returns how many; throws InvalidArgument without closed form.
-  int allSolutions(const Eigen::Isometry3d& target, const JointVector& seed,
-                   std::array<IkSolution, 8>& solutions);
+  int allSolutions(const Eigen::Isometry3d& target, const JointVector& seed, std::array<IkSolution, 8>& solutions);
 
   // The solution closest to `seed` (closed form when there is one, else damped least squares from the
   // seed). Throws UnreachableError naming the target and the residual when there is none.
@@ -55,8 +54,8 @@ private:
   bool closed_form_ = false;
   // Closed-form geometry at q = 0, base frame.
   Eigen::Vector3d axis1_, point1_, axis2_, point2_, point3_, wrist_centre_;
-  std::array<Eigen::Vector3d, 3> wrist_axis_;       // axes 4, 5, 6 at q = 0
-  Eigen::Isometry3d tool_at_zero_;                  // tool pose at q = 0
+  std::array<Eigen::Vector3d, 3> wrist_axis_;  // axes 4, 5, 6 at q = 0
+  Eigen::Isometry3d tool_at_zero_;             // tool pose at q = 0
 };
 
 }  // namespace jointcomp

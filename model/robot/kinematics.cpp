@@ -20,8 +20,7 @@ void rotateAboutAxis(Eigen::Matrix3d& rotation, const Eigen::Vector3d& axis, dou
   }
   Eigen::Matrix3d cross;
   cross << 0.0, -axis.z(), axis.y(), axis.z(), 0.0, -axis.x(), -axis.y(), axis.x(), 0.0;
-  const Eigen::Matrix3d joint_rotation =
-      Eigen::Matrix3d::Identity() + s * cross + (1.0 - c) * (cross * cross);
+  const Eigen::Matrix3d joint_rotation = Eigen::Matrix3d::Identity() + s * cross + (1.0 - c) * (cross * cross);
   rotation = rotation * joint_rotation;
 }
 

@@ -14,8 +14,7 @@ void forwardKinematics(const Robot& robot, RobotWorkspace& ws, const JointVector
 void toolJacobian(const Robot& robot, const RobotWorkspace& ws, Jacobian& jacobian);
 
 // Geometric Jacobian of a point fixed to the tool (given in the base frame) at the last forwardKinematics.
-void pointJacobian(const Robot& robot, const RobotWorkspace& ws, const Eigen::Vector3d& point,
-                   Jacobian& jacobian);
+void pointJacobian(const Robot& robot, const RobotWorkspace& ws, const Eigen::Vector3d& point, Jacobian& jacobian);
 
 // Pose error (position difference, then rotation vector) taking `from` to `to`, base frame.
 Vector6 poseError(const Eigen::Isometry3d& from, const Eigen::Isometry3d& to);

@@ -7,9 +7,9 @@
 #include <mutex>
 #include <sstream>
 
-#include <Eigen/Eigenvalues>
 #include <console_bridge/console.h>
 #include <urdf_parser/urdf_parser.h>
+#include <Eigen/Eigenvalues>
 
 #include "model/common/errors.hpp"
 
@@ -46,9 +46,9 @@ Eigen::Isometry3d toIsometry(const urdf::Pose& pose) {
 }
 
 bool isFinite(const urdf::Pose& pose) {
-  return std::isfinite(pose.position.x) && std::isfinite(pose.position.y) &&
-         std::isfinite(pose.position.z) && std::isfinite(pose.rotation.x) &&
-         std::isfinite(pose.rotation.y) && std::isfinite(pose.rotation.z) && std::isfinite(pose.rotation.w);
+  return std::isfinite(pose.position.x) && std::isfinite(pose.position.y) && std::isfinite(pose.position.z) &&
+         std::isfinite(pose.rotation.x) && std::isfinite(pose.rotation.y) && std::isfinite(pose.rotation.z) &&
+         std::isfinite(pose.rotation.w);
 }
 
 const char* jointTypeName(int type) {
@@ -94,8 +94,8 @@ public:
     }
     if (robot.joints.empty()) fail("no revolute joint between '" + robot.root_link + "' and '" + robot.tip_link + "'");
     if (robot.dof() > kMaxJoints) {
-      fail("the chain has " + std::to_string(robot.dof()) + " moving joints; at most " +
-           std::to_string(kMaxJoints) + " are supported");
+      fail("the chain has " + std::to_string(robot.dof()) + " moving joints; at most " + std::to_string(kMaxJoints) +
+           " are supported");
     }
     robot.tool = pending;
 
@@ -103,8 +103,7 @@ public:
     for (int i = 0; i < robot.dof(); ++i) {
       Joint& joint = robot.joints[i];
       const std::string next_on_chain = i + 1 < robot.dof() ? robot.joints[i + 1].name : std::string();
-      accumulateBody(model_.getLink(joint.child_link), Eigen::Isometry3d::Identity(), next_on_chain, path,
-                     joint.body);
+      accumulateBody(model_.getLink(joint.child_link), Eigen::Isometry3d::Identity(), next_on_chain, path, joint.body);
       if (joint.body.mass <= 0.0 && robot.link_without_inertial.empty()) {
         robot.link_without_inertial = joint.child_link;
       }
@@ -161,8 +160,8 @@ private:
     if (urdf_joint.limits) {
       joint.velocity_limit = urdf_joint.limits->velocity;
       joint.effort_limit = urdf_joint.limits->effort;
-      if (!std::isfinite(joint.velocity_limit) || joint.velocity_limit < 0.0 ||
-          !std::isfinite(joint.effort_limit) || joint.effort_limit < 0.0) {
+      if (!std::isfinite(joint.velocity_limit) || joint.velocity_limit < 0.0 || !std::isfinite(joint.effort_limit) ||
+          joint.effort_limit < 0.0) {
         fail(where + ": <limit> velocity and effort must be finite and non-negative");
       }
     }
@@ -203,8 +202,9 @@ private:
     const Eigen::Vector3d& moments = principal.eigenvalues();
     const double tolerance = 1e-9 * std::max(1.0, moments.cwiseAbs().maxCoeff());
     if (moments.minCoeff() < -tolerance || moments[0] + moments[1] < moments[2] - tolerance) {
-      fail(where + ": <inertia> is not a physical inertia tensor (principal moments must be non-negative and "
-                   "satisfy the triangle inequality)");
+      fail(where +
+           ": <inertia> is not a physical inertia tensor (principal moments must be non-negative and "
+           "satisfy the triangle inequality)");
     }
     const Eigen::Isometry3d inertial_in_body = link_in_body * toIsometry(inertial.origin);
     const Eigen::Vector3d com = inertial_in_body.translation();

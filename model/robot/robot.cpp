@@ -27,13 +27,13 @@ int Robot::jointIndex(const std::string& joint_name) const {
 
 void checkJointVector(const Robot& robot, const JointVector& q, const char* what) {
   if (q.size() != robot.dof()) {
-    throw InvalidArgument(std::string(what) + " has " + std::to_string(q.size()) + " values, robot '" +
-                          robot.name + "' has " + std::to_string(robot.dof()) + " joints");
+    throw InvalidArgument(std::string(what) + " has " + std::to_string(q.size()) + " values, robot '" + robot.name +
+                          "' has " + std::to_string(robot.dof()) + " joints");
   }
   for (int i = 0; i < q.size(); ++i) {
     if (!std::isfinite(q[i])) {
-      throw InvalidArgument(std::string(what) + "[" + std::to_string(i) + "] (joint '" +
-                            robot.joints[i].name + "') is not finite");
+      throw InvalidArgument(std::string(what) + "[" + std::to_string(i) + "] (joint '" + robot.joints[i].name +
+                            "') is not finite");
     }
   }
 }

@@ -11,9 +11,9 @@ namespace jointcomp {
 
 // Mass properties of the body a joint moves (its child link with every link fixed to it merged in).
 struct BodyInertia {
-  double mass = 0.0;                                        // kg
-  Eigen::Vector3d com = Eigen::Vector3d::Zero();            // m, in the joint frame
-  Eigen::Matrix3d inertia = Eigen::Matrix3d::Zero();        // kg m^2, about the com, joint-frame axes
+  double mass = 0.0;                                  // kg
+  Eigen::Vector3d com = Eigen::Vector3d::Zero();      // m, in the joint frame
+  Eigen::Matrix3d inertia = Eigen::Matrix3d::Zero();  // kg m^2, about the com, joint-frame axes
 };
 
 struct Joint {
@@ -23,18 +23,18 @@ struct Joint {
   // the first joint), with every fixed joint on the way folded in.
   Eigen::Isometry3d placement = Eigen::Isometry3d::Identity();
   Eigen::Vector3d axis = Eigen::Vector3d::UnitZ();  // unit vector, joint frame
-  double lower = 0.0;           // rad; -inf for continuous joints
-  double upper = 0.0;           // rad; +inf for continuous joints
-  double velocity_limit = 0.0;  // rad/s, 0 when the URDF gives none
-  double effort_limit = 0.0;    // N m, 0 when the URDF gives none
+  double lower = 0.0;                               // rad; -inf for continuous joints
+  double upper = 0.0;                               // rad; +inf for continuous joints
+  double velocity_limit = 0.0;                      // rad/s, 0 when the URDF gives none
+  double effort_limit = 0.0;                        // N m, 0 when the URDF gives none
   BodyInertia body;
 };
 
 struct Robot {
-  std::string name;         // the URDF's robot name
-  std::string source;       // where it was loaded from, for messages
+  std::string name;    // the URDF's robot name
+  std::string source;  // where it was loaded from, for messages
   std::string root_link;
-  std::string tip_link;     // the tool frame's link
+  std::string tip_link;  // the tool frame's link
   std::vector<Joint> joints;
   // Tool frame in the last joint's frame (fixed joints after the last revolute joint).
   Eigen::Isometry3d tool = Eigen::Isometry3d::Identity();

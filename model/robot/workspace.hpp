@@ -22,9 +22,9 @@ struct RobotWorkspace {
   Eigen::Isometry3d tool_pose = Eigen::Isometry3d::Identity();
 
   // Dynamics scratch.
-  std::array<Eigen::Matrix3d, kMaxJoints> inertia;       // body inertia about its com, base axes
+  std::array<Eigen::Matrix3d, kMaxJoints> inertia;                // body inertia about its com, base axes
   std::array<Eigen::Vector3d, kMaxJoints> omega, omega_dot, acc;  // per body
-  std::array<Eigen::Vector3d, kMaxJoints> force, moment;           // transmitted by each joint
+  std::array<Eigen::Vector3d, kMaxJoints> force, moment;          // transmitted by each joint
   JointMatrix mass_matrix;
   Eigen::LLT<JointMatrix> mass_llt;
   JointVector bias;

@@ -19,23 +19,21 @@
 static int checks = 0;
 static int failures = 0;
 
-#define CHECK(condition)                                                                                 \
-  do {                                                                                                   \
-    ++checks;                                                                                            \
-    if (!(condition)) {                                                                                  \
-      ++failures;                                                                                        \
-      fprintf(stderr, "%s:%d: CHECK(%s) failed; last error: %s\n", __FILE__, __LINE__, #condition,       \
-              jc_last_error());                                                                          \
-    }                                                                                                    \
+#define CHECK(condition)                                                                                             \
+  do {                                                                                                               \
+    ++checks;                                                                                                        \
+    if (!(condition)) {                                                                                              \
+      ++failures;                                                                                                    \
+      fprintf(stderr, "%s:%d: CHECK(%s) failed; last error: %s\n", __FILE__, __LINE__, #condition, jc_last_error()); \
+    }                                                                                                                \
   } while (0)
 
 /* A call must return `expected`; an error's message must name the function and contain `fragment`. */
-#define EXPECT_STATUS(expected, fragment, call) \
-  expect_status((expected), (fragment), (call), #call, __FILE__, __LINE__)
+#define EXPECT_STATUS(expected, fragment, call) expect_status((expected), (fragment), (call), #call, __FILE__, __LINE__)
 #define EXPECT_OK(call) EXPECT_STATUS(JC_OK, "", call)
 
-static void expect_status(jc_status expected, const char* fragment, jc_status got, const char* call,
-                          const char* file, int line) {
+static void expect_status(jc_status expected, const char* fragment, jc_status got, const char* call, const char* file,
+                          int line) {
   const char* message = jc_last_error();
   char function[64] = {0};
   size_t name_length = strcspn(call, "(");
@@ -96,13 +94,14 @@ static const double kInf = INFINITY;
 static const double kPosture[6] = {10 * DEG, 60 * DEG, 70 * DEG, 5 * DEG, 40 * DEG, 15 * DEG};
 
 /* Gear train of the RX170's parameter file, for the broken parameter texts below. */
-#define RX170_GEARS                                                                                   \
-  "\"gears\": {\"joints\": [{\"joint\": \"joint_1\", \"stage_ratios\": [3.0, 40.0]},"                 \
+#define RX170_GEARS                                                                                      \
+  "\"gears\": {\"joints\": [{\"joint\": \"joint_1\", \"stage_ratios\": [3.0, 40.0]},"                    \
   "{\"joint\": \"joint_2\", \"stage_ratios\": [3.0, 40.0]}, {\"joint\": \"joint_3\", \"stage_ratios\": " \
-  "[2.5, 40.0]}, {\"joint\": \"joint_4\", \"stage_ratios\": [72.0]}, {\"joint\": \"joint_5\", "       \
+  "[2.5, 40.0]}, {\"joint\": \"joint_4\", \"stage_ratios\": [72.0]}, {\"joint\": \"joint_5\", "          \
   "\"stage_ratios\": [64.0]}, {\"joint\": \"joint_6\", \"stage_ratios\": [28.0]}]}"
 
-static const char* kMinimalParameters = "{\"format\": \"jointcomp-parameters/1\", \"robot\": \"rx170\", \"effects\": []}";
+static const char* kMinimalParameters =
+    "{\"format\": \"jointcomp-parameters/1\", \"robot\": \"rx170\", \"effects\": []}";
 /* Joints so soft that the links never settle. */
 static const char* kSoftParameters =
     "{\"format\": \"jointcomp-parameters/1\", \"robot\": \"rx170\", \"effects\": [{\"type\": \"compliance\", "
@@ -147,15 +146,16 @@ static void test_loading(void) {
   path = temporary_file("{\"format\": \"jointcomp-parameters/1\", \"robot\": ");
   EXPECT_STATUS(JC_ERROR_FILE, path, jc_robot_load(JOINTCOMP_TEST_URDF, path, &robot));
   unlink(path);
-  EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "parameters_json is NULL", jc_robot_load_json(JOINTCOMP_TEST_URDF, NULL, &robot));
+  EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "parameters_json is NULL",
+                jc_robot_load_json(JOINTCOMP_TEST_URDF, NULL, &robot));
   EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "robot is NULL",
                 jc_robot_load_json(JOINTCOMP_TEST_URDF, kMinimalParameters, NULL));
   EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "urdf_path is NULL", jc_robot_load_json(NULL, kMinimalParameters, &robot));
   EXPECT_STATUS(JC_ERROR_FILE, "parameters_json", jc_robot_load_json(JOINTCOMP_TEST_URDF, "{not json", &robot));
-  EXPECT_STATUS(JC_ERROR_FILE, "rx160",
-                jc_robot_load_json(JOINTCOMP_TEST_URDF,
-                                   "{\"format\": \"jointcomp-parameters/1\", \"robot\": \"rx160\", \"effects\": []}",
-                                   &robot));
+  EXPECT_STATUS(
+      JC_ERROR_FILE, "rx160",
+      jc_robot_load_json(JOINTCOMP_TEST_URDF,
+                         "{\"format\": \"jointcomp-parameters/1\", \"robot\": \"rx160\", \"effects\": []}", &robot));
   /* A "plant" object is optional, but an invalid one is an error. */
   EXPECT_STATUS(JC_ERROR_FILE, "plant",
                 jc_robot_load_json(JOINTCOMP_TEST_URDF,
@@ -222,7 +222,8 @@ static void test_handles(jc_robot* robot, jc_plant* plant) {
   uint64_t not_a_handle[8] = {0};
   EXPECT_STATUS(JC_ERROR_WRONG_HANDLE, "got a jc_plant", jc_robot_dof((jc_robot*)(void*)plant, &dof));
   EXPECT_STATUS(JC_ERROR_WRONG_HANDLE, "got a jc_robot", jc_plant_time((jc_plant*)(void*)robot, &time));
-  EXPECT_STATUS(JC_ERROR_WRONG_HANDLE, "not a live jointcomp handle", jc_robot_dof((jc_robot*)(void*)not_a_handle, &dof));
+  EXPECT_STATUS(JC_ERROR_WRONG_HANDLE, "not a live jointcomp handle",
+                jc_robot_dof((jc_robot*)(void*)not_a_handle, &dof));
   EXPECT_STATUS(JC_ERROR_WRONG_HANDLE, "expected a jc_robot", jc_robot_free((jc_robot*)(void*)plant));
   EXPECT_STATUS(JC_ERROR_WRONG_HANDLE, "expected a jc_plant", jc_plant_free((jc_plant*)(void*)robot));
   EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "plant is NULL", jc_plant_time(NULL, &time));
@@ -272,14 +273,19 @@ static void test_kinematics(jc_robot* robot, jc_robot* ur10) {
   EXPECT_STATUS(JC_ERROR_UNREACHABLE, "", jc_inverse_kinematics(robot, far_pose, 16, kPosture, 6, q, 6, NULL));
   memcpy(skewed, pose, sizeof skewed);
   skewed[0] *= 1.1;
-  EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "not a rotation", jc_inverse_kinematics(robot, skewed, 16, kPosture, 6, q, 6, NULL));
+  EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "not a rotation",
+                jc_inverse_kinematics(robot, skewed, 16, kPosture, 6, q, 6, NULL));
   memcpy(skewed, pose, sizeof skewed);
   skewed[14] = 0.5;
-  EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "last row", jc_inverse_kinematics(robot, skewed, 16, kPosture, 6, q, 6, NULL));
+  EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "last row",
+                jc_inverse_kinematics(robot, skewed, 16, kPosture, 6, q, 6, NULL));
   skewed[14] = kNaN;
-  EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "pose[14] is NaN", jc_inverse_kinematics(robot, skewed, 16, kPosture, 6, q, 6, NULL));
-  EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "seed_len is 7", jc_inverse_kinematics(robot, pose, 16, kPosture, 7, q, 6, NULL));
-  EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "q is NULL", jc_inverse_kinematics(robot, pose, 16, kPosture, 6, NULL, 6, NULL));
+  EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "pose[14] is NaN",
+                jc_inverse_kinematics(robot, skewed, 16, kPosture, 6, q, 6, NULL));
+  EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "seed_len is 7",
+                jc_inverse_kinematics(robot, pose, 16, kPosture, 7, q, 6, NULL));
+  EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "q is NULL",
+                jc_inverse_kinematics(robot, pose, 16, kPosture, 6, NULL, 6, NULL));
 
   /* Every closed-form solution reaches the pose; the seed's own is among them. */
   EXPECT_OK(jc_inverse_kinematics_all(robot, pose, 16, kPosture, 6, solutions, 48, &count));
@@ -288,9 +294,12 @@ static void test_kinematics(jc_robot* robot, jc_robot* ur10) {
     EXPECT_OK(jc_forward_kinematics(robot, solutions + 6 * k, 6, pose_back, 16));
     CHECK(max_abs_difference(pose, pose_back, 16) < 1e-9);
   }
-  EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "at least 48", jc_inverse_kinematics_all(robot, pose, 16, kPosture, 6, solutions, 47, &count));
-  EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "count is NULL", jc_inverse_kinematics_all(robot, pose, 16, kPosture, 6, solutions, 48, NULL));
-  EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "", jc_inverse_kinematics_all(ur10, pose, 16, kPosture, 6, solutions, 48, &count));
+  EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "at least 48",
+                jc_inverse_kinematics_all(robot, pose, 16, kPosture, 6, solutions, 47, &count));
+  EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "count is NULL",
+                jc_inverse_kinematics_all(robot, pose, 16, kPosture, 6, solutions, 48, NULL));
+  EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "",
+                jc_inverse_kinematics_all(ur10, pose, 16, kPosture, 6, solutions, 48, &count));
 
   /* The Jacobian's linear rows are the derivatives of the tool position. */
   EXPECT_OK(jc_jacobian(robot, kPosture, 6, jacobian, 36));
@@ -336,13 +345,18 @@ static void test_errors_and_compensation(jc_robot* robot) {
   EXPECT_OK(jc_predict_joint_errors(robot, NULL, kPosture, 6, NULL, 0, errors_all, 6));
   EXPECT_OK(jc_predict_joint_errors(robot, " compliance , transmission_error ", kPosture, 6, NULL, 0, errors, 6));
   CHECK(same_bits(errors, errors_all, 6));
-  EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "'bogus'", jc_predict_joint_errors(robot, "compliance,bogus", kPosture, 6, NULL, 0, errors, 6));
-  EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "velocity_len is 3", jc_predict_joint_errors(robot, NULL, kPosture, 6, NULL, 3, errors, 6));
-  EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "command is NULL", jc_predict_joint_errors(robot, NULL, NULL, 6, NULL, 0, errors, 6));
-  EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "errors_len is 0", jc_predict_joint_errors(robot, NULL, kPosture, 6, NULL, 0, errors, 0));
+  EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "'bogus'",
+                jc_predict_joint_errors(robot, "compliance,bogus", kPosture, 6, NULL, 0, errors, 6));
+  EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "velocity_len is 3",
+                jc_predict_joint_errors(robot, NULL, kPosture, 6, NULL, 3, errors, 6));
+  EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "command is NULL",
+                jc_predict_joint_errors(robot, NULL, NULL, 6, NULL, 0, errors, 6));
+  EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "errors_len is 0",
+                jc_predict_joint_errors(robot, NULL, kPosture, 6, NULL, 0, errors, 0));
   memcpy(bad, velocity, sizeof bad);
   bad[5] = kNaN;
-  EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "velocity[5] is NaN", jc_predict_joint_errors(robot, NULL, kPosture, 6, bad, 6, errors, 6));
+  EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "velocity[5] is NaN",
+                jc_predict_joint_errors(robot, NULL, kPosture, 6, bad, 6, errors, 6));
 
   /* Conditions: a payload and a pushing wrench change the errors; zero restores them. */
   EXPECT_OK(jc_robot_set_payload(robot, 20.0, com, 3));
@@ -372,16 +386,21 @@ static void test_errors_and_compensation(jc_robot* robot) {
   CHECK(max_abs_difference(reference, kPosture, 6) > 1e-5);
   EXPECT_OK(jc_compensate_point(robot, "", kPosture, 6, NULL, 0, reference, 6, NULL));
   CHECK(same_bits(reference, kPosture, 6));
-  EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "planned[0] is NaN",
-                jc_compensate_point(robot, NULL, (const double[]){kNaN, 0, 0, 0, 0, 0}, 6, NULL, 0, reference, 6, NULL));
-  EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "reference_len is 7", jc_compensate_point(robot, NULL, kPosture, 6, NULL, 0, reference, 7, NULL));
-  EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "'nothing'", jc_compensate_point(robot, "nothing", kPosture, 6, NULL, 0, reference, 6, NULL));
+  EXPECT_STATUS(
+      JC_ERROR_INVALID_ARGUMENT, "planned[0] is NaN",
+      jc_compensate_point(robot, NULL, (const double[]){kNaN, 0, 0, 0, 0, 0}, 6, NULL, 0, reference, 6, NULL));
+  EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "reference_len is 7",
+                jc_compensate_point(robot, NULL, kPosture, 6, NULL, 0, reference, 7, NULL));
+  EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "'nothing'",
+                jc_compensate_point(robot, "nothing", kPosture, 6, NULL, 0, reference, 6, NULL));
 
   /* Solvers that fail say so. */
   EXPECT_OK(jc_robot_load_json(JOINTCOMP_TEST_URDF, kSoftParameters, &soft));
-  EXPECT_STATUS(JC_ERROR_SOLVER, "did not settle", jc_predict_joint_errors(soft, NULL, kPosture, 6, NULL, 0, errors, 6));
+  EXPECT_STATUS(JC_ERROR_SOLVER, "did not settle",
+                jc_predict_joint_errors(soft, NULL, kPosture, 6, NULL, 0, errors, 6));
   EXPECT_OK(jc_robot_load_json(JOINTCOMP_TEST_URDF, kWildParameters, &wild));
-  EXPECT_STATUS(JC_ERROR_SOLVER, "did not converge", jc_compensate_point(wild, NULL, kPosture, 6, NULL, 0, reference, 6, NULL));
+  EXPECT_STATUS(JC_ERROR_SOLVER, "did not converge",
+                jc_compensate_point(wild, NULL, kPosture, 6, NULL, 0, reference, 6, NULL));
   EXPECT_STATUS(JC_ERROR_SOLVER, "trajectory point 0",
                 jc_compensate_trajectory(wild, NULL, kPosture, 6, NULL, 0, reference, 6, NULL, NULL));
   EXPECT_OK(jc_robot_free(soft));
@@ -411,18 +430,23 @@ static void test_spiral(jc_robot* robot, jc_robot* bare) {
   EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "time_len", jc_spiral_plan(robot, NULL, 5, NULL, 0, NULL, 0, NULL, 0));
 
   /* The whole trajectory compensated at once equals its points compensated one by one. */
-  EXPECT_OK(jc_compensate_trajectory(robot, NULL, q, 6 * m, qd, 6 * m, references, 6 * m, &max_iterations, &max_correction));
+  EXPECT_OK(
+      jc_compensate_trajectory(robot, NULL, q, 6 * m, qd, 6 * m, references, 6 * m, &max_iterations, &max_correction));
   CHECK(max_iterations >= 2 && max_correction > 1e-5 && max_correction < 1e-2);
   for (k = 0; k < m; k += m / 7) {
     EXPECT_OK(jc_compensate_point(robot, NULL, q + 6 * k, 6, qd + 6 * k, 6, point_reference, 6, NULL));
     CHECK(same_bits(point_reference, references + 6 * k, 6));
   }
   EXPECT_OK(jc_compensate_trajectory(robot, "compliance", q, 6 * m, NULL, 0, references, 6 * m, NULL, NULL));
-  EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "multiple of 6", jc_compensate_trajectory(robot, NULL, q, 6 * m - 1, NULL, 0, references, 6 * m, NULL, NULL));
-  EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "velocities_len", jc_compensate_trajectory(robot, NULL, q, 6 * m, qd, 6, references, 6 * m, NULL, NULL));
-  EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "references_len", jc_compensate_trajectory(robot, NULL, q, 6 * m, NULL, 0, references, 6, NULL, NULL));
+  EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "multiple of 6",
+                jc_compensate_trajectory(robot, NULL, q, 6 * m - 1, NULL, 0, references, 6 * m, NULL, NULL));
+  EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "velocities_len",
+                jc_compensate_trajectory(robot, NULL, q, 6 * m, qd, 6, references, 6 * m, NULL, NULL));
+  EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "references_len",
+                jc_compensate_trajectory(robot, NULL, q, 6 * m, NULL, 0, references, 6, NULL, NULL));
   q[6 * 100 + 3] = kNaN;
-  EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "planned[603] is NaN", jc_compensate_trajectory(robot, NULL, q, 6 * m, NULL, 0, references, 6 * m, NULL, NULL));
+  EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "planned[603] is NaN",
+                jc_compensate_trajectory(robot, NULL, q, 6 * m, NULL, 0, references, 6 * m, NULL, NULL));
 
   /* The paper's experiment: both corrections reduce Ra and Rz as much as the paper's did (85 %, 48 %),
      the stiffness correction alone less; identical numbers from run to run. */
@@ -569,7 +593,8 @@ static void test_plant(jc_plant* plant) {
   EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "start_time is +infinity", jc_plant_reset(plant, kPosture, 6, kInf));
   EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "command_len is 2", jc_plant_reset(plant, kPosture, 2, 0.0));
   EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "velocity is NULL", jc_plant_set_reference(plant, kPosture, 6, NULL, 6));
-  EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "position_len is 1", jc_plant_set_reference(plant, kPosture, 1, velocity, 6));
+  EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "position_len is 1",
+                jc_plant_set_reference(plant, kPosture, 1, velocity, 6));
   EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "wrench_len is 5", jc_plant_set_tool_wrench(plant, wrench, 5));
   EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "mass is negative", jc_plant_set_payload(plant, -2.0, com, 3));
   EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "com_len is 0", jc_plant_set_payload(plant, 2.0, com, 0));
@@ -591,8 +616,8 @@ static char* report_text(jc_report* report, int summary) {
     return NULL;
   text = (char*)malloc((size_t)length + 1);
   if (!text) return NULL;
-  if ((summary ? jc_report_summary(report, text, length + 1, &length) : jc_report_json(report, text, length + 1, &length)) !=
-      JC_OK) {
+  if ((summary ? jc_report_summary(report, text, length + 1, &length)
+               : jc_report_json(report, text, length + 1, &length)) != JC_OK) {
     free(text);
     return NULL;
   }
@@ -632,8 +657,9 @@ static void test_identification(jc_robot* robot, jc_robot* bare) {
   EXPECT_OK(jc_simulate_campaign(robot, "{\"protocol\": \"stiffness\", \"seed\": 4}", stiffness));
   EXPECT_OK(jc_simulate_campaign(robot, "{\"protocol\": \"random\", \"seed\": 5, \"count\": 80}", poses));
   EXPECT_OK(jc_simulate_campaign(robot, "{\"protocol\": \"random\", \"seed\": 6, \"count\": 40}", held));
-  EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "truth is NULL" , jc_simulate_campaign(NULL, "{}", sweep));
-  EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "campaign_path is NULL", jc_simulate_campaign(robot, "{\"protocol\": \"random\"}", NULL));
+  EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "truth is NULL", jc_simulate_campaign(NULL, "{}", sweep));
+  EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "campaign_path is NULL",
+                jc_simulate_campaign(robot, "{\"protocol\": \"random\"}", NULL));
   EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "protocol: is required", jc_simulate_campaign(robot, NULL, sweep));
   EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "not valid JSON", jc_simulate_campaign(robot, "{\"protocol\": ", sweep));
   EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "JSON object", jc_simulate_campaign(robot, "[1, 2]", sweep));
@@ -703,8 +729,8 @@ static void test_identification(jc_robot* robot, jc_robot* bare) {
   report = NULL;
   EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "options_json.method",
                 jc_identify_stiffness(robot, stiffness, "{\"method\": \"best\"}", &identified, &report));
-  EXPECT_STATUS(JC_ERROR_FILE, "format", jc_identify_stiffness(robot, temporary_file("not a campaign\n"), NULL,
-                                                               &identified, &report));
+  EXPECT_STATUS(JC_ERROR_FILE, "format",
+                jc_identify_stiffness(robot, temporary_file("not a campaign\n"), NULL, &identified, &report));
 
   /* Calibration with a held-out campaign, then saving and reloading the calibrated robot. */
   sprintf(lists, "%s\n", held);
@@ -737,19 +763,22 @@ static void test_identification(jc_robot* robot, jc_robot* bare) {
 
   /* Discovery: the truth is the model, so nothing is missing and nothing may be added. */
   sprintf(lists, "%s\r\n\n", poses);
-  EXPECT_OK(jc_discover(robot, lists, held, "{\"max_steps\": 2, \"types\": [\"offset\", \"harmonic\"]}", &extended,
-                        &report));
+  EXPECT_OK(
+      jc_discover(robot, lists, held, "{\"max_steps\": 2, \"types\": [\"offset\", \"harmonic\"]}", &extended, &report));
   text = report_text(report, 0);
   CHECK(text != NULL && strstr(text, "jointcomp-discovery-report/1") != NULL && strstr(text, "\"steps\": []") != NULL);
   free(text);
   EXPECT_OK(jc_report_free(report));
   EXPECT_OK(jc_robot_free(extended));
-  EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "campaign_paths names no file", jc_discover(robot, "\n\n", NULL, NULL, NULL, NULL));
+  EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "campaign_paths names no file",
+                jc_discover(robot, "\n\n", NULL, NULL, NULL, NULL));
   EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "campaign_paths is NULL", jc_discover(robot, NULL, NULL, NULL, NULL, NULL));
   EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "unknown effect type 'gremlin'",
                 jc_discover(robot, poses, NULL, "{\"types\": [\"gremlin\"]}", NULL, NULL));
-  EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "options_json.folds", jc_discover(robot, poses, NULL, "{\"folds\": 1}", NULL, NULL));
-  EXPECT_STATUS(JC_ERROR_WRONG_HANDLE, "expected a jc_robot", jc_discover((jc_robot*)(void*)held, poses, NULL, NULL, NULL, NULL));
+  EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "options_json.folds",
+                jc_discover(robot, poses, NULL, "{\"folds\": 1}", NULL, NULL));
+  EXPECT_STATUS(JC_ERROR_WRONG_HANDLE, "expected a jc_robot",
+                jc_discover((jc_robot*)(void*)held, poses, NULL, NULL, NULL, NULL));
 
   remove(sweep);
   remove(stiffness);

@@ -8,12 +8,12 @@
 #include <vector>
 
 #include <gtest/gtest.h>
-#include <unistd.h>
 #include <jointcomp/jointcomp.h>
+#include <unistd.h>
 
+#include "model/experiment/campaign_simulation.hpp"
 #include "model/experiment/spiral_experiment.hpp"
 #include "model/identify/calibration_report.hpp"
-#include "model/experiment/campaign_simulation.hpp"
 #include "model/identify/discovery.hpp"
 #include "model/identify/identification_report.hpp"
 #include "model/io/atomic_file.hpp"
@@ -30,7 +30,9 @@ const std::string kUrdf = std::string(JOINTCOMP_DATA_DIR) + "/robots/rx170.urdf"
 const std::string kParameters = std::string(JOINTCOMP_DATA_DIR) + "/params/rx170.json";
 constexpr double kDegree = 3.14159265358979323846 / 180.0;
 
-bool sameBits(const double* a, const double* b, std::size_t count) { return std::memcmp(a, b, count * sizeof(double)) == 0; }
+bool sameBits(const double* a, const double* b, std::size_t count) {
+  return std::memcmp(a, b, count * sizeof(double)) == 0;
+}
 
 std::vector<double> flatten(const std::vector<JointVector>& rows) {
   std::vector<double> flat;
@@ -218,8 +220,8 @@ TEST_F(CapiMatchesCore, SpiralPlanTrajectoryCompensationAndExperiment) {
   EXPECT_TRUE(sameBits(flatten(plan.qd).data(), qd.data(), 6 * m));
 
   std::vector<JointVector> references;
-  const TrajectoryCompensationReport report =
-      compensateTrajectory(*model_, model_->loadsAnd({"compliance", "transmission_error"}), plan.q, plan.qd, references);
+  const TrajectoryCompensationReport report = compensateTrajectory(
+      *model_, model_->loadsAnd({"compliance", "transmission_error"}), plan.q, plan.qd, references);
   std::vector<double> api_references(6 * m);
   int32_t max_iterations = 0;
   double max_correction = 0.0;
@@ -383,9 +385,9 @@ std::string scratchPath(const std::string& stem) {
 // the core gives.
 TEST_F(CapiMatchesCore, SimulationIdentificationAndCalibration) {
   const std::string sweep_path = scratchPath("sweep");
-  ASSERT_EQ(jc_simulate_campaign(handle_, R"({"protocol": "joint2-sweep", "seed": 9, "step_deg": 0.5})",
-                                 sweep_path.c_str()),
-            JC_OK)
+  ASSERT_EQ(
+      jc_simulate_campaign(handle_, R"({"protocol": "joint2-sweep", "seed": 9, "step_deg": 0.5})", sweep_path.c_str()),
+      JC_OK)
       << jc_last_error();
   CampaignSimulationSpec spec = defaultCampaignSpec(CampaignProtocol::JointSweep);
   spec.seed = 9;
@@ -396,13 +398,15 @@ TEST_F(CapiMatchesCore, SimulationIdentificationAndCalibration) {
 
   jc_robot* identified = nullptr;
   jc_report* report = nullptr;
-  ASSERT_EQ(jc_identify_transmission_error(handle_, sweep_path.c_str(), R"({"orders": [1, 2, 3]})", &identified, &report),
-            JC_OK)
+  ASSERT_EQ(
+      jc_identify_transmission_error(handle_, sweep_path.c_str(), R"({"orders": [1, 2, 3]})", &identified, &report),
+      JC_OK)
       << jc_last_error();
   TransmissionIdentificationOptions options;
   options.candidate_orders = {1, 2, 3};
   // The library reads the campaign back from its file (millimetres and degrees in text): so does the core.
-  const TransmissionIdentificationResult result = identifyTransmissionError(*model_, readCampaignFile(sweep_path), options);
+  const TransmissionIdentificationResult result =
+      identifyTransmissionError(*model_, readCampaignFile(sweep_path), options);
   EXPECT_EQ(parametersOf(identified), parametersToJson(withIdentifiedHarmonics(*model_, result, sweep_path), drives_));
   ReportSources sources;
   sources.campaign = sweep_path;
@@ -414,7 +418,8 @@ TEST_F(CapiMatchesCore, SimulationIdentificationAndCalibration) {
   EXPECT_EQ(jc_robot_free(identified), JC_OK);
 
   const std::string poses_path = scratchPath("poses");
-  ASSERT_EQ(jc_simulate_campaign(handle_, R"({"protocol": "random", "seed": 10, "count": 60})", poses_path.c_str()), JC_OK)
+  ASSERT_EQ(jc_simulate_campaign(handle_, R"({"protocol": "random", "seed": 10, "count": 60})", poses_path.c_str()),
+            JC_OK)
       << jc_last_error();
   jc_robot* calibrated = nullptr;
   ASSERT_EQ(jc_calibrate(handle_, poses_path.c_str(), nullptr, R"({"loss": "none"})", &calibrated, nullptr), JC_OK)
@@ -434,9 +439,9 @@ TEST_F(CapiMatchesCore, SimulationIdentificationAndCalibration) {
   EXPECT_EQ(jc_robot_free(calibrated), JC_OK);
 
   jc_robot* extended = nullptr;
-  ASSERT_EQ(jc_discover(handle_, poses_path.c_str(), nullptr, R"({"max_steps": 1, "types": ["offset"]})", &extended,
-                        nullptr),
-            JC_OK)
+  ASSERT_EQ(
+      jc_discover(handle_, poses_path.c_str(), nullptr, R"({"max_steps": 1, "types": ["offset"]})", &extended, nullptr),
+      JC_OK)
       << jc_last_error();
   DiscoveryOptions discovery;
   discovery.max_steps = 1;

@@ -52,8 +52,8 @@ std::string lastError() { return jc_last_error(); }
                                          << jc_status_name(expected) << " (message: " << message << ")";
   }
   if (message.find(function) == std::string::npos || message.find(fragment) == std::string::npos) {
-    return ::testing::AssertionFailure() << function << ": the message '" << message << "' does not name "
-                                         << function << " or does not contain '" << fragment << "'";
+    return ::testing::AssertionFailure() << function << ": the message '" << message << "' does not name " << function
+                                         << " or does not contain '" << fragment << "'";
   }
   return ::testing::AssertionSuccess();
 }
@@ -168,7 +168,8 @@ std::vector<RobotCall> everyRobotCall() {
        "truth"},
       {"jc_identify_stiffness",
        [](jc_robot* r, Buffers& b) {
-         return identification(b, [r](jc_robot** o, jc_report** p) { return jc_identify_stiffness(r, "c.csv", nullptr, o, p); });
+         return identification(
+             b, [r](jc_robot** o, jc_report** p) { return jc_identify_stiffness(r, "c.csv", nullptr, o, p); });
        },
        "nominal"},
       {"jc_identify_transmission_error",
@@ -179,12 +180,14 @@ std::vector<RobotCall> everyRobotCall() {
        "nominal"},
       {"jc_calibrate",
        [](jc_robot* r, Buffers& b) {
-         return identification(b, [r](jc_robot** o, jc_report** p) { return jc_calibrate(r, "c.csv", nullptr, nullptr, o, p); });
+         return identification(
+             b, [r](jc_robot** o, jc_report** p) { return jc_calibrate(r, "c.csv", nullptr, nullptr, o, p); });
        },
        "nominal"},
       {"jc_discover",
        [](jc_robot* r, Buffers& b) {
-         return identification(b, [r](jc_robot** o, jc_report** p) { return jc_discover(r, "c.csv", nullptr, nullptr, o, p); });
+         return identification(
+             b, [r](jc_robot** o, jc_report** p) { return jc_discover(r, "c.csv", nullptr, nullptr, o, p); });
        },
        "nominal"},
       {"jc_robot_free", [](jc_robot* r, Buffers&) { return jc_robot_free(r); }},
@@ -253,9 +256,9 @@ protected:
     std::memset(&results, 0, sizeof results);
     int32_t iterations = 0;
     ASSERT_EQ(jc_forward_kinematics(healthy_robot_, kPosture, kDof, results.pose, 16), JC_OK) << lastError();
-    ASSERT_EQ(jc_compensate_point(healthy_robot_, nullptr, kPosture, kDof, nullptr, 0, results.reference, kDof,
-                                  &iterations),
-              JC_OK)
+    ASSERT_EQ(
+        jc_compensate_point(healthy_robot_, nullptr, kPosture, kDof, nullptr, 0, results.reference, kDof, &iterations),
+        JC_OK)
         << lastError();
     ASSERT_EQ(jc_plant_reset(healthy_plant_, kPosture, kDof, 0.0), JC_OK) << lastError();
     const double at_rest[kDof] = {};
@@ -461,8 +464,9 @@ TEST_F(CapiMisuse, OptionalVelocitiesMustBeConsistent) {
                  jc_predict_joint_errors(robot_, nullptr, kPosture, kDof, kPosture, 3, buffers.a.data(), kDof));
   EXPECT_INVALID("jc_predict_joint_errors", "velocity",
                  jc_predict_joint_errors(robot_, nullptr, kPosture, kDof, nan_velocity, kDof, buffers.a.data(), kDof));
-  EXPECT_INVALID("jc_compensate_point", "velocity",
-                 jc_compensate_point(robot_, nullptr, kPosture, kDof, kPosture, -kDof, buffers.a.data(), kDof, nullptr));
+  EXPECT_INVALID(
+      "jc_compensate_point", "velocity",
+      jc_compensate_point(robot_, nullptr, kPosture, kDof, kPosture, -kDof, buffers.a.data(), kDof, nullptr));
   EXPECT_TRUE(buffers.untouched());
 }
 
@@ -471,8 +475,8 @@ TEST_F(CapiMisuse, EffectSelectionsNameRegisteredTypes) {
   for (const char* effects : {"stiffness", "compliance,", "compliance;transmission_error", "COMPLIANCE", "\t x"}) {
     const std::string text = effects;
     const bool only_separators_and_known = text == "compliance,";
-    const jc_status status = jc_compensate_point(robot_, effects, kPosture, kDof, nullptr, 0, buffers.a.data(), kDof,
-                                                 nullptr);
+    const jc_status status =
+        jc_compensate_point(robot_, effects, kPosture, kDof, nullptr, 0, buffers.a.data(), kDof, nullptr);
     if (only_separators_and_known) {
       EXPECT_EQ(status, JC_OK) << "an empty item in the list is skipped: " << lastError();
     } else {
@@ -491,8 +495,7 @@ TEST_F(CapiMisuse, TrajectoriesRefuseBadShapes) {
   };
   const int32_t good = 4 * kDof;
   EXPECT_INVALID("jc_compensate_trajectory", "planned", trajectory(nullptr, good, nullptr, 0, buffers.a.data(), good));
-  EXPECT_INVALID("jc_compensate_trajectory", "references",
-                 trajectory(planned.data(), good, nullptr, 0, nullptr, good));
+  EXPECT_INVALID("jc_compensate_trajectory", "references", trajectory(planned.data(), good, nullptr, 0, nullptr, good));
   for (int32_t length : {0, 1, kDof - 1, good - 1, good + 1, -kDof, -good, kMostNegativeLength, kHugeLength}) {
     EXPECT_INVALID("jc_compensate_trajectory", "_len",
                    trajectory(planned.data(), length, nullptr, 0, buffers.a.data(), length))
@@ -527,7 +530,8 @@ TEST_F(CapiMisuse, PosesMustBeFiniteRigidTransforms) {
   const auto ik_all = [&](const double* p, int32_t p_len) {
     return jc_inverse_kinematics_all(robot_, p, p_len, kPosture, kDof, buffers.a.data(), 8 * kDof, &buffers.integer);
   };
-  for (const auto& call : {std::function<jc_status(const double*, int32_t)>(ik), std::function<jc_status(const double*, int32_t)>(ik_all)}) {
+  for (const auto& call : {std::function<jc_status(const double*, int32_t)>(ik),
+                           std::function<jc_status(const double*, int32_t)>(ik_all)}) {
     EXPECT_EQ(call(nullptr, 16), JC_ERROR_INVALID_ARGUMENT);
     for (int32_t length : wrongLengths(16)) EXPECT_EQ(call(pose, length), JC_ERROR_INVALID_ARGUMENT) << length;
     for (int k : {0, 3, 5, 11, 15}) {
@@ -542,9 +546,9 @@ TEST_F(CapiMisuse, PosesMustBeFiniteRigidTransforms) {
     }
   }
   // Too small for the eight solutions: refused before anything is written.
-  EXPECT_INVALID("jc_inverse_kinematics_all", "solutions",
-                 jc_inverse_kinematics_all(robot_, pose, 16, kPosture, kDof, buffers.a.data(), 8 * kDof - 1,
-                                           &buffers.integer));
+  EXPECT_INVALID(
+      "jc_inverse_kinematics_all", "solutions",
+      jc_inverse_kinematics_all(robot_, pose, 16, kPosture, kDof, buffers.a.data(), 8 * kDof - 1, &buffers.integer));
   EXPECT_INVALID("jc_inverse_kinematics_all", "solutions",
                  jc_inverse_kinematics_all(robot_, pose, 16, kPosture, kDof, buffers.a.data(), kMostNegativeLength,
                                            &buffers.integer));
@@ -693,7 +697,8 @@ TEST_F(CapiMisuse, SpiralCallsRefuseBadOutputs) {
   }
   EXPECT_INVALID("jc_spiral_plan", "time", jc_spiral_plan(robot_, nullptr, m, nullptr, 0, nullptr, 0, nullptr, 0));
   for (int32_t length : wrongLengths(15)) {
-    EXPECT_INVALID("jc_spiral_experiment", "metrics", jc_spiral_experiment(robot_, 0, buffers.a.data(), length, nullptr, 0));
+    EXPECT_INVALID("jc_spiral_experiment", "metrics",
+                   jc_spiral_experiment(robot_, 0, buffers.a.data(), length, nullptr, 0));
   }
   for (int32_t use_plant : {-1, 2, kHugeLength}) {
     EXPECT_INVALID("jc_spiral_experiment", "use_plant",

@@ -47,12 +47,12 @@ static void posture(int k, double q[6]) {
   for (j = 0; j < 6; ++j) q[j] = degrees[j] * DEG;
 }
 
-#define CALL(results, call)                                                       \
-  do {                                                                            \
-    if ((call) != JC_OK) {                                                        \
-      fprintf(stderr, "%s failed: %s\n", #call, jc_last_error());                 \
-      (results)->failed = 1;                                                      \
-    }                                                                             \
+#define CALL(results, call)                                       \
+  do {                                                            \
+    if ((call) != JC_OK) {                                        \
+      fprintf(stderr, "%s failed: %s\n", #call, jc_last_error()); \
+      (results)->failed = 1;                                      \
+    }                                                             \
   } while (0)
 
 static void* work(void* argument) {
@@ -115,9 +115,9 @@ static int same_results(const Results* a, const Results* b, int with_experiment)
     return 0;
   }
   if (memcmp(a->trajectory_references, b->trajectory_references, sizeof(double) * 6 * (size_t)sample_count)) return 0;
-  if (with_experiment && (memcmp(a->metrics, b->metrics, sizeof a->metrics) ||
-                          memcmp(a->plant_q, b->plant_q, sizeof a->plant_q) ||
-                          memcmp(a->plant_state, b->plant_state, sizeof a->plant_state))) {
+  if (with_experiment &&
+      (memcmp(a->metrics, b->metrics, sizeof a->metrics) || memcmp(a->plant_q, b->plant_q, sizeof a->plant_q) ||
+       memcmp(a->plant_state, b->plant_state, sizeof a->plant_state))) {
     return 0;
   }
   return 1;

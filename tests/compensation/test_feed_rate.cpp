@@ -51,14 +51,11 @@ void expectWithinLimits(const std::vector<FeedRateSample>& samples, const FeedRa
     EXPECT_LE(std::abs(sample.s_ddot), spec.acceleration * (1.0 + slack));
   }
   EXPECT_LE(maxDifferenceQuotient(samples, [](const auto& x) { return x.s; }), spec.speed * (1.0 + slack));
-  EXPECT_LE(maxDifferenceQuotient(samples, [](const auto& x) { return x.s_dot; }),
-            spec.acceleration * (1.0 + slack));
-  EXPECT_LE(maxDifferenceQuotient(samples, [](const auto& x) { return x.s_ddot; }),
-            spec.jerk * (1.0 + 1e-6));
+  EXPECT_LE(maxDifferenceQuotient(samples, [](const auto& x) { return x.s_dot; }), spec.acceleration * (1.0 + slack));
+  EXPECT_LE(maxDifferenceQuotient(samples, [](const auto& x) { return x.s_ddot; }), spec.jerk * (1.0 + 1e-6));
 }
 
-void expectStartsAndEndsAtRest(const Path& path, const std::vector<FeedRateSample>& samples,
-                               const FeedRateSpec& spec) {
+void expectStartsAndEndsAtRest(const Path& path, const std::vector<FeedRateSample>& samples, const FeedRateSpec& spec) {
   ASSERT_GE(samples.size(), 2u);
   const FeedRateSample& first = samples.front();
   const FeedRateSample& last = samples.back();
@@ -96,8 +93,8 @@ TEST(PlanFeedRate, PaperSpiralRespectsLimitsAndEndsAtRestAtTheEnd) {
   expectWithinLimits(samples, spec);
   expectStartsAndEndsAtRest(path, samples, spec);
   // Cruise is reached and held at the commanded speed.
-  const auto cruising = std::count_if(samples.begin(), samples.end(),
-                                      [&](const auto& x) { return x.s_dot == spec.speed; });
+  const auto cruising =
+      std::count_if(samples.begin(), samples.end(), [&](const auto& x) { return x.s_dot == spec.speed; });
   EXPECT_GT(cruising, static_cast<long>(samples.size() * 9 / 10));
 }
 
@@ -105,15 +102,13 @@ TEST(PlanFeedRate, LongPathTakesTheClosedFormTime) {
   // Symmetric S-curve reaching both limits: T = L / v + v / a + a / j.
   const Path path = paperSpiral();
   const FeedRateSpec spec;
-  const double expected = path.length() / spec.speed + spec.speed / spec.acceleration +
-                          spec.acceleration / spec.jerk;
+  const double expected = path.length() / spec.speed + spec.speed / spec.acceleration + spec.acceleration / spec.jerk;
   const SCurveProfile profile(path.length(), spec);
   EXPECT_NEAR(profile.duration(), expected, 1e-12);
   EXPECT_EQ(profile.peakSpeed(), spec.speed);
   EXPECT_NEAR(profile.peakAcceleration(), spec.acceleration, 1e-15);
   const std::vector<FeedRateSample> samples = planFeedRate(path, spec);
-  EXPECT_NEAR(samples.back().t, std::ceil(expected / spec.controller_period) * spec.controller_period,
-              1e-9);
+  EXPECT_NEAR(samples.back().t, std::ceil(expected / spec.controller_period) * spec.controller_period, 1e-9);
   // The sample before last is still moving: no padding at rest beyond one period.
   EXPECT_LT(samples[samples.size() - 2].s, path.length());
 
@@ -121,8 +116,7 @@ TEST(PlanFeedRate, LongPathTakesTheClosedFormTime) {
   FeedRateSpec slow;
   slow.speed = 0.005;
   const SCurveProfile slow_profile(path.length(), slow);
-  EXPECT_NEAR(slow_profile.duration(),
-              path.length() / slow.speed + 2.0 * std::sqrt(slow.speed / slow.jerk), 1e-10);
+  EXPECT_NEAR(slow_profile.duration(), path.length() / slow.speed + 2.0 * std::sqrt(slow.speed / slow.jerk), 1e-10);
   EXPECT_NEAR(slow_profile.peakAcceleration(), std::sqrt(slow.speed * slow.jerk), 1e-15);
   expectWithinLimits(planFeedRate(path, slow), slow);
 }
@@ -172,11 +166,10 @@ TEST(SCurveProfile, DerivativesAreFiniteDifferencesAndContinuous) {
       EXPECT_LE(std::abs(after.s_ddot - before.s_ddot), 2.0 * h * spec.jerk * (1.0 + 1e-6));
     }
     // Phase boundaries, approached from both sides.
-    for (const double boundary :
-         {profile.jerkTime(), profile.accelerationTime() - profile.jerkTime(), profile.accelerationTime(),
-          profile.accelerationTime() + profile.cruiseTime(),
-          profile.duration() - profile.accelerationTime() + profile.jerkTime(),
-          profile.duration() - profile.jerkTime()}) {
+    for (const double boundary : {profile.jerkTime(), profile.accelerationTime() - profile.jerkTime(),
+                                  profile.accelerationTime(), profile.accelerationTime() + profile.cruiseTime(),
+                                  profile.duration() - profile.accelerationTime() + profile.jerkTime(),
+                                  profile.duration() - profile.jerkTime()}) {
       const SCurveProfile::State left = profile.at(boundary - 1e-12);
       const SCurveProfile::State right = profile.at(boundary + 1e-12);
       EXPECT_NEAR(left.s, right.s, 1e-13);
@@ -210,19 +203,18 @@ TEST(PlanFeedRate, CartesianVelocityAndAccelerationAreDifferencesOfPositions) {
         (samples[k + 1].position - 2.0 * samples[k].position + samples[k - 1].position) / (dt * dt);
     EXPECT_LT((samples[k].velocity - velocity).norm(), 1e-6) << "t = " << samples[k].t;
     // A second difference straddling a jerk switch errs by up to dt * jerk / 6.
-    EXPECT_LT((samples[k].acceleration - acceleration).norm(), dt * spec.jerk / 2.0)
-        << "t = " << samples[k].t;
+    EXPECT_LT((samples[k].acceleration - acceleration).norm(), dt * spec.jerk / 2.0) << "t = " << samples[k].t;
     EXPECT_NEAR(samples[k].velocity.norm(), samples[k].s_dot, 1e-15);
     EXPECT_EQ(samples[k].position, path.pointAt(samples[k].s));
   }
   // At cruise the acceleration is centripetal, v^2 times the curvature 1 / (R sqrt(1 + b^2)): about
   // 0.037 m/s^2 on the tight first turn of the paper's spiral.
-  const auto inner_turn = std::find_if(samples.begin(), samples.end(),
-                                       [&](const auto& x) { return x.s_ddot == 0.0 && x.s_dot > 0.0; });
+  const auto inner_turn =
+      std::find_if(samples.begin(), samples.end(), [&](const auto& x) { return x.s_ddot == 0.0 && x.s_dot > 0.0; });
   ASSERT_NE(inner_turn, samples.end());
   const double radius = (inner_turn->position - Eigen::Vector3d(0.9, 0.0, 0.2)).norm();
-  EXPECT_NEAR(inner_turn->acceleration.norm(),
-              spec.speed * spec.speed / (radius * std::sqrt(1.0 + 0.15 * 0.15)), 1e-12);
+  EXPECT_NEAR(inner_turn->acceleration.norm(), spec.speed * spec.speed / (radius * std::sqrt(1.0 + 0.15 * 0.15)),
+              1e-12);
 }
 
 TEST(PlanFeedRate, IsDeterministic) {

@@ -43,13 +43,12 @@ TEST(ZDeviation, RzIgnoresAnOffsetAndRaDoesNot) {
 
 TEST(AccuracyMetrics, ByHand) {
   // Norms 5, 2 and 0 mm (a 3-4-5 triangle, a pure Z error, no error).
-  const std::vector<Eigen::Vector3d> errors = {Eigen::Vector3d(3e-3, 4e-3, 0.0),
-                                               Eigen::Vector3d(0.0, 0.0, -2e-3),
+  const std::vector<Eigen::Vector3d> errors = {Eigen::Vector3d(3e-3, 4e-3, 0.0), Eigen::Vector3d(0.0, 0.0, -2e-3),
                                                Eigen::Vector3d::Zero()};
   const AccuracyMetrics metrics = accuracyMetrics(errors);
-  EXPECT_NEAR(metrics.ra, 2e-3 / 3.0, 1e-18);         // z = 0, -2, 0 mm
-  EXPECT_NEAR(metrics.rz, 2e-3, 1e-18);               // 0 - (-2) mm
-  EXPECT_NEAR(metrics.mean, 7e-3 / 3.0, 1e-18);       // (5 + 2 + 0) / 3 mm
+  EXPECT_NEAR(metrics.ra, 2e-3 / 3.0, 1e-18);    // z = 0, -2, 0 mm
+  EXPECT_NEAR(metrics.rz, 2e-3, 1e-18);          // 0 - (-2) mm
+  EXPECT_NEAR(metrics.mean, 7e-3 / 3.0, 1e-18);  // (5 + 2 + 0) / 3 mm
   EXPECT_NEAR(metrics.max, 5e-3, 1e-18);
   EXPECT_NEAR(metrics.rms, std::sqrt(29.0 / 3.0) * 1e-3, 1e-18);  // sqrt((25 + 4 + 0) / 3) mm
 }
@@ -59,8 +58,8 @@ TEST(AccuracyMetrics, AgreesWithTheZFunctionsAndTheMeanSquareIdentity) {
   std::vector<double> z;
   for (int k = 0; k < 500; ++k) {
     // A spread of deterministic errors of a tenth of a millimetre.
-    const Eigen::Vector3d error = 1e-4 * Eigen::Vector3d(std::sin(0.3 * k), std::cos(1.7 * k),
-                                                         std::sin(0.11 * k + 0.4) - 0.2);
+    const Eigen::Vector3d error =
+        1e-4 * Eigen::Vector3d(std::sin(0.3 * k), std::cos(1.7 * k), std::sin(0.11 * k + 0.4) - 0.2);
     errors.push_back(error);
     z.push_back(error.z());
   }

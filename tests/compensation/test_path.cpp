@@ -125,10 +125,9 @@ TEST(LogarithmicSpiral, ArcLengthBetweenPointsIsTheirDifferenceInS) {
     const Eigen::Vector3d offset = path.pointAt(s) - spec.centre;
     return std::log(offset.head<2>().norm() / spec.a) / spec.b;
   };
-  for (const auto& [s1, s2] : std::vector<std::pair<double, double>>{
-           {0.0, 0.1}, {0.1, 0.45}, {0.3, 0.9}, {0.0, path.length()}}) {
-    EXPECT_NEAR(chordLength(spec, angle_of(s1), angle_of(s2), 100000), s2 - s1, 1e-9)
-        << s1 << " to " << s2;
+  for (const auto& [s1, s2] :
+       std::vector<std::pair<double, double>>{{0.0, 0.1}, {0.1, 0.45}, {0.3, 0.9}, {0.0, path.length()}}) {
+    EXPECT_NEAR(chordLength(spec, angle_of(s1), angle_of(s2), 100000), s2 - s1, 1e-9) << s1 << " to " << s2;
   }
   // Consecutive samples a small step apart are that step apart (chord = arc to O(step^3)).
   const double step = 1e-4;
@@ -163,8 +162,7 @@ TEST(LogarithmicSpiral, CurvatureVectorIsTheDerivativeOfTheTangent) {
       EXPECT_NEAR(curvature.dot(path.tangentAt(s)), 0.0, 1e-12);
       // Textbook curvature of a logarithmic spiral: 1 / (R sqrt(1 + b^2)).
       const double radius = (path.pointAt(s) - spec.centre).norm();
-      EXPECT_NEAR(curvature.norm(), 1.0 / (radius * std::sqrt(1.0 + spec.b * spec.b)),
-                  1e-12 * curvature.norm());
+      EXPECT_NEAR(curvature.norm(), 1.0 / (radius * std::sqrt(1.0 + spec.b * spec.b)), 1e-12 * curvature.norm());
       // It points to the inside of the turn: towards the centre.
       EXPECT_LT(curvature.dot(path.pointAt(s) - spec.centre), 0.0);
     }
@@ -222,17 +220,15 @@ TEST(StraightLine, IsTheSegmentWalkedAtUnitSpeed) {
 TEST(StraightLine, RejectsBadEnds) {
   const Eigen::Vector3d point(1.0, 2.0, 3.0);
   expectInvalidArgument([&] { straightLine(point, point); }, {"straightLine", "zero-length"});
-  expectInvalidArgument([&] { straightLine(Eigen::Vector3d(std::nan(""), 0, 0), point); },
-                        {"straightLine", "start"});
-  expectInvalidArgument(
-      [&] { straightLine(point, Eigen::Vector3d(0, std::numeric_limits<double>::infinity(), 0)); },
-      {"straightLine", "end"});
+  expectInvalidArgument([&] { straightLine(Eigen::Vector3d(std::nan(""), 0, 0), point); }, {"straightLine", "start"});
+  expectInvalidArgument([&] { straightLine(point, Eigen::Vector3d(0, std::numeric_limits<double>::infinity(), 0)); },
+                        {"straightLine", "end"});
 }
 
 TEST(Polyline, InterpolatesLinearlyByArcLength) {
   // An L: 0.3 m along x, then 0.4 m along z, with a duplicated corner that must not matter.
-  const Path path = polyline({Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(0.3, 0, 0),
-                              Eigen::Vector3d(0.3, 0, 0), Eigen::Vector3d(0.3, 0, 0.4)});
+  const Path path = polyline(
+      {Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(0.3, 0, 0), Eigen::Vector3d(0.3, 0, 0), Eigen::Vector3d(0.3, 0, 0.4)});
   EXPECT_DOUBLE_EQ(path.length(), 0.7);
   EXPECT_LT((path.pointAt(0.15) - Eigen::Vector3d(0.15, 0, 0)).norm(), 1e-15);
   EXPECT_LT((path.pointAt(0.3) - Eigen::Vector3d(0.3, 0, 0)).norm(), 1e-15);
@@ -241,8 +237,8 @@ TEST(Polyline, InterpolatesLinearlyByArcLength) {
   EXPECT_LT((path.tangentAt(0.3) - Eigen::Vector3d::UnitZ()).norm(), 1e-15);  // the segment ahead
   EXPECT_LT((path.tangentAt(0.7) - Eigen::Vector3d::UnitZ()).norm(), 1e-15);
   // A repeated last point must not leave a zero-length segment at the end.
-  const Path repeated_end = polyline({Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(0, 0.2, 0),
-                                      Eigen::Vector3d(0, 0.2, 0)});
+  const Path repeated_end =
+      polyline({Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(0, 0.2, 0), Eigen::Vector3d(0, 0.2, 0)});
   EXPECT_EQ(repeated_end.pointAt(repeated_end.length()), Eigen::Vector3d(0, 0.2, 0));
   EXPECT_EQ(repeated_end.tangentAt(repeated_end.length()), Eigen::Vector3d::UnitY());
   // Tangent is the finite difference of pointAt away from the corner.
@@ -255,8 +251,11 @@ TEST(Polyline, InterpolatesLinearlyByArcLength) {
 
 TEST(Polyline, RejectsDegenerateInput) {
   expectInvalidArgument([] { polyline({}); }, {"polyline", "at least 2"});
-  expectInvalidArgument([] { polyline({Eigen::Vector3d(1, 1, 1), Eigen::Vector3d(1, 1, 1)}); },
-                        {"polyline", "at least 2"});
+  expectInvalidArgument(
+      [] {
+        polyline({Eigen::Vector3d(1, 1, 1), Eigen::Vector3d(1, 1, 1)});
+      },
+      {"polyline", "at least 2"});
   expectInvalidArgument(
       [] {
         polyline({Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(1, 0, 0), Eigen::Vector3d(std::nan(""), 0, 0)});

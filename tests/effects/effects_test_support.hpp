@@ -28,7 +28,8 @@ inline std::string rx170UrdfPath() { return std::string(JOINTCOMP_DATA_DIR) + "/
 inline std::string rx170ParametersPath() { return std::string(JOINTCOMP_DATA_DIR) + "/params/rx170.json"; }
 
 inline std::shared_ptr<const Robot> rx170() {
-  static const std::shared_ptr<const Robot> robot = std::make_shared<const Robot>(loadRobotFromUrdfFile(rx170UrdfPath()));
+  static const std::shared_ptr<const Robot> robot =
+      std::make_shared<const Robot>(loadRobotFromUrdfFile(rx170UrdfPath()));
   return robot;
 }
 

@@ -210,7 +210,8 @@ TEST(Registry, CreatesEachFileEffectByName) {
   const nlohmann::json file = effects_test::rx170Json();
   for (std::size_t i = 0; i < file.at("effects").size(); ++i) {
     const nlohmann::json& json = file.at("effects")[i];
-    std::unique_ptr<Effect> effect = createEffect(json, model.robot(), model.gears(), "test: effects[" + std::to_string(i) + "]");
+    std::unique_ptr<Effect> effect =
+        createEffect(json, model.robot(), model.gears(), "test: effects[" + std::to_string(i) + "]");
     EXPECT_EQ(effect->type(), json.at("type").get<std::string>());
     EXPECT_TRUE(bitIdentical(effect->parameters(), model.effect(static_cast<int>(i)).parameters())) << effect->type();
   }
@@ -290,9 +291,7 @@ TEST(Perturbation, StaysWithinTheStatedBoundsAndMovesEveryKind) {
           case Kind::Amplitude:
             EXPECT_LE(std::abs(p[k] - p0[k]), spec.amplitude_relative * std::abs(p0[k]) * (1 + 1e-15)) << what;
             break;
-          case Kind::Phase:
-            EXPECT_LE(std::abs(p[k] - p0[k]), spec.phase_absolute_rad * (1 + 1e-15)) << what;
-            break;
+          case Kind::Phase: EXPECT_LE(std::abs(p[k] - p0[k]), spec.phase_absolute_rad * (1 + 1e-15)) << what; break;
           case Kind::Geometry:
             EXPECT_LE(std::abs(p[k] - p0[k]), spec.geometry_relative * std::abs(p0[k]) * (1 + 1e-15)) << what;
             break;

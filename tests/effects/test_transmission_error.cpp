@@ -146,9 +146,9 @@ TEST(TransmissionError, FundamentalOfJoint2RepeatsTwicePerTurnOfTheStage2Input) 
   const double first_ratio = hand.ratios[1][0];
   const double half_turn = effects_test::kPi * first_ratio / hand.g(1, 1);
   std::vector<Harmonic> two_cycles;
-  for (const Harmonic& h : dynamic_cast<const TransmissionErrorEffect&>(
-                               model.effect(model.findEffect(TransmissionErrorEffect::kType)))
-                               .harmonics()) {
+  for (const Harmonic& h :
+       dynamic_cast<const TransmissionErrorEffect&>(model.effect(model.findEffect(TransmissionErrorEffect::kType)))
+           .harmonics()) {
     if (h.joint == 1 && h.cycles_per_revolution == 2.0) two_cycles.push_back(h);
   }
   ASSERT_EQ(two_cycles.size(), 1u);

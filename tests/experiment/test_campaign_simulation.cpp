@@ -41,7 +41,8 @@ Eigen::Vector3d exactTarget(const JointErrorModel& truth, const MeasurementCampa
   forwardKinematics(robot, ws.robot, ctx.command);
   for (int pass = 0; pass < 2; ++pass) {
     ctx.tool_wrench = campaign.wrench[k];
-    ctx.tool_wrench.tail<3>() += (ws.robot.tool_pose.linear() * campaign.target_in_flange).cross(campaign.wrench[k].head<3>());
+    ctx.tool_wrench.tail<3>() +=
+        (ws.robot.tool_pose.linear() * campaign.target_in_flange).cross(campaign.wrench[k].head<3>());
     EXPECT_TRUE(settleStatically(truth, truth.allEffects(), ws, ctx).converged);
     forwardKinematics(robot, ws.robot, ctx.q);
   }
@@ -107,7 +108,8 @@ TEST(CampaignSimulation, StiffnessProtocolRowsLoadsAndMetadata) {
           }
         }
       } else {
-        EXPECT_EQ(campaign.wrench[k].norm(), std::abs(campaign.wrench[k][2])) << "joint 3 is loaded by a vertical force";
+        EXPECT_EQ(campaign.wrench[k].norm(), std::abs(campaign.wrench[k][2]))
+            << "joint 3 is loaded by a vertical force";
         EXPECT_TRUE(std::isfinite(campaign.measured_angles[k][2]) || campaign.wrench[k].isZero(0.0));
       }
     }

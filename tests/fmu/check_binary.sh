@@ -20,7 +20,9 @@ done
 if readelf -d "$binary" | grep -q -E 'R(UN)?PATH'; then echo "the binary has an RPATH/RUNPATH"; status=1; fi
 
 exported=$(nm -D --defined-only "$binary" | awk '{print $3}' | sort)
-expected=$(grep -o "^JOINTCOMP_FMI${version}_EXPORT [^(]*(" "$api" | sed -E "s/.*[ *](fmi${version}[A-Za-z0-9]*)\\($/\\1/" | sort)
+# Declarations may span lines (the return type on a line of its own): read the header as one line.
+expected=$(tr '\n' ' ' <"$api" | grep -o "JOINTCOMP_FMI${version}_EXPORT [^(;]*[ *]fmi${version}[A-Za-z0-9]* *(" |
+  sed -E "s/.*[ *](fmi${version}[A-Za-z0-9]*) *\\($/\\1/" | sort)
 [ "$(echo "$expected" | wc -l)" = "$count" ] || { echo "$api declares $(echo "$expected" | wc -l) functions, the standard $count"; status=1; }
 if [ "$exported" != "$expected" ]; then
   echo "exported symbols differ from the FMI $version API:"

@@ -38,8 +38,8 @@
 #include "model/compensation/feed_rate.hpp"
 #include "model/compensation/joint_trajectory.hpp"
 #include "model/compensation/path.hpp"
-#include "model/experiment/spiral_experiment.hpp"
 #include "model/effects/perturbation.hpp"
+#include "model/experiment/spiral_experiment.hpp"
 #include "model/io/atomic_file.hpp"
 #include "model/io/parameter_file.hpp"
 #include "model/io/robot_file.hpp"
@@ -76,7 +76,8 @@ std::string attribute(const std::string& xml, std::size_t begin, std::size_t end
 ModelDescription readModelDescription(int version) {
   const std::string xml = readFile(unzipped(version) + "/modelDescription.xml");
   ModelDescription md;
-  md.token = attribute(xml, 0, xml.find('>', xml.find("<fmiModelDescription")), version == 2 ? "guid" : "instantiationToken");
+  md.token =
+      attribute(xml, 0, xml.find('>', xml.find("<fmiModelDescription")), version == 2 ? "guid" : "instantiationToken");
   // Every element with a valueReference inside ModelVariables is a variable.
   const std::size_t variables_end = xml.find("</ModelVariables>");
   for (std::size_t at = xml.find("<ModelVariables>"); (at = xml.find('<', at + 1)) < variables_end;) {
@@ -84,7 +85,8 @@ ModelDescription readModelDescription(int version) {
     const std::string vr = attribute(xml, at, end, "valueReference");
     if (vr.empty()) continue;
     md.vr[attribute(xml, at, end, "name")] = static_cast<std::uint32_t>(std::stoul(vr));
-    if (attribute(xml, at, end, "causality") == "output") md.outputs.push_back(static_cast<std::uint32_t>(std::stoul(vr)));
+    if (attribute(xml, at, end, "causality") == "output")
+      md.outputs.push_back(static_cast<std::uint32_t>(std::stoul(vr)));
   }
   return md;
 }
@@ -188,18 +190,50 @@ private:
 // The FMI 2 functions, as a master gets them.
 struct Fmi2Api {
   explicit Fmi2Api(Library& library) {
-    LOAD(fmi2GetTypesPlatform); LOAD(fmi2GetVersion); LOAD(fmi2SetDebugLogging); LOAD(fmi2Instantiate);
-    LOAD(fmi2FreeInstance); LOAD(fmi2SetupExperiment); LOAD(fmi2EnterInitializationMode);
-    LOAD(fmi2ExitInitializationMode); LOAD(fmi2Terminate); LOAD(fmi2Reset); LOAD(fmi2GetReal); LOAD(fmi2GetInteger);
-    LOAD(fmi2GetBoolean); LOAD(fmi2GetString); LOAD(fmi2SetReal); LOAD(fmi2SetInteger); LOAD(fmi2SetBoolean);
-    LOAD(fmi2SetString); LOAD(fmi2GetFMUstate); LOAD(fmi2SetFMUstate); LOAD(fmi2FreeFMUstate);
-    LOAD(fmi2SerializedFMUstateSize); LOAD(fmi2SerializeFMUstate); LOAD(fmi2DeSerializeFMUstate);
-    LOAD(fmi2GetDirectionalDerivative); LOAD(fmi2EnterEventMode); LOAD(fmi2NewDiscreteStates);
-    LOAD(fmi2EnterContinuousTimeMode); LOAD(fmi2CompletedIntegratorStep); LOAD(fmi2SetTime);
-    LOAD(fmi2SetContinuousStates); LOAD(fmi2GetDerivatives); LOAD(fmi2GetEventIndicators);
-    LOAD(fmi2GetContinuousStates); LOAD(fmi2GetNominalsOfContinuousStates); LOAD(fmi2SetRealInputDerivatives);
-    LOAD(fmi2GetRealOutputDerivatives); LOAD(fmi2DoStep); LOAD(fmi2CancelStep); LOAD(fmi2GetStatus);
-    LOAD(fmi2GetRealStatus); LOAD(fmi2GetIntegerStatus); LOAD(fmi2GetBooleanStatus); LOAD(fmi2GetStringStatus);
+    LOAD(fmi2GetTypesPlatform);
+    LOAD(fmi2GetVersion);
+    LOAD(fmi2SetDebugLogging);
+    LOAD(fmi2Instantiate);
+    LOAD(fmi2FreeInstance);
+    LOAD(fmi2SetupExperiment);
+    LOAD(fmi2EnterInitializationMode);
+    LOAD(fmi2ExitInitializationMode);
+    LOAD(fmi2Terminate);
+    LOAD(fmi2Reset);
+    LOAD(fmi2GetReal);
+    LOAD(fmi2GetInteger);
+    LOAD(fmi2GetBoolean);
+    LOAD(fmi2GetString);
+    LOAD(fmi2SetReal);
+    LOAD(fmi2SetInteger);
+    LOAD(fmi2SetBoolean);
+    LOAD(fmi2SetString);
+    LOAD(fmi2GetFMUstate);
+    LOAD(fmi2SetFMUstate);
+    LOAD(fmi2FreeFMUstate);
+    LOAD(fmi2SerializedFMUstateSize);
+    LOAD(fmi2SerializeFMUstate);
+    LOAD(fmi2DeSerializeFMUstate);
+    LOAD(fmi2GetDirectionalDerivative);
+    LOAD(fmi2EnterEventMode);
+    LOAD(fmi2NewDiscreteStates);
+    LOAD(fmi2EnterContinuousTimeMode);
+    LOAD(fmi2CompletedIntegratorStep);
+    LOAD(fmi2SetTime);
+    LOAD(fmi2SetContinuousStates);
+    LOAD(fmi2GetDerivatives);
+    LOAD(fmi2GetEventIndicators);
+    LOAD(fmi2GetContinuousStates);
+    LOAD(fmi2GetNominalsOfContinuousStates);
+    LOAD(fmi2SetRealInputDerivatives);
+    LOAD(fmi2GetRealOutputDerivatives);
+    LOAD(fmi2DoStep);
+    LOAD(fmi2CancelStep);
+    LOAD(fmi2GetStatus);
+    LOAD(fmi2GetRealStatus);
+    LOAD(fmi2GetIntegerStatus);
+    LOAD(fmi2GetBooleanStatus);
+    LOAD(fmi2GetStringStatus);
   }
   decltype(&::fmi2GetTypesPlatform) fmi2GetTypesPlatform;
   decltype(&::fmi2GetVersion) fmi2GetVersion;
@@ -250,17 +284,47 @@ struct Fmi2Api {
 // The FMI 3 functions, as a master gets them (those the tests call).
 struct Fmi3Api {
   explicit Fmi3Api(Library& library) {
-    LOAD(fmi3GetVersion); LOAD(fmi3SetDebugLogging); LOAD(fmi3InstantiateModelExchange);
-    LOAD(fmi3InstantiateCoSimulation); LOAD(fmi3InstantiateScheduledExecution); LOAD(fmi3FreeInstance);
-    LOAD(fmi3EnterInitializationMode); LOAD(fmi3ExitInitializationMode); LOAD(fmi3EnterEventMode);
-    LOAD(fmi3Terminate); LOAD(fmi3Reset); LOAD(fmi3GetFloat32); LOAD(fmi3GetFloat64); LOAD(fmi3GetInt32);
-    LOAD(fmi3GetInt64); LOAD(fmi3GetBoolean); LOAD(fmi3GetString); LOAD(fmi3GetBinary); LOAD(fmi3GetClock);
-    LOAD(fmi3SetFloat64); LOAD(fmi3SetInt32); LOAD(fmi3SetInt64); LOAD(fmi3SetBoolean); LOAD(fmi3SetUInt8);
-    LOAD(fmi3GetNumberOfVariableDependencies); LOAD(fmi3GetVariableDependencies); LOAD(fmi3GetFMUState);
-    LOAD(fmi3SetFMUState); LOAD(fmi3FreeFMUState); LOAD(fmi3SerializedFMUStateSize); LOAD(fmi3SerializeFMUState);
-    LOAD(fmi3DeserializeFMUState); LOAD(fmi3GetDirectionalDerivative); LOAD(fmi3EnterConfigurationMode);
-    LOAD(fmi3UpdateDiscreteStates); LOAD(fmi3EnterContinuousTimeMode); LOAD(fmi3GetNumberOfContinuousStates);
-    LOAD(fmi3EnterStepMode); LOAD(fmi3GetOutputDerivatives); LOAD(fmi3DoStep); LOAD(fmi3ActivateModelPartition);
+    LOAD(fmi3GetVersion);
+    LOAD(fmi3SetDebugLogging);
+    LOAD(fmi3InstantiateModelExchange);
+    LOAD(fmi3InstantiateCoSimulation);
+    LOAD(fmi3InstantiateScheduledExecution);
+    LOAD(fmi3FreeInstance);
+    LOAD(fmi3EnterInitializationMode);
+    LOAD(fmi3ExitInitializationMode);
+    LOAD(fmi3EnterEventMode);
+    LOAD(fmi3Terminate);
+    LOAD(fmi3Reset);
+    LOAD(fmi3GetFloat32);
+    LOAD(fmi3GetFloat64);
+    LOAD(fmi3GetInt32);
+    LOAD(fmi3GetInt64);
+    LOAD(fmi3GetBoolean);
+    LOAD(fmi3GetString);
+    LOAD(fmi3GetBinary);
+    LOAD(fmi3GetClock);
+    LOAD(fmi3SetFloat64);
+    LOAD(fmi3SetInt32);
+    LOAD(fmi3SetInt64);
+    LOAD(fmi3SetBoolean);
+    LOAD(fmi3SetUInt8);
+    LOAD(fmi3GetNumberOfVariableDependencies);
+    LOAD(fmi3GetVariableDependencies);
+    LOAD(fmi3GetFMUState);
+    LOAD(fmi3SetFMUState);
+    LOAD(fmi3FreeFMUState);
+    LOAD(fmi3SerializedFMUStateSize);
+    LOAD(fmi3SerializeFMUState);
+    LOAD(fmi3DeserializeFMUState);
+    LOAD(fmi3GetDirectionalDerivative);
+    LOAD(fmi3EnterConfigurationMode);
+    LOAD(fmi3UpdateDiscreteStates);
+    LOAD(fmi3EnterContinuousTimeMode);
+    LOAD(fmi3GetNumberOfContinuousStates);
+    LOAD(fmi3EnterStepMode);
+    LOAD(fmi3GetOutputDerivatives);
+    LOAD(fmi3DoStep);
+    LOAD(fmi3ActivateModelPartition);
   }
   decltype(&::fmi3GetVersion) fmi3GetVersion;
   decltype(&::fmi3SetDebugLogging) fmi3SetDebugLogging;
@@ -333,8 +397,8 @@ void fmi2Logger(fmi2ComponentEnvironment environment, fmi2String, fmi2Status sta
 }
 
 void fmi3Logger(fmi3InstanceEnvironment environment, fmi3Status status, fmi3String category, fmi3String message) {
-  static_cast<Master*>(environment)->messages.push_back(std::string(category) + " [" + std::to_string(status) + "] " +
-                                                          message);
+  static_cast<Master*>(environment)
+      ->messages.push_back(std::string(category) + " [" + std::to_string(status) + "] " + message);
 }
 
 class Master2 : public Master {
@@ -521,9 +585,7 @@ const Spiral& spiral() {
 std::vector<double> values(const JointVector& q) { return std::vector<double>(q.data(), q.data() + q.size()); }
 
 // The paper's truth: the nominal parameters moved by the paper experiment's default perturbation.
-JointErrorModel nominalModel() {
-  return loadParameterFile(unzipped(2) + "/resources/parameters.json", spiral().robot);
-}
+JointErrorModel nominalModel() { return loadParameterFile(unzipped(2) + "/resources/parameters.json", spiral().robot); }
 JointErrorModel truthModel() { return perturbedModel(nominalModel(), PerturbationSpec{}); }
 
 // Gives the FMU's plant the truth's effect parameters, through the FMU's plant.* parameters.
@@ -608,8 +670,7 @@ Record run(Master& m, std::size_t from, std::size_t to, bool varying) {
 Record runDirectly(long mode, const JointErrorModel& truth, std::size_t to, bool varying) {
   const Spiral& s = spiral();
   const JointErrorModel nominal = nominalModel();
-  const std::vector<DriveParameters> drives =
-      loadDriveParameters(unzipped(2) + "/resources/parameters.json", *s.robot);
+  const std::vector<DriveParameters> drives = loadDriveParameters(unzipped(2) + "/resources/parameters.json", *s.robot);
   FlexibleJointPlant plant(truth, drives, PlantOptions{});
   EffectMask mask = 0;
   if (mode == 1) mask = nominal.loadsAnd({"compliance"});
@@ -637,7 +698,8 @@ Record runDirectly(long mode, const JointErrorModel& truth, std::size_t to, bool
   for (std::size_t i = 0; k + 1 < std::min(to, s.time.size()); ++i) {
     const std::size_t next = std::min(k + pattern[i % pattern.size()], s.time.size() - 1);
     const double t = s.time[k];
-    const JointVector v = has_last ? JointVector((s.q[k] - last_q) / (t - last_t)) : JointVector(JointVector::Zero(kDof));
+    const JointVector v =
+        has_last ? JointVector((s.q[k] - last_q) / (t - last_t)) : JointVector(JointVector::Zero(kDof));
     const JointVector ref = reference(s.q[k], v, t);
     plant.setReference(ref, v);
     plant.advance(t + (s.time[next] - t));
@@ -722,8 +784,7 @@ TEST_P(FmuTest, RegressionThroughTheFmuEqualsTheCApi) {
       JointVector ref = q;
       if (mode == 2) {
         int32_t iterations = 0;
-        EXPECT_EQ(jc_compensate_point(robot, nullptr, q.data(), kDof, v.data(),
-                                      kDof, ref.data(), kDof, &iterations),
+        EXPECT_EQ(jc_compensate_point(robot, nullptr, q.data(), kDof, v.data(), kDof, ref.data(), kDof, &iterations),
                   JC_OK)
             << jc_last_error();
       }
@@ -735,7 +796,8 @@ TEST_P(FmuTest, RegressionThroughTheFmuEqualsTheCApi) {
     JointVector last_q = s.q[0];
     for (std::size_t k = 0; k + 1 < end; ++k) {
       const double t = s.time[k];
-      const JointVector v = k > 0 ? JointVector((s.q[k] - last_q) / (t - s.time[k - 1])) : JointVector(JointVector::Zero(kDof));
+      const JointVector v =
+          k > 0 ? JointVector((s.q[k] - last_q) / (t - s.time[k - 1])) : JointVector(JointVector::Zero(kDof));
       const JointVector ref = reference(s.q[k], v);
       ASSERT_EQ(jc_plant_set_reference(plant, ref.data(), kDof, v.data(), kDof), JC_OK) << jc_last_error();
       ASSERT_EQ(jc_plant_advance(plant, s.time[k + 1]), JC_OK) << jc_last_error();
@@ -1153,9 +1215,7 @@ TEST_P(FmuTest, MissingOrWrongResourcesFailInstantiationWithTheReason) {
   std::string robot_text = readFile(unzipped(2) + "/resources/robot.json");
   robot_text.replace(robot_text.find("\"rx170\""), 7, "\"other\"");
   writeFileAtomically(wrong + "/robot.json", robot_text);
-  auto location = [&](const std::string& dir) {
-    return GetParam() == 2 ? "file://" + percentEncoded(dir) : dir + "/";
-  };
+  auto location = [&](const std::string& dir) { return GetParam() == 2 ? "file://" + percentEncoded(dir) : dir + "/"; };
   auto expect_refused = [&](const std::string& resources, const std::string& token, const char* fragment) {
     auto m = makeMaster(GetParam());
     EXPECT_FALSE(m->instantiate("robot", resources, token)) << resources;
@@ -1303,9 +1363,9 @@ TEST(FmuMisuse3, EventModeAndEarlyReturnAreDeclinedGracefully) {
   EXPECT_EQ(api.fmi3ActivateModelPartition(m.c, 0, 0.0), kError);
   // Model exchange and scheduled execution are not provided: no instance, and a reason.
   Master3 other;
-  EXPECT_EQ(api.fmi3InstantiateModelExchange("me", md.token.c_str(), resources.c_str(), false, true, &other,
-                                             fmi3Logger),
-            nullptr);
+  EXPECT_EQ(
+      api.fmi3InstantiateModelExchange("me", md.token.c_str(), resources.c_str(), false, true, &other, fmi3Logger),
+      nullptr);
   EXPECT_EQ(api.fmi3InstantiateScheduledExecution("se", md.token.c_str(), resources.c_str(), false, true, &other,
                                                   fmi3Logger, nullptr, nullptr, nullptr),
             nullptr);
@@ -1357,12 +1417,12 @@ TEST(FmuMisuse3, VariableDependenciesFollowTheModelStructure) {
   std::vector<fmi3ValueReference> independents(n);
   std::vector<fmi3DependencyKind> kinds(n);
   ASSERT_EQ(api.fmi3GetVariableDependencies(m.c, m.vr("q_ref_1"), dependent.data(), independents.data(), element.data(),
-                                           kinds.data(), n),
+                                            kinds.data(), n),
             kOK);
   EXPECT_EQ(independents.front(), m.vr("q_desired_1"));
   EXPECT_EQ(independents.back(), m.vr("tool_wrench.moment_z"));
-  EXPECT_EQ(api.fmi3GetVariableDependencies(m.c, m.vr("q_ref_1"), dependent.data(), independents.data(),
-                                            element.data(), kinds.data(), 3),
+  EXPECT_EQ(api.fmi3GetVariableDependencies(m.c, m.vr("q_ref_1"), dependent.data(), independents.data(), element.data(),
+                                            kinds.data(), 3),
             kError);
   ASSERT_EQ(api.fmi3GetNumberOfVariableDependencies(m.c, m.vr("q_link_1"), &n), kOK);
   EXPECT_EQ(n, 0u);
@@ -1370,8 +1430,9 @@ TEST(FmuMisuse3, VariableDependenciesFollowTheModelStructure) {
   EXPECT_EQ(api.fmi3GetNumberOfVariableDependencies(m.c, m.vr("q_ref_1"), nullptr), kError);
 }
 
-INSTANTIATE_TEST_SUITE_P(Fmi, FmuTest, ::testing::Values(2, 3),
-                         [](const ::testing::TestParamInfo<int>& param) { return "fmi" + std::to_string(param.param); });
+INSTANTIATE_TEST_SUITE_P(Fmi, FmuTest, ::testing::Values(2, 3), [](const ::testing::TestParamInfo<int>& param) {
+  return "fmi" + std::to_string(param.param);
+});
 
 }  // namespace
 }  // namespace jointcomp

@@ -85,14 +85,16 @@ TEST(RobotFile, BrokenFilesAreRefusedNamingTheField) {
   expectRefused("{", "not valid JSON");
   expectRefused("[]", "expected a JSON object");
   expectRefused(replaced(good, "jointcomp-robot/1", "jointcomp-robot/9"), "format");
-  expectRefused(replaced(good, "\"name\": \"odd_arm\",", "\"name\": \"odd_arm\", \"colour\": 1,"), "colour: unknown key");
+  expectRefused(replaced(good, "\"name\": \"odd_arm\",", "\"name\": \"odd_arm\", \"colour\": 1,"),
+                "colour: unknown key");
   expectRefused(replaced(good, "\"tip_link\": \"tool\",", ""), "tip_link: missing");
   expectRefused(replaced(good, "\"mass_kg\": 3.3", "\"mass_kg\": -3.3"), "mass_kg");
   expectRefused(replaced(good, "\"mass_kg\": 3.3", "\"mass_kg\": 1e999"), "not valid JSON");
   expectRefused(replaced(good, "\"lower_rad\": -2.1", "\"lower_rad\": 2.1"), "lower_rad");
   expectRefused(replaced(good, "\"lower_rad\": -2.1", "\"lower_rad\": \"low\""), "lower_rad");
   expectRefused(replaced(good, "\"joints\": [", "\"joints\": [ 7,"), "joints[0]");
-  expectRefused(replaced(good, "\"axis\": [\n        0.0,\n        0.0,\n        1.0", "\"axis\": [\n        0.0,\n        0.0,\n        2.0"),
+  expectRefused(replaced(good, "\"axis\": [\n        0.0,\n        0.0,\n        1.0",
+                         "\"axis\": [\n        0.0,\n        0.0,\n        2.0"),
                 "axis");
   expectRefused(replaced(good, "\"rotation\": [\n      1.0", "\"rotation\": [\n      1.5"), "rotation");
   expectRefused(R"({"format": "jointcomp-robot/1", "name": "x", "root_link": "a", "tip_link": "b",

@@ -13,7 +13,6 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     const jointcomp::MeasurementCampaign campaign = jointcomp::parseCampaign(text, "fuzz.csv");
     const jointcomp::MeasurementCampaign again = jointcomp::parseCampaign(jointcomp::campaignToText(campaign), "again");
     if (again.size() != campaign.size()) __builtin_trap();  // a round trip never loses a row
-  } catch (const jointcomp::Error&) {
-  }
+  } catch (const jointcomp::Error&) {}
   return 0;
 }

@@ -73,8 +73,8 @@ void fuzzEffects(jc_robot* robot, const char* effects) {
   // A selection is valid or not whatever the call: the three calls agree on it.
   double planned[2 * kDof], references[2 * kDof];
   for (int k = 0; k < 2 * kDof; ++k) planned[k] = kPosture[k % kDof];
-  const jc_status trajectory = jc_compensate_trajectory(robot, effects, planned, 2 * kDof, nullptr, 0, references,
-                                                        2 * kDof, nullptr, nullptr);
+  const jc_status trajectory =
+      jc_compensate_trajectory(robot, effects, planned, 2 * kDof, nullptr, 0, references, 2 * kDof, nullptr, nullptr);
   expectFailureExplained(trajectory);
   if ((predicted == JC_ERROR_INVALID_ARGUMENT) != (compensated == JC_ERROR_INVALID_ARGUMENT) ||
       (compensated == JC_ERROR_INVALID_ARGUMENT) != (trajectory == JC_ERROR_INVALID_ARGUMENT)) {

@@ -103,9 +103,8 @@ fmi2Component instantiateFmi2() {
 }
 
 fmi3Instance instantiateFmi3() {
-  fmi3Instance instance = fmi3InstantiateCoSimulation("fuzz3", table::kInstantiationToken, kResourceDir, false,
-                                                      false, false, false, nullptr, 0, nullptr,
-                                                      ignoreFmi3Log, nullptr);
+  fmi3Instance instance = fmi3InstantiateCoSimulation("fuzz3", table::kInstantiationToken, kResourceDir, false, false,
+                                                      false, false, nullptr, 0, nullptr, ignoreFmi3Log, nullptr);
   if (!instance) die("fmi3InstantiateCoSimulation failed (are the FMU resources built?)");
   return instance;
 }

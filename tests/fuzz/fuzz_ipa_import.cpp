@@ -10,7 +10,6 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   const std::string text(reinterpret_cast<const char*>(data), size);
   try {
     (void)jointcomp::parseIpaUr10(text, "fuzz.csv").size();
-  } catch (const jointcomp::Error&) {
-  }
+  } catch (const jointcomp::Error&) {}
   return 0;
 }

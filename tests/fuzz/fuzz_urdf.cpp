@@ -11,7 +11,6 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   try {
     const jointcomp::Robot robot = jointcomp::loadRobotFromUrdfString(text, "fuzz.urdf");
     (void)robot.dof();
-  } catch (const jointcomp::Error&) {
-  }
+  } catch (const jointcomp::Error&) {}
   return 0;
 }

@@ -15,10 +15,10 @@
 namespace jointcomp {
 namespace {
 
-using ::testing::HasSubstr;
 using calibration_test::randomPoses;
 using calibration_test::ur10;
 using calibration_test::ur10Model;
+using ::testing::HasSubstr;
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 const Eigen::Vector3d kTarget(0.0, 0.0, 0.1);
@@ -50,8 +50,7 @@ std::string messageOf(const std::function<void()>& call) {
 
 TEST(CalibrationErrors, TooFewRows) {
   const MeasurementCampaign five = campaignOf(randomPoses(5, 1));
-  const std::string message =
-      messageOf<InvalidArgument>([&] { calibrateGeometry(ur10Model(), five); });
+  const std::string message = messageOf<InvalidArgument>([&] { calibrateGeometry(ur10Model(), five); });
   EXPECT_THAT(message, HasSubstr("too few points"));
   EXPECT_THAT(message, HasSubstr("5 usable rows"));
   EXPECT_THAT(message, HasSubstr("simulated campaign"));
@@ -97,7 +96,8 @@ TEST(CalibrationErrors, PosesTurningOnlyJointOneIdentifyTheFrameAndLittleElse) {
 
 TEST(CalibrationErrors, RowsWithoutAMeasuredPositionAreSkippedAndCounted) {
   MeasurementCampaign campaign = campaignOf(randomPoses(150, 6));
-  for (int k : {0, 3, 50, 51, 52, 99, 149}) campaign.position[static_cast<std::size_t>(k)] = Eigen::Vector3d::Constant(kNaN);
+  for (int k : {0, 3, 50, 51, 52, 99, 149})
+    campaign.position[static_cast<std::size_t>(k)] = Eigen::Vector3d::Constant(kNaN);
   campaign.position[10].y() = kNaN;  // in part (a reader would refuse it; the calibration skips it)
   campaign.command[20][2] = kNaN;    // a command that is not finite: skipped too
   const GeometricCalibrationResult result = calibrateGeometry(ur10Model(), campaign);
@@ -150,7 +150,8 @@ TEST(CalibrationErrors, CampaignsTheCalibrationCannotUse) {
   // A parameter named to be fixed that does not exist.
   GeometricCalibrationOptions options;
   options.fixed = {"joint_9.offset_rad"};
-  message = messageOf<InvalidArgument>([&] { calibrateGeometry(ur10Model(), campaignOf(randomPoses(60, 8)), options); });
+  message =
+      messageOf<InvalidArgument>([&] { calibrateGeometry(ur10Model(), campaignOf(randomPoses(60, 8)), options); });
   EXPECT_THAT(message, HasSubstr("joint_9.offset_rad"));
 }
 

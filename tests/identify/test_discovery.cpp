@@ -96,7 +96,8 @@ DiscoveryResult discover(const JointErrorModel& truth, std::uint64_t seed) {
 void print(const std::string& name, const DiscoveryResult& r) {
   std::printf("[ discovery ] %-22s", name.c_str());
   for (const DiscoveryStep& s : r.steps) {
-    std::printf(" %s(%s%s%s)", s.type.c_str(), s.joint >= 0 ? ("j" + std::to_string(s.joint + 1)).c_str() : "tool", s.part.empty() ? "" : (" " + s.part).c_str(),
+    std::printf(" %s(%s%s%s)", s.type.c_str(), s.joint >= 0 ? ("j" + std::to_string(s.joint + 1)).c_str() : "tool",
+                s.part.empty() ? "" : (" " + s.part).c_str(),
                 s.cycles > 0 ? (" k" + std::to_string(static_cast<int>(s.cycles))).c_str() : "");
   }
   std::printf(" | held-out %.4f -> %.4f mm, floor %.4f mm (ratio %.2f)\n", r.initial.heldout[0].rms * 1e3,
@@ -105,7 +106,8 @@ void print(const std::string& name, const DiscoveryResult& r) {
 
 bool found(const DiscoveryResult& r, const std::string& type, int joint, double cycles = 0.0, int stage = 0) {
   for (const DiscoveryStep& s : r.steps) {
-    if (s.type == type && s.joint == joint && (cycles == 0.0 || s.cycles == cycles) && (stage == 0 || s.stage == stage)) return true;
+    if (s.type == type && s.joint == joint && (cycles == 0.0 || s.cycles == cycles) && (stage == 0 || s.stage == stage))
+      return true;
   }
   return false;
 }
@@ -151,7 +153,8 @@ TEST(Discovery, FindsJointOffset) {
 TEST(Discovery, FindsNonlinearCompliance) {
   JointErrorModel truth = rx170Model();
   // Joint 2 carries a few hundred N m here (balancer included): c3 = 3e-12 rad/(N m)^3 gives tenths of a mrad.
-  truth.addEffect(std::make_unique<NonlinearComplianceEffect>(truth.robot(), std::vector<double>{0, 3e-12, 0, 0, 0, 0}));
+  truth.addEffect(
+      std::make_unique<NonlinearComplianceEffect>(truth.robot(), std::vector<double>{0, 3e-12, 0, 0, 0, 0}));
   const DiscoveryResult r = discover(truth, 61);
   print("nonlinear_compliance j2", r);
   ASSERT_FALSE(r.steps.empty());
@@ -161,8 +164,7 @@ TEST(Discovery, FindsNonlinearCompliance) {
 }
 
 TEST(Discovery, FindsTwoAtOnce) {
-  const DiscoveryResult r =
-      discover(withOffset(withBacklash(rx170Model(), 1, 0.012 * kDegree), 4, 0.03 * kDegree), 51);
+  const DiscoveryResult r = discover(withOffset(withBacklash(rx170Model(), 1, 0.012 * kDegree), 4, 0.03 * kDegree), 51);
   print("backlash j2 + offset j5", r);
   EXPECT_TRUE(found(r, "backlash", 1));
   EXPECT_TRUE(found(r, "offset", 4));
@@ -219,7 +221,8 @@ TEST(Discovery, FindsHysteresis) {
   EXPECT_EQ(parametersToJson(back), text);
   const double without = compensatedJointError(truth, rx170Model(), 1);
   const double with = compensatedJointError(truth, back, 1);
-  std::printf("[ discovery ] hysteresis j2: joint-2 error after compensation %.2e rad (nominal model %.2e rad)\n", with, without);
+  std::printf("[ discovery ] hysteresis j2: joint-2 error after compensation %.2e rad (nominal model %.2e rad)\n", with,
+              without);
   EXPECT_LT(with, 0.3 * without);
 }
 
@@ -266,7 +269,8 @@ TEST(Discovery, FindsPayload) {
   // Its compensator takes the payload's deflection out of joint 2.
   const double without = compensatedJointError(truth, rx170Model(), 1);
   const double with = compensatedJointError(truth, back, 1);
-  std::printf("[ discovery ] payload: joint-2 error after compensation %.2e rad (nominal model %.2e rad)\n", with, without);
+  std::printf("[ discovery ] payload: joint-2 error after compensation %.2e rad (nominal model %.2e rad)\n", with,
+              without);
   EXPECT_LT(with, 0.1 * without);
   // The report names it without a joint.
   const nlohmann::ordered_json report = discoveryReportJson(r, {}, DiscoverySources{}, 0.0);
@@ -361,7 +365,8 @@ TEST(Discovery, RaRzOnHeldOutSpiral) {
   }
   EXPECT_LT(after.ra, 0.7 * before.ra);
   EXPECT_LT(after.rz, 0.8 * before.rz);
-  const nlohmann::ordered_json report = discoveryReportJson(r, options, DiscoverySources{{}, {}, {"fit.csv"}, {"spiral.csv"}, {}}, 0.0);
+  const nlohmann::ordered_json report =
+      discoveryReportJson(r, options, DiscoverySources{{}, {}, {"fit.csv"}, {"spiral.csv"}, {}}, 0.0);
   ASSERT_EQ(report["final"]["ra_rz_on_paths"].size(), 1u);
   EXPECT_EQ(report["final"]["ra_rz_on_paths"][0]["campaign"], "spiral.csv");
   EXPECT_EQ(report["final"]["ra_rz_on_paths"][0]["set"], "held_out");
@@ -481,17 +486,50 @@ TEST(DiscoverySweep, DetectionRateOverSeedsNoiseAndMagnitudes) {
     std::string part;                // must match when not empty (thermal: "temperature")
   };
   const std::vector<Case> cases = {
-      {"backlash j2", "backlash", 1, 0.0, [](double m) { return withBacklash(rx170Model(), 1, m); },
-       {0.001 * kDegree, 0.003 * kDegree, 0.01 * kDegree}, false, ""},
-      {"harmonic j3 motor k1", "harmonic", 2, 1.0, [](double m) { return withHarmonic(rx170Model(), 2, 1, 1.0, m); },
-       {0.0005 * kDegree, 0.0015 * kDegree, 0.005 * kDegree}, false, ""},
-      {"offset j4", "offset", 3, 0.0, [](double m) { return withOffset(rx170Model(), 3, m); },
-       {0.002 * kDegree, 0.006 * kDegree, 0.02 * kDegree}, false, ""},
-      {"hysteresis j2 [rad/Nm]", "hysteresis", 1, 0.0, [](double m) { return withHysteresis(rx170Model(), 1, m); },
-       {1.5e-7, 5e-7, 1.5e-6}, false, ""},
-      {"payload [kg]", "payload", -1, 0.0,
-       [](double m) { return withPayload(rx170Model(), m, Eigen::Vector3d(0.05, 0.0, 0.12)); }, {0.5, 2.0, 8.0}, false, ""},
-      {"thermal j3 [rad/degC]", "thermal", 2, 0.0,
+      {"backlash j2",
+       "backlash",
+       1,
+       0.0,
+       [](double m) { return withBacklash(rx170Model(), 1, m); },
+       {0.001 * kDegree, 0.003 * kDegree, 0.01 * kDegree},
+       false,
+       ""},
+      {"harmonic j3 motor k1",
+       "harmonic",
+       2,
+       1.0,
+       [](double m) { return withHarmonic(rx170Model(), 2, 1, 1.0, m); },
+       {0.0005 * kDegree, 0.0015 * kDegree, 0.005 * kDegree},
+       false,
+       ""},
+      {"offset j4",
+       "offset",
+       3,
+       0.0,
+       [](double m) { return withOffset(rx170Model(), 3, m); },
+       {0.002 * kDegree, 0.006 * kDegree, 0.02 * kDegree},
+       false,
+       ""},
+      {"hysteresis j2 [rad/Nm]",
+       "hysteresis",
+       1,
+       0.0,
+       [](double m) { return withHysteresis(rx170Model(), 1, m); },
+       {1.5e-7, 5e-7, 1.5e-6},
+       false,
+       ""},
+      {"payload [kg]",
+       "payload",
+       -1,
+       0.0,
+       [](double m) { return withPayload(rx170Model(), m, Eigen::Vector3d(0.05, 0.0, 0.12)); },
+       {0.5, 2.0, 8.0},
+       false,
+       ""},
+      {"thermal j3 [rad/degC]",
+       "thermal",
+       2,
+       0.0,
        [](double m) {
          JointErrorModel t = rx170Model();
          std::vector<double> a(6, 0.0);
@@ -499,7 +537,9 @@ TEST(DiscoverySweep, DetectionRateOverSeedsNoiseAndMagnitudes) {
          t.addEffect(std::make_unique<ThermalDriftEffect>(t.robot(), a, 20.0, std::vector<double>(6, 0.0), 0.0));
          return t;
        },
-       {1e-6, 3e-6, 1e-5}, true, "temperature"},
+       {1e-6, 3e-6, 1e-5},
+       true,
+       "temperature"},
   };
   const std::vector<double> noise_scales = {1.0, 3.0};
   const int seeds = 4;
@@ -531,14 +571,20 @@ TEST(DiscoverySweep, DetectionRateOverSeedsNoiseAndMagnitudes) {
           options.max_steps = 3;
           const DiscoveryResult r = discoverEffects(rx170Model(), {fit}, {held}, options);
           const bool hit = !r.steps.empty() && r.steps[0].type == c.type && r.steps[0].joint == c.joint &&
-                           (c.cycles == 0.0 || r.steps[0].cycles == c.cycles) && (c.part.empty() || r.steps[0].part == c.part);
+                           (c.cycles == 0.0 || r.steps[0].cycles == c.cycles) &&
+                           (c.part.empty() || r.steps[0].part == c.part);
           hits += hit;
-          if (!hit) misses += " " + (r.steps.empty() ? std::string("nothing") : r.steps[0].type + (r.steps[0].part.empty() ? "" : "/" + r.steps[0].part) + "@j" + std::to_string(r.steps[0].joint + 1));
+          if (!hit)
+            misses +=
+                " " + (r.steps.empty() ? std::string("nothing")
+                                       : r.steps[0].type + (r.steps[0].part.empty() ? "" : "/" + r.steps[0].part) +
+                                             "@j" + std::to_string(r.steps[0].joint + 1));
           within += r.final_state.heldout[0].rms <= 1.3 * r.noise_floor;
         }
-        std::printf("[ sweep ] %-22s noise x%.0f magnitude %.4g %s: detected %d/%d, held-out within 1.3x floor %d/%d%s%s\n",
-                    c.name.c_str(), noise, c.magnitudes[m] / unit, unit_name, hits, seeds, within, seeds,
-                    misses.empty() ? "" : "; first step instead:", misses.c_str());
+        std::printf(
+            "[ sweep ] %-22s noise x%.0f magnitude %.4g %s: detected %d/%d, held-out within 1.3x floor %d/%d%s%s\n",
+            c.name.c_str(), noise, c.magnitudes[m] / unit, unit_name, hits, seeds, within, seeds,
+            misses.empty() ? "" : "; first step instead:", misses.c_str());
         // The smallest magnitude from which up every magnitude tried was found at every seed.
         if (hits == seeds && (smallest > 0 || m + 1 == c.magnitudes.size())) smallest = c.magnitudes[m];
         if (hits < seeds) smallest = smallest > 0 ? -smallest : smallest;  // a miss stops the run
@@ -547,7 +593,8 @@ TEST(DiscoverySweep, DetectionRateOverSeedsNoiseAndMagnitudes) {
         }
       }
       char smallest_text[64] = "none";
-      if (smallest != -1.0) std::snprintf(smallest_text, sizeof(smallest_text), "%.4g %s", std::abs(smallest) / unit, unit_name);
+      if (smallest != -1.0)
+        std::snprintf(smallest_text, sizeof(smallest_text), "%.4g %s", std::abs(smallest) / unit, unit_name);
       std::printf("[ sweep ] %-22s noise x%.0f: smallest magnitude found at every seed: %s\n", c.name.c_str(), noise,
                   smallest_text);
     }

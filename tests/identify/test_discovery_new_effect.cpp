@@ -73,7 +73,8 @@ public:
     candidate.columns = featureColumn(data, [&](int i) { return data.command[i][joint + 1]; });
     candidates.push_back(std::move(candidate));
   }
-  std::unique_ptr<Effect> makeEffect(const DiscoveryData& data, const std::vector<FittedCandidate>& accepted) const override {
+  std::unique_ptr<Effect> makeEffect(const DiscoveryData& data,
+                                     const std::vector<FittedCandidate>& accepted) const override {
     std::vector<double> coupling(static_cast<std::size_t>(data.robot->dof()), 0.0);
     for (const FittedCandidate& a : accepted) coupling[static_cast<std::size_t>(a.candidate->joint)] += a.theta[0];
     return std::make_unique<CouplingEffect>(*data.robot, coupling);
@@ -128,7 +129,8 @@ TEST(DiscoveryNewEffect, ARegisteredTypeIsFoundNamedAndWritten) {
   const int index = result.model.findEffect(CouplingEffect::kType);
   ASSERT_GE(index, 0);
   const std::string document = parametersToJson(result.model);
-  const JointErrorModel reread = parseParameterSet(document, "discovered.json", result.model.sharedRobot(), registry).model;
+  const JointErrorModel reread =
+      parseParameterSet(document, "discovered.json", result.model.sharedRobot(), registry).model;
   const int reread_index = reread.findEffect(CouplingEffect::kType);
   ASSERT_GE(reread_index, 0);
   EXPECT_EQ(reread.effect(reread_index).parameters(), result.model.effect(index).parameters());

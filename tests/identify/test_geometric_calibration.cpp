@@ -67,7 +67,8 @@ TEST(GeometricCalibration, AnalyticJacobianAgreesWithFiniteDifferences) {
            predictMeasurement(robot, GeometricParameters::fromVector(minus, 6), q, torque, other)) /
           (2.0 * h);
       const double scale = std::max(1.0, numeric.norm());
-      EXPECT_LE((analytic.col(i) - numeric).norm(), 1e-6 * scale) << geometricParameterNames(robot)[static_cast<std::size_t>(i)];
+      EXPECT_LE((analytic.col(i) - numeric).norm(), 1e-6 * scale)
+          << geometricParameterNames(robot)[static_cast<std::size_t>(i)];
     }
   }
 }
@@ -129,11 +130,13 @@ GeometricParameters randomTruth(const std::vector<std::string>& identified, Dete
     const Eigen::Index k = static_cast<Eigen::Index>(i);
     // Compliance: joints 2 and 3 as the UR10's (about 8e-6 rad/(N m)); the wrist joints, which carry
     // little torque, softer, so that the truth stays many sigma above zero.
-    if (unit == "rad/(N m)") x[k] = names[i].rfind("joint_2", 0) == 0 || names[i].rfind("joint_3", 0) == 0
-                                        ? random.uniform(4e-6, 1.2e-5)
-                                        : random.uniform(2e-4, 4e-4);
-    else if (unit == "rad") x[k] += random.uniform(-1e-3, 1e-3);
-    else x[k] += random.uniform(-1e-3, 1e-3);
+    if (unit == "rad/(N m)")
+      x[k] = names[i].rfind("joint_2", 0) == 0 || names[i].rfind("joint_3", 0) == 0 ? random.uniform(4e-6, 1.2e-5)
+                                                                                    : random.uniform(2e-4, 4e-4);
+    else if (unit == "rad")
+      x[k] += random.uniform(-1e-3, 1e-3);
+    else
+      x[k] += random.uniform(-1e-3, 1e-3);
   }
   return GeometricParameters::fromVector(x, 6);
 }
@@ -151,8 +154,8 @@ TEST(GeometricCalibration, RecoversTheTruthWithHonestUncertaintyOverSeeds) {
     SCOPED_TRACE("seed " + std::to_string(seed));
     DeterministicRandom random(100 + static_cast<std::uint64_t>(seed));
     const GeometricParameters truth = randomTruth(identified, random);
-    const MeasurementCampaign campaign =
-        simulateGeometricCampaign(ur10Model(), truth, poses, kNoise, 500 + static_cast<std::uint64_t>(seed), kNominalTarget);
+    const MeasurementCampaign campaign = simulateGeometricCampaign(
+        ur10Model(), truth, poses, kNoise, 500 + static_cast<std::uint64_t>(seed), kNominalTarget);
     const GeometricCalibrationResult result = calibrateGeometry(ur10Model(), campaign);
     std::vector<std::string> now;
     for (const ParameterEstimate& p : result.parameters) {
@@ -181,9 +184,10 @@ TEST(GeometricCalibration, RecoversTheTruthWithHonestUncertaintyOverSeeds) {
   }
   const double coverage = static_cast<double>(inside_one) / samples;
   const double coverage3 = static_cast<double>(inside_three) / samples;
-  std::printf("[ calibration ] %d estimates over %d seeds: %.1f %% within 1 sigma, %.1f %% within 3 sigma, worst "
-              "%.2f sigma (%s)\n",
-              samples, seeds, 100 * coverage, 100 * coverage3, worst, worst_name.c_str());
+  std::printf(
+      "[ calibration ] %d estimates over %d seeds: %.1f %% within 1 sigma, %.1f %% within 3 sigma, worst "
+      "%.2f sigma (%s)\n",
+      samples, seeds, 100 * coverage, 100 * coverage3, worst, worst_name.c_str());
   EXPECT_GE(coverage, 0.50);
   EXPECT_LE(coverage, 0.85);
   EXPECT_GE(coverage3, 0.97);
@@ -249,7 +253,8 @@ TEST(GeometricCalibration, CalibratedUrdfAndParameterFileReproduceThePredictions
   const auto calibrated_robot = std::make_shared<const Robot>(correctedRobot(*robot, result.estimate));
   saveRobotUrdf(*calibrated_robot, directory + "/calibrated.urdf");
   std::vector<std::string> left_out;
-  saveParameterFile(calibratedJointErrorModel(prior, calibrated_robot, result, left_out), directory + "/calibrated.json");
+  saveParameterFile(calibratedJointErrorModel(prior, calibrated_robot, result, left_out),
+                    directory + "/calibrated.json");
   EXPECT_TRUE(left_out.empty());
   auto loaded_robot = std::make_shared<const Robot>(loadRobotFromUrdfFile(directory + "/calibrated.urdf"));
   const JointErrorModel loaded = loadParameterFile(directory + "/calibrated.json", loaded_robot);
@@ -298,9 +303,8 @@ TEST(GeometricCalibration, ComplianceFittedNotPositiveIsHeldAndLeftOut) {
   EXPECT_THAT(c4.fixed_because, ::testing::HasSubstr("not positive"));
   EXPECT_TRUE(find(result, "joint_2.compliance_rad_per_nm").identified);
   std::vector<std::string> left_out;
-  const JointErrorModel model =
-      calibratedJointErrorModel(ur10Model(), std::make_shared<const Robot>(correctedRobot(*ur10(), result.estimate)),
-                                result, left_out);
+  const JointErrorModel model = calibratedJointErrorModel(
+      ur10Model(), std::make_shared<const Robot>(correctedRobot(*ur10(), result.estimate)), result, left_out);
   // The fitted joints keep their compliance; joint 4 is written as rigid (infinite stiffness).
   const int compliance_index = model.findEffect(ComplianceEffect::kType);
   ASSERT_GE(compliance_index, 0);
@@ -322,7 +326,8 @@ TEST(GeometricCalibration, HeldOutCampaignRefitsOnlyItsFrame) {
   // Series "B": other poses, another tracker set-up.
   GeometricParameters truth_b = truth;
   truth_b.setInstrumentFromBase(trackerFrame(random));
-  const MeasurementCampaign b = simulateGeometricCampaign(ur10Model(), truth_b, randomPoses(150, 14), kNoise, 2, kNominalTarget);
+  const MeasurementCampaign b =
+      simulateGeometricCampaign(ur10Model(), truth_b, randomPoses(150, 14), kNoise, 2, kNominalTarget);
   const HoldoutEvaluation after = evaluateOnCampaign(ur10Model(), result.estimate, b, true);
   const HoldoutEvaluation before = evaluateOnCampaign(ur10Model(), nominalParameters(ur10Model(), b), b, true);
   const HoldoutEvaluation shared = evaluateOnCampaign(ur10Model(), result.estimate, b, false);

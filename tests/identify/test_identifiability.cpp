@@ -23,10 +23,10 @@ TEST(Identifiability, FindsExactRedundanciesAndExplainsThem) {
   const Eigen::MatrixXd base = randomColumns(60, 3, 1);
   Eigen::MatrixXd j(60, 6);
   j.col(0) = base.col(0);
-  j.col(1) = 1e-3 * base.col(1);             // other units: scaling must not matter
+  j.col(1) = 1e-3 * base.col(1);  // other units: scaling must not matter
   j.col(2) = base.col(2);
-  j.col(3) = 2.0 * base.col(0);              // redundant with column 0, ratio 2
-  j.col(4) = Eigen::VectorXd::Zero(60);      // no effect
+  j.col(3) = 2.0 * base.col(0);                                       // redundant with column 0, ratio 2
+  j.col(4) = Eigen::VectorXd::Zero(60);                               // no effect
   j.col(5) = base.col(0) + 1e-3 * base.col(1) + 1e-12 * base.col(2);  // nearly a combination
   const IdentifiabilityResult result = analyseIdentifiability(j);
   EXPECT_EQ(result.kept.size(), 3u);

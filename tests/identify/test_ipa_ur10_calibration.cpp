@@ -36,13 +36,14 @@ TEST(IpaUr10Calibration, SeriesACalibrationCarriesOverToSeriesB) {
   const HoldoutEvaluation before = evaluateOnCampaign(prior, nominalParameters(prior, b), b, true);
   const HoldoutEvaluation after = evaluateOnCampaign(prior, result.estimate, b, true);
   const HoldoutEvaluation shared = evaluateOnCampaign(prior, result.estimate, b, false);
-  std::printf("[ IPA UR10 ] A (%d rows): RMS %.3f -> %.3f mm; B (%d rows, frame re-fitted): RMS %.3f -> %.3f mm, "
-              "max %.3f -> %.3f mm; B with A's frame: RMS %.1f mm; %zu parameters, condition number %.1f, "
-              "%d + %d rows down-weighted (%d + %d below half weight)\n",
-              result.used_rows, result.before.rms * 1e3, result.after.rms * 1e3, after.statistics.rows,
-              before.statistics.rms * 1e3, after.statistics.rms * 1e3, before.statistics.max * 1e3,
-              after.statistics.max * 1e3, shared.statistics.rms * 1e3, result.free.size(), result.condition_number,
-              result.downweighted_rows, after.downweighted_rows, result.outlier_rows, after.outlier_rows);
+  std::printf(
+      "[ IPA UR10 ] A (%d rows): RMS %.3f -> %.3f mm; B (%d rows, frame re-fitted): RMS %.3f -> %.3f mm, "
+      "max %.3f -> %.3f mm; B with A's frame: RMS %.1f mm; %zu parameters, condition number %.1f, "
+      "%d + %d rows down-weighted (%d + %d below half weight)\n",
+      result.used_rows, result.before.rms * 1e3, result.after.rms * 1e3, after.statistics.rows,
+      before.statistics.rms * 1e3, after.statistics.rms * 1e3, before.statistics.max * 1e3, after.statistics.max * 1e3,
+      shared.statistics.rms * 1e3, result.free.size(), result.condition_number, result.downweighted_rows,
+      after.downweighted_rows, result.outlier_rows, after.outlier_rows);
 
   EXPECT_EQ(result.used_rows, static_cast<int>(a.size()));
   EXPECT_EQ(result.skipped_rows, 0);

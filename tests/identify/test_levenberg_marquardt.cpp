@@ -83,7 +83,8 @@ TEST(LevenbergMarquardt, RobustLossesResistOutliersAndWeighThemDown) {
   Eigen::VectorXd start = Eigen::VectorXd::Zero(6);
   LevenbergMarquardtOptions options;
   options.block_size = 3;
-  const double least_squares_error = (solveLevenbergMarquardt(model, start, 3 * m, options).x.head<3>() - origin).norm();
+  const double least_squares_error =
+      (solveLevenbergMarquardt(model, start, 3 * m, options).x.head<3>() - origin).norm();
   EXPECT_GT(least_squares_error, 3e-3);  // pulled by the outliers
   for (RobustLoss loss : {RobustLoss::Huber, RobustLoss::Cauchy}) {
     SCOPED_TRACE(robustLossName(loss));
@@ -106,8 +107,8 @@ TEST(LevenbergMarquardt, LossFunctionsAreConsistent) {
     for (double s : {0.0, 0.5, 1.0, 4.0, 100.0}) {
       // rho'(s) by central differences equals the weight.
       const double h = 1e-6;
-      const double derivative = (robustRho(loss, 1.0, s + h) - robustRho(loss, 1.0, std::max(0.0, s - h))) /
-                                (s + h - std::max(0.0, s - h));
+      const double derivative =
+          (robustRho(loss, 1.0, s + h) - robustRho(loss, 1.0, std::max(0.0, s - h))) / (s + h - std::max(0.0, s - h));
       EXPECT_NEAR(derivative, robustWeight(loss, 1.0, s), 1e-5) << robustLossName(loss) << " s " << s;
     }
     EXPECT_EQ(parseRobustLoss(robustLossName(loss)), loss);

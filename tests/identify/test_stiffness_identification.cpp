@@ -159,7 +159,8 @@ TEST(StiffnessIdentification, LocalTestsAloneStillGiveBothMethods) {
 TEST(StiffnessIdentification, UpdatedParameterFileHoldsTheEstimates) {
   const JointErrorModel nominal = rx170Model();
   const JointErrorModel truth = truthModel(2012);
-  const StiffnessIdentificationResult result = identifyStiffness(nominal, simulateCampaign(truth, CampaignSimulationSpec()));
+  const StiffnessIdentificationResult result =
+      identifyStiffness(nominal, simulateCampaign(truth, CampaignSimulationSpec()));
   const JointErrorModel updated = withIdentifiedStiffness(nominal, result, false, "campaign.csv");
   TemporaryDirectory directory("stiffness_update");
   saveParameterFile(updated, directory.file("params.json"));
@@ -192,14 +193,16 @@ TEST(StiffnessIdentification, TooFewPointsInALocalTest) {
   MeasurementCampaign campaign = simulateCampaign(truth, spec);
   // The ladder cut down to rows 1-3 (loads 0.25, 0.5, 0.75 of the maximum), two of them not measured.
   MeasurementCampaign cut = campaign;
-  for (auto* column : {&cut.time, &cut.temperature, &cut.payload}) *column = {column->at(1), column->at(2), column->at(3)};
+  for (auto* column : {&cut.time, &cut.temperature, &cut.payload})
+    *column = {column->at(1), column->at(2), column->at(3)};
   cut.command = {campaign.command[1], campaign.command[2], campaign.command[3]};
   cut.position = {campaign.position[1], campaign.position[2], campaign.position[3]};
   cut.wrench = {campaign.wrench[1], campaign.wrench[2], campaign.wrench[3]};
   cut.measured_angles.assign(3, JointVector::Constant(6, std::numeric_limits<double>::quiet_NaN()));
   cut.position[0].setConstant(std::numeric_limits<double>::quiet_NaN());
   cut.position[2].setConstant(std::numeric_limits<double>::quiet_NaN());
-  expectMeasurementError([&] { identifyStiffnessLocal(rx170Model(), cut); }, "joint_1: 1 measured points for 2 unknowns");
+  expectMeasurementError([&] { identifyStiffnessLocal(rx170Model(), cut); },
+                         "joint_1: 1 measured points for 2 unknowns");
 }
 
 TEST(StiffnessIdentification, DegeneratePosesAreNamed) {
@@ -219,7 +222,8 @@ TEST(StiffnessIdentification, DegeneratePosesAreNamed) {
   // The local test of joint 2 alone has one joint: the global fit of it alone cannot separate anything
   // but joint 2 ... and the others' torques do not vary there, so they are simply not identified.
   spec.stiffness.global_poses = 0;
-  const std::vector<StiffnessEstimate> global = identifyStiffnessGlobal(rx170Model(), simulateCampaign(truth, spec), {}, true);
+  const std::vector<StiffnessEstimate> global =
+      identifyStiffnessGlobal(rx170Model(), simulateCampaign(truth, spec), {}, true);
   EXPECT_TRUE(global[1].identified);
   EXPECT_FALSE(global[0].identified);
   EXPECT_THAT(global[0].reason, HasSubstr("does not vary"));
@@ -261,7 +265,8 @@ TEST(StiffnessIdentification, TargetOnTheTestedAxis) {
 TEST(StiffnessIdentification, RowsNotMeasuredAreLeftOutAndCounted) {
   const JointErrorModel truth = truthModel(2012);
   MeasurementCampaign campaign = simulateCampaign(truth, CampaignSimulationSpec());
-  for (std::size_t k = 3; k < campaign.size(); k += 10) campaign.position[k].setConstant(std::numeric_limits<double>::quiet_NaN());
+  for (std::size_t k = 3; k < campaign.size(); k += 10)
+    campaign.position[k].setConstant(std::numeric_limits<double>::quiet_NaN());
   const StiffnessIdentificationResult result = identifyStiffness(rx170Model(), campaign);
   EXPECT_EQ(result.rows_without_position, 21);
   for (int j = 0; j < 6; ++j) EXPECT_TRUE(result.local[j].identified);

@@ -74,7 +74,8 @@ TEST(TransmissionIdentification, Joint2SweepRecoversTheTwoCycleHarmonic) {
   }
   // The spectrum peaks at 2 cycles per revolution.
   const auto peak = std::max_element(result.spectrum_amplitude_rad.begin(), result.spectrum_amplitude_rad.end());
-  EXPECT_NEAR(result.spectrum_orders[static_cast<std::size_t>(peak - result.spectrum_amplitude_rad.begin())], 2.0, 0.05);
+  EXPECT_NEAR(result.spectrum_orders[static_cast<std::size_t>(peak - result.spectrum_amplitude_rad.begin())], 2.0,
+              0.05);
   // The residual is the tracker noise.
   EXPECT_GT(result.reduced_chi2, 0.8);
   EXPECT_LT(result.reduced_chi2, 1.3);
@@ -117,16 +118,18 @@ TEST(TransmissionIdentification, IntervalsCoverTheTruthOverSeeds) {
       ++trials;
       amplitude_covered += amplitude >= h->amplitude_low_rad && amplitude <= h->amplitude_high_rad ? 1 : 0;
       const double phase_error = wrappedAngleDifference(h->phase_rad, phase);
-      phase_covered += h->phase_rad - phase_error >= h->phase_low_rad && h->phase_rad - phase_error <= h->phase_high_rad ? 1 : 0;
+      phase_covered +=
+          h->phase_rad - phase_error >= h->phase_low_rad && h->phase_rad - phase_error <= h->phase_high_rad ? 1 : 0;
       within_three_sigma += std::abs(h->amplitude_rad - amplitude) < 3 * h->amplitude_se_rad &&
                                     std::abs(phase_error) < 3 * h->phase_se_rad
                                 ? 1
                                 : 0;
     }
   }
-  std::printf("95 %% intervals over %d seeds x 2 harmonics: amplitude covers the truth %d/%d, phase %d/%d; "
-              "both within 3 sigma %d/%d\n",
-              seeds, amplitude_covered, trials, phase_covered, trials, within_three_sigma, trials);
+  std::printf(
+      "95 %% intervals over %d seeds x 2 harmonics: amplitude covers the truth %d/%d, phase %d/%d; "
+      "both within 3 sigma %d/%d\n",
+      seeds, amplitude_covered, trials, phase_covered, trials, within_three_sigma, trials);
   EXPECT_GE(amplitude_covered, 34);  // 85 % of 40
   EXPECT_GE(phase_covered, 34);
   EXPECT_GE(within_three_sigma, 39);
@@ -143,7 +146,8 @@ TEST(TransmissionIdentification, UpdatedParameterFileHoldsTheHarmonics) {
   const int index = back.findEffect(TransmissionErrorEffect::kType);
   ASSERT_GE(index, 0);
   const auto& effect = static_cast<const TransmissionErrorEffect&>(back.effect(index));
-  const auto& before = static_cast<const TransmissionErrorEffect&>(nominal.effect(nominal.findEffect("transmission_error")));
+  const auto& before =
+      static_cast<const TransmissionErrorEffect&>(nominal.effect(nominal.findEffect("transmission_error")));
   int joint2 = 0, others = 0;
   for (const Harmonic& h : effect.harmonics()) {
     if (h.joint == 1 && h.stage == 2) {
@@ -205,7 +209,8 @@ TEST(TransmissionIdentification, JointAngleFromLevelsWhenNoPositions) {
 
 TEST(TransmissionIdentification, RowsNotMeasuredAreLeftOut) {
   MeasurementCampaign campaign = sweep(truthModel(2012));
-  for (std::size_t k = 0; k < campaign.size(); k += 4) campaign.position[k].setConstant(std::numeric_limits<double>::quiet_NaN());
+  for (std::size_t k = 0; k < campaign.size(); k += 4)
+    campaign.position[k].setConstant(std::numeric_limits<double>::quiet_NaN());
   TransmissionIdentificationOptions options;
   options.spectrum_step = 1.0;
   const TransmissionIdentificationResult result = identifyTransmissionError(rx170Model(), campaign, options);
@@ -228,7 +233,8 @@ TEST(TransmissionIdentification, DocumentedErrors) {
   few.wrench.resize(12);
   TransmissionIdentificationOptions options;
   options.min_periods = 0.01;
-  expectMeasurementError([&] { identifyTransmissionError(nominal, few, options); }, "12 measured points of joint_2 for 16 unknowns");
+  expectMeasurementError([&] { identifyTransmissionError(nominal, few, options); },
+                         "12 measured points of joint_2 for 16 unknowns");
   // Too short for two periods of any candidate.
   expectMeasurementError([&] { identifyTransmissionError(nominal, few); }, "too short");
   // Instrument frame.

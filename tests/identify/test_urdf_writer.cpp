@@ -105,10 +105,10 @@ TEST(UrdfWriter, RpyAnglesGiveBackTheRotationEverywhere) {
                      .toRotationMatrix();
     }
     const Eigen::Vector3d rpy = rotationToRpy(rotation);
-    const Eigen::Matrix3d back = (Eigen::AngleAxisd(rpy.z(), Eigen::Vector3d::UnitZ()) *
-                                  Eigen::AngleAxisd(rpy.y(), Eigen::Vector3d::UnitY()) *
-                                  Eigen::AngleAxisd(rpy.x(), Eigen::Vector3d::UnitX()))
-                                     .toRotationMatrix();
+    const Eigen::Matrix3d back =
+        (Eigen::AngleAxisd(rpy.z(), Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(rpy.y(), Eigen::Vector3d::UnitY()) *
+         Eigen::AngleAxisd(rpy.x(), Eigen::Vector3d::UnitX()))
+            .toRotationMatrix();
     ASSERT_LE((back - rotation).cwiseAbs().maxCoeff(), 1e-14) << "case " << k;
   }
 }

@@ -57,8 +57,8 @@ TEST(IpaImport, SeriesA) {
 }
 
 TEST(IpaImport, SeriesBTimeFromRowOrder) {
-  const MeasurementCampaign c = importIpaUr10(ipaFile("Series_B/measurements_joint_configurations.csv"),
-                                              ipaFile("Series_B/Trafo_TM_F_init.txt"));
+  const MeasurementCampaign c =
+      importIpaUr10(ipaFile("Series_B/measurements_joint_configurations.csv"), ipaFile("Series_B/Trafo_TM_F_init.txt"));
   ASSERT_EQ(c.size(), 1495u);
   // The timestamps are mangled ("2,02011E+13"): time is the row order, 1 s per row.
   EXPECT_EQ(c.metadata.at("time_from"), "row order (1 s per row)");
@@ -80,8 +80,8 @@ TEST(IpaImport, WithoutTrafoThereIsNoTarget) {
 }
 
 TEST(IpaImport, SurvivesTheCampaignFormat) {
-  const MeasurementCampaign c = importIpaUr10(ipaFile("Series_B/measurements_joint_configurations.csv"),
-                                              ipaFile("Series_B/Trafo_TM_F_init.txt"));
+  const MeasurementCampaign c =
+      importIpaUr10(ipaFile("Series_B/measurements_joint_configurations.csv"), ipaFile("Series_B/Trafo_TM_F_init.txt"));
   const std::string path = ::testing::TempDir() + "jointcomp_ipa_b.csv";
   writeCampaignFile(c, path);
   const MeasurementCampaign back = readCampaignFile(path);
@@ -109,18 +109,18 @@ void expectError(Call call, const std::string& where, const std::string& fragmen
 }
 
 TEST(IpaImport, BrokenFilesAreRejected) {
-  expectError([] { importIpaUr10(brokenFile("ipa_missing_column.csv")); }, brokenFile("ipa_missing_column.csv") + ":1:",
-              "column 'wrist_3_joint' is missing");
-  expectError([] { importIpaUr10(brokenFile("ipa_bad_number.csv")); }, brokenFile("ipa_bad_number.csv") + ":3:",
-              "column 'measurement_y': 'abc' is not a finite number");
-  expectError([] { importIpaUr10(brokenFile("ipa_wrong_cell_count.csv")); }, brokenFile("ipa_wrong_cell_count.csv") + ":2:",
-              "row has 9 cells, the header has 10");
+  expectError([] { importIpaUr10(brokenFile("ipa_missing_column.csv")); },
+              brokenFile("ipa_missing_column.csv") + ":1:", "column 'wrist_3_joint' is missing");
+  expectError([] { importIpaUr10(brokenFile("ipa_bad_number.csv")); },
+              brokenFile("ipa_bad_number.csv") + ":3:", "column 'measurement_y': 'abc' is not a finite number");
+  expectError([] { importIpaUr10(brokenFile("ipa_wrong_cell_count.csv")); },
+              brokenFile("ipa_wrong_cell_count.csv") + ":2:", "row has 9 cells, the header has 10");
   expectError([] { importIpaUr10(brokenFile("empty.csv")); }, brokenFile("empty.csv"), "empty");
   expectError([] { importIpaUr10(brokenFile("no_such_file.csv")); }, "no_such_file.csv", "");
   expectError([] { ipaTargetInFlange(brokenFile("ipa_bad_trafo.txt")); }, brokenFile("ipa_bad_trafo.txt"),
               "expected 16 numbers (a 4x4 matrix), found 12");
-  expectError([] { ipaTargetInFlange(brokenFile("ipa_not_rotation_trafo.txt")); }, brokenFile("ipa_not_rotation_trafo.txt"),
-              "the rotation part is not a rotation");
+  expectError([] { ipaTargetInFlange(brokenFile("ipa_not_rotation_trafo.txt")); },
+              brokenFile("ipa_not_rotation_trafo.txt"), "the rotation part is not a rotation");
 }
 
 }  // namespace

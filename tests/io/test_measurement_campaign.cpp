@@ -20,7 +20,9 @@ using ::testing::HasSubstr;
 
 constexpr double kDegree = 3.14159265358979323846 / 180.0;
 
-std::string campaignFile(const std::string& name) { return std::string(JOINTCOMP_TEST_DATA_DIR) + "/campaigns/" + name; }
+std::string campaignFile(const std::string& name) {
+  return std::string(JOINTCOMP_TEST_DATA_DIR) + "/campaigns/" + name;
+}
 
 TEST(MeasurementCampaign, GoodFileInSiUnits) {
   const MeasurementCampaign c = readCampaignFile(campaignFile("good.csv"));
@@ -91,8 +93,9 @@ MeasurementCampaign randomCampaign() {
     }
     c.command.push_back(q);
     c.measured_angles.push_back(qm);
-    c.position.push_back(random.uniform() < 0.1 ? Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN())
-                                                : Eigen::Vector3d(random.uniform(-2, 2), random.uniform(-2, 2), random.uniform(0, 2)));
+    c.position.push_back(random.uniform() < 0.1
+                             ? Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN())
+                             : Eigen::Vector3d(random.uniform(-2, 2), random.uniform(-2, 2), random.uniform(0, 2)));
     c.temperature.push_back(random.uniform() < 0.5 ? std::numeric_limits<double>::quiet_NaN() : random.uniform(18, 25));
     Vector6 w;
     for (int a = 0; a < 6; ++a) w[a] = random.normal() * 100.0;
@@ -152,8 +155,8 @@ TEST(MeasurementCampaign, InconsistentCampaignIsNotWritten) {
 
 struct BrokenFile {
   const char* file;
-  int line;                 // the line the message must name (0: no line number expected)
-  const char* fragment;     // and this text (column, reason)
+  int line;              // the line the message must name (0: no line number expected)
+  const char* fragment;  // and this text (column, reason)
 };
 
 class BrokenCampaign : public ::testing::TestWithParam<BrokenFile> {};
@@ -176,29 +179,29 @@ TEST_P(BrokenCampaign, IsRejectedNamingFileLineAndColumn) {
 
 INSTANTIATE_TEST_SUITE_P(
     Files, BrokenCampaign,
-    ::testing::Values(BrokenFile{"missing_format_line.csv", 1, "the first line must be '# format: jointcomp-measurements/1'"},
-                      BrokenFile{"wrong_format_version.csv", 1, "the first line must be"},
-                      BrokenFile{"empty.csv", 1, "the file is empty"},
-                      BrokenFile{"no_header.csv", 2, "no header row"},
-                      BrokenFile{"missing_t.csv", 2, "required column 't' is missing"},
-                      BrokenFile{"missing_joints.csv", 2, "required columns q1 ... qN are missing"},
-                      BrokenFile{"no_measurement.csv", 2, "needs measured positions (x, y, z) or measured joint angles"},
-                      BrokenFile{"non_numeric.csv", 4, "column 'q2': '4O' is not a number"},
-                      BrokenFile{"non_finite.csv", 4, "column 'x': 'inf' is not finite"},
-                      BrokenFile{"nan_cell.csv", 4, "column 'y': 'nan' is not finite"},
-                      BrokenFile{"overflow.csv", 4, "column 'z': '1e999' is not finite"},
-                      BrokenFile{"decreasing_t.csv", 5, "column 't': time decreases"},
-                      BrokenFile{"wrong_cell_count.csv", 4, "row has 5 cells, the header has 6"},
-                      BrokenFile{"partial_xyz_header.csv", 2, "columns x, y and z go together"},
-                      BrokenFile{"partial_xyz_row.csv", 4, "columns x, y, z: measured in part only"},
-                      BrokenFile{"q_gap.csv", 2, "column 'q4' but the joints are q1 ... q2"},
-                      BrokenFile{"q_huge_index.csv", 2, "column 'q99999999999999999999' but the joints are q1 ... q2"},
-                      BrokenFile{"empty_q_cell.csv", 4, "column 'q2': empty cell in a required column"},
-                      BrokenFile{"negative_payload.csv", 3, "column 'payload': negative mass"},
-                      BrokenFile{"duplicate_column.csv", 2, "column 'x' appears twice"},
-                      BrokenFile{"bad_frame.csv", 0, "metadata 'frame' must be 'base' or 'instrument', is 'tracker'"},
-                      BrokenFile{"bad_target.csv", 0, "metadata 'target' must be 'x,y,z' in mm"},
-                      BrokenFile{"no_such_file.csv", 0, "no_such_file.csv"}),
+    ::testing::Values(
+        BrokenFile{"missing_format_line.csv", 1, "the first line must be '# format: jointcomp-measurements/1'"},
+        BrokenFile{"wrong_format_version.csv", 1, "the first line must be"},
+        BrokenFile{"empty.csv", 1, "the file is empty"}, BrokenFile{"no_header.csv", 2, "no header row"},
+        BrokenFile{"missing_t.csv", 2, "required column 't' is missing"},
+        BrokenFile{"missing_joints.csv", 2, "required columns q1 ... qN are missing"},
+        BrokenFile{"no_measurement.csv", 2, "needs measured positions (x, y, z) or measured joint angles"},
+        BrokenFile{"non_numeric.csv", 4, "column 'q2': '4O' is not a number"},
+        BrokenFile{"non_finite.csv", 4, "column 'x': 'inf' is not finite"},
+        BrokenFile{"nan_cell.csv", 4, "column 'y': 'nan' is not finite"},
+        BrokenFile{"overflow.csv", 4, "column 'z': '1e999' is not finite"},
+        BrokenFile{"decreasing_t.csv", 5, "column 't': time decreases"},
+        BrokenFile{"wrong_cell_count.csv", 4, "row has 5 cells, the header has 6"},
+        BrokenFile{"partial_xyz_header.csv", 2, "columns x, y and z go together"},
+        BrokenFile{"partial_xyz_row.csv", 4, "columns x, y, z: measured in part only"},
+        BrokenFile{"q_gap.csv", 2, "column 'q4' but the joints are q1 ... q2"},
+        BrokenFile{"q_huge_index.csv", 2, "column 'q99999999999999999999' but the joints are q1 ... q2"},
+        BrokenFile{"empty_q_cell.csv", 4, "column 'q2': empty cell in a required column"},
+        BrokenFile{"negative_payload.csv", 3, "column 'payload': negative mass"},
+        BrokenFile{"duplicate_column.csv", 2, "column 'x' appears twice"},
+        BrokenFile{"bad_frame.csv", 0, "metadata 'frame' must be 'base' or 'instrument', is 'tracker'"},
+        BrokenFile{"bad_target.csv", 0, "metadata 'target' must be 'x,y,z' in mm"},
+        BrokenFile{"no_such_file.csv", 0, "no_such_file.csv"}),
     [](const ::testing::TestParamInfo<BrokenFile>& param) {
       std::string name = param.param.file;
       name = name.substr(0, name.find('.'));

@@ -97,7 +97,8 @@ TEST(ParameterFile, Rx170LoadsWithTheValuesOfTheFile) {
   for (int r = 0; r < 6; ++r) {
     for (int c = 0; c < 6; ++c) {
       if (r == c) continue;
-      const double expected = (r == 5 && c == 4) ? file.at("gears").at("coupling")[0].at("motor_rad_per_joint_rad").get<double>() : 0.0;
+      const double expected =
+          (r == 5 && c == 4) ? file.at("gears").at("coupling")[0].at("motor_rad_per_joint_rad").get<double>() : 0.0;
       EXPECT_EQ(model.gears().motorFromJoint()(r, c), expected) << r << "," << c;
     }
   }
@@ -139,7 +140,8 @@ TEST(ParameterFile, RoundTripsArbitraryValuesBitForBit) {
   JointErrorModel model = loadParameterFile(rx170ParametersPath(), rx170());
   for (int i = 0; i < model.effectCount(); ++i) {
     std::vector<double> values = model.effect(i).parameters();
-    for (std::size_t k = 0; k < values.size(); ++k) values[k] = (values[k] + 0.1) * (1.0 + std::sqrt(2.0) * 1e-3 * (k + 1));
+    for (std::size_t k = 0; k < values.size(); ++k)
+      values[k] = (values[k] + 0.1) * (1.0 + std::sqrt(2.0) * 1e-3 * (k + 1));
     model.effect(i).setParameters(values);
   }
   const JointErrorModel again = parseParameters(parametersToJson(model), "round trip", rx170());
@@ -215,17 +217,16 @@ TEST_P(CommittedBrokenFile, GivesParameterErrorNamingFileAndField) {
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(
-    Files, CommittedBrokenFile,
-    ::testing::Values(BrokenFile{"truncated.json", "", "JSON"},
-                      BrokenFile{"huge_number.json", "", "1e400"},
-                      BrokenFile{"unknown_top_level_key.json", "colour", "unknown"},
-                      BrokenFile{"wrong_format.json", "format", "jointcomp-parameters/1"},
-                      BrokenFile{"robot_mismatch.json", "robot", "rx160"}),
-    [](const ::testing::TestParamInfo<BrokenFile>& param_info) {
-      std::string name = param_info.param.file;
-      return name.substr(0, name.find('.'));
-    });
+INSTANTIATE_TEST_SUITE_P(Files, CommittedBrokenFile,
+                         ::testing::Values(BrokenFile{"truncated.json", "", "JSON"},
+                                           BrokenFile{"huge_number.json", "", "1e400"},
+                                           BrokenFile{"unknown_top_level_key.json", "colour", "unknown"},
+                                           BrokenFile{"wrong_format.json", "format", "jointcomp-parameters/1"},
+                                           BrokenFile{"robot_mismatch.json", "robot", "rx160"}),
+                         [](const ::testing::TestParamInfo<BrokenFile>& param_info) {
+                           std::string name = param_info.param.file;
+                           return name.substr(0, name.find('.'));
+                         });
 
 // ---- edits of the good file ------------------------------------------------------------------------
 
@@ -297,12 +298,10 @@ std::vector<Edit> edits() {
        "gears.coupling[0].motor_of"},
       {"UnknownCouplingJoint", [](json& j) { j["gears"]["coupling"][0]["joint"] = "joint_0"; },
        "gears.coupling[0].joint"},
-      {"GearJointOutOfOrder", [](json& j) { j["gears"]["joints"][0]["joint"] = "joint_2"; },
-       "gears.joints[0].joint"},
+      {"GearJointOutOfOrder", [](json& j) { j["gears"]["joints"][0]["joint"] = "joint_2"; }, "gears.joints[0].joint"},
       {"OfStageBeyondTheTrain", [](json& j) { j["effects"][2]["harmonics"][0]["of"] = "stage_3"; },
        "effects[2].harmonics[0].of"},
-      {"OfStageZero", [](json& j) { j["effects"][2]["harmonics"][1]["of"] = "stage_0"; },
-       "effects[2].harmonics[1].of"},
+      {"OfStageZero", [](json& j) { j["effects"][2]["harmonics"][1]["of"] = "stage_0"; }, "effects[2].harmonics[1].of"},
       {"OfUnknownPart", [](json& j) { j["effects"][2]["harmonics"][2]["of"] = "gearbox"; },
        "effects[2].harmonics[2].of"},
       {"OfStageWithoutNumber", [](json& j) { j["effects"][2]["harmonics"][3]["of"] = "stage_"; },
@@ -313,7 +312,8 @@ std::vector<Edit> edits() {
        "effects[2].harmonics[3].of"},
       {"OfStageHuge", [](json& j) { j["effects"][2]["harmonics"][3]["of"] = "stage_99999999999999999999"; },
        "effects[2].harmonics[3].of"},
-      {"OfSingleStageJointStage2", [](json& j) {
+      {"OfSingleStageJointStage2",
+       [](json& j) {
          j["effects"][2]["harmonics"][0]["joint"] = "joint_4";  // one stage: stage_2 is its output, named "output"
        },
        "effects[2].harmonics[0].of"},

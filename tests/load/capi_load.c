@@ -33,8 +33,8 @@ static double seconds_now(void) {
   return (double)now.tv_sec + 1e-9 * (double)now.tv_nsec;
 }
 
-static void *allocate(size_t count) {
-  void *memory = malloc(count * sizeof(double));
+static void* allocate(size_t count) {
+  void* memory = malloc(count * sizeof(double));
   if (!memory) {
     fprintf(stderr, "capi_load: out of memory\n");
     exit(1);
@@ -42,9 +42,9 @@ static void *allocate(size_t count) {
   return memory;
 }
 
-int main(int argc, char **argv) {
+int main(int argc, char** argv) {
   const double posture[DOF] = {0.0, -0.3, 0.5, 0.0, 0.6, 0.0};
-  jc_robot *robot = NULL;
+  jc_robot* robot = NULL;
   long points, k, rss_before, rss_first = 0;
   int j, call, ok = 1;
   double *planned, *velocities, *first, *references;
@@ -82,7 +82,7 @@ int main(int argc, char **argv) {
     int32_t max_iterations = 0;
     double max_correction = 0.0, started = seconds_now(), took;
     long rss;
-    double *out = call == 1 ? first : references;
+    double* out = call == 1 ? first : references;
     const jc_status status =
         jc_compensate_trajectory(robot, NULL, planned, (int32_t)(points * DOF), velocities, (int32_t)(points * DOF),
                                  out, (int32_t)(points * DOF), &max_iterations, &max_correction);

@@ -24,10 +24,10 @@ namespace {
 namespace table = jointcomp::fmu::table;
 
 constexpr double kPi = 3.14159265358979323846;
-constexpr double kStep = 0.01;             // communication step, s
+constexpr double kStep = 0.01;  // communication step, s
 constexpr double kMinute = 60.0;
-constexpr double kWarmUp = 5 * kMinute;     // allocations settle (integrator, caches) before this
-constexpr long kAllowedGrowthKiB = 2048;    // RSS may vary this much after the warm-up
+constexpr double kWarmUp = 5 * kMinute;   // allocations settle (integrator, caches) before this
+constexpr long kAllowedGrowthKiB = 2048;  // RSS may vary this much after the warm-up
 
 [[noreturn]] void die(const std::string& what) {
   std::fprintf(stderr, "fmu_load: %s\n", what.c_str());
@@ -114,7 +114,7 @@ Run runFmi2(void* library, const std::string& folder, double seconds) {
   const std::string uri = "file://" + folder + "/resources";
   static const fmi2CallbackFunctions callbacks = {logNothing, nullptr, nullptr, nullptr, nullptr};
   fmi2Component c = FMI(library, fmi2Instantiate)("load", fmi2CoSimulation, table::kInstantiationToken, uri.c_str(),
-                                                   &callbacks, 0, 0);
+                                                  &callbacks, 0, 0);
   if (!c) die("fmi2Instantiate failed");
   const auto set = FMI(library, fmi2SetReal);
   const auto get = FMI(library, fmi2GetReal);
@@ -142,9 +142,9 @@ Run runFmi2(void* library, const std::string& folder, double seconds) {
 
 Run runFmi3(void* library, const std::string& folder, double seconds) {
   const std::string resources = folder + "/resources/";
-  fmi3Instance instance = FMI(library, fmi3InstantiateCoSimulation)(
-      "load", table::kInstantiationToken, resources.c_str(), false, false, false, false, nullptr, 0, nullptr,
-      logNothing3, nullptr);
+  fmi3Instance instance =
+      FMI(library, fmi3InstantiateCoSimulation)("load", table::kInstantiationToken, resources.c_str(), false, false,
+                                                false, false, nullptr, 0, nullptr, logNothing3, nullptr);
   if (!instance) die("fmi3InstantiateCoSimulation failed");
   const auto set = FMI(library, fmi3SetFloat64);
   const auto get = FMI(library, fmi3GetFloat64);

@@ -29,18 +29,14 @@ namespace {
 
 using namespace plant_testing;
 
-
-
-
-
-
 struct Energy {
   double kinetic = 0.0;    // links and motors
   double potential = 0.0;  // gravity, joint springs, balancer
   double total() const { return kinetic + potential; }
 };
 
-Energy energyOf(const JointErrorModel& model, const std::vector<DriveParameters>& drives, const FlexibleJointPlant& plant) {
+Energy energyOf(const JointErrorModel& model, const std::vector<DriveParameters>& drives,
+                const FlexibleJointPlant& plant) {
   const Robot& robot = model.robot();
   const JointVector q = plant.linkPositions();
   const JointVector qd = plant.linkVelocities();

@@ -10,8 +10,8 @@
 #include <string>
 #include <vector>
 
-#include <Eigen/Eigenvalues>
 #include <gtest/gtest.h>
+#include <Eigen/Eigenvalues>
 
 #include "tests/plant/plant_test_support.hpp"
 
@@ -27,11 +27,6 @@ namespace jointcomp {
 namespace {
 
 using namespace plant_testing;
-
-
-
-
-
 
 struct Linearised {
   JointErrorModel model = loadParameterFile(kParameters, rx170());
@@ -160,7 +155,8 @@ TEST(PlantLinearisation, FreeResponseOscillatesAtTheLowestFrequency) {
   for (int k = 1; k <= 200 * 10; ++k) {
     s.plant->advance(s.equilibrium.time + k * dt);
     const double now = s.plant->linkPositions()[watched] - q0;
-    if ((previous < 0.0) != (now < 0.0)) crossings.push_back(s.equilibrium.time + (k - 1 + previous / (previous - now)) * dt);
+    if ((previous < 0.0) != (now < 0.0))
+      crossings.push_back(s.equilibrium.time + (k - 1 + previous / (previous - now)) * dt);
     previous = now;
   }
   ASSERT_GE(crossings.size(), 18U);

@@ -24,9 +24,6 @@ using namespace plant_testing;
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
-
-
-
 JointErrorModel rx170Model() { return loadParameterFile(kParameters, rx170()); }
 std::vector<DriveParameters> rx170Drives() { return loadDriveParameters(kParameters, *rx170()); }
 
@@ -195,10 +192,11 @@ TEST(PlantMisuse, AbsurdGainsAreASolverErrorNotAnAbort) {
   FlexibleJointPlant plant(rx170Model(), drives, options);
   plant.reset(home());
   plant.setReference(target, JointVector::Zero(6));
-  expectSolverFailure(plant, 0.2,
-                      {"CV_TOO_MUCH_WORK", "CV_TOO_MUCH_ACC", "CV_ERR_FAILURE", "CV_CONV_FAILURE", "CV_REPTD_RHSFUNC_ERR",
-                       "CV_RHSFUNC_FAIL", "CV_TOO_CLOSE", "CV_FIRST_RHSFUNC_ERR", "CV_UNREC_RHSFUNC_ERR"},
-                      "kp = 1e14");
+  expectSolverFailure(
+      plant, 0.2,
+      {"CV_TOO_MUCH_WORK", "CV_TOO_MUCH_ACC", "CV_ERR_FAILURE", "CV_CONV_FAILURE", "CV_REPTD_RHSFUNC_ERR",
+       "CV_RHSFUNC_FAIL", "CV_TOO_CLOSE", "CV_FIRST_RHSFUNC_ERR", "CV_UNREC_RHSFUNC_ERR"},
+      "kp = 1e14");
 }
 
 // A drive without inertia makes the motor's acceleration infinite: the right-hand side cannot be

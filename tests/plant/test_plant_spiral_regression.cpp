@@ -23,16 +23,13 @@ namespace {
 
 using namespace plant_testing;
 
-
-
-
 struct Reference {
   double ra_mm, rz_mm, rms_mm, max_mm;
 };
 
-// Ra, Rz, RMS (3-D) and max (3-D) in mm. Measured once with the plant as of the commit that starts it at rest (reset holds the motor reaction) (GCC, Release,
-// Debian's SUNDIALS; plant with default PlantOptions, default SpiralExperimentSpec: truth seed 2012,
-// noise seed 7) by
+// Ra, Rz, RMS (3-D) and max (3-D) in mm. Measured once with the plant as of the commit that starts it at rest (reset
+// holds the motor reaction) (GCC, Release, Debian's SUNDIALS; plant with default PlantOptions, default
+// SpiralExperimentSpec: truth seed 2012, noise seed 7) by
 //   cmake -S . -B build/helper-plant -DCMAKE_BUILD_TYPE=Release &&
 //   cmake --build build/helper-plant --target test_plant &&
 //   build/helper-plant/tests/test_plant --gtest_filter='PlantSpiralRegression.*'

@@ -24,9 +24,6 @@ using namespace plant_testing;
 
 constexpr double kPeriod = 0.004;  // s, reference updates
 
-
-
-
 JointVector home() {
   JointVector q(6);
   q << 0.0, 60.0, 60.0, 0.0, 60.0, 0.0;

@@ -28,13 +28,6 @@ namespace {
 
 using namespace plant_testing;
 
-
-
-
-
-
-
-
 JointVector stiffnesses(const JointErrorModel& model) {
   const auto& compliance =
       dynamic_cast<const ComplianceEffect&>(model.effect(model.findEffect(ComplianceEffect::kType)));
@@ -88,8 +81,7 @@ Settled settle(FlexibleJointPlant& plant, double seconds) {
 
 void expectComplianceEquilibrium(const JointErrorModel& model, const Settled& s, const std::string& what) {
   const JointVector k = stiffnesses(model);
-  const JointVector predicted =
-      s.p + transmissionErrorAt(model, s.p) - staticLoad(model, s.q).cwiseQuotient(k);
+  const JointVector predicted = s.p + transmissionErrorAt(model, s.p) - staticLoad(model, s.q).cwiseQuotient(k);
   for (int j = 0; j < s.q.size(); ++j) {
     EXPECT_NEAR(s.q[j], predicted[j], 1e-9) << what << ", joint " << j + 1;
     EXPECT_LT(std::abs(s.qd[j]), 1e-8) << what << ", joint " << j + 1 << " still moving";

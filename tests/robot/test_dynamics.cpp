@@ -11,9 +11,9 @@
 #include <string>
 #include <vector>
 
-#include <Eigen/Eigenvalues>
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
+#include <Eigen/Eigenvalues>
 
 #include "model/common/errors.hpp"
 #include "model/robot/dynamics.hpp"
@@ -35,8 +35,7 @@ JointMatrix massAt(const Robot& robot, const JointVector& q) {
   return mass;
 }
 
-JointVector inverseDynamicsAt(const Robot& robot, const JointVector& q, const JointVector& qd,
-                              const JointVector& qdd) {
+JointVector inverseDynamicsAt(const Robot& robot, const JointVector& q, const JointVector& qd, const JointVector& qdd) {
   RobotWorkspace ws(robot);
   JointVector tau;
   inverseDynamics(robot, ws, q, qd, qdd, tau);
@@ -65,8 +64,7 @@ TEST(Dynamics, GravityTorquesAreTheGradientOfThePotentialEnergy) {
         JointVector minus = q;
         plus[i] += h;
         minus[i] -= h;
-        const double gradient =
-            (potentialEnergy(*robot, ws, plus) - potentialEnergy(*robot, ws, minus)) / (2.0 * h);
+        const double gradient = (potentialEnergy(*robot, ws, plus) - potentialEnergy(*robot, ws, minus)) / (2.0 * h);
         EXPECT_NEAR(tau[i], gradient, 1e-5) << robot->name << " joint " << i + 1;
       }
     }
@@ -243,8 +241,7 @@ TEST(Dynamics, ForwardDynamicsInvertsInverseDynamics) {
       forwardDynamics(*robot, ws, q, qd, tau, qdd);
       ASSERT_EQ(qdd.size(), n);
       const JointVector back = inverseDynamicsAt(*robot, q, qd, qdd);
-      EXPECT_LT((back - tau).cwiseAbs().maxCoeff(), 1e-8 * std::max(1.0, tau.cwiseAbs().maxCoeff()))
-          << robot->name;
+      EXPECT_LT((back - tau).cwiseAbs().maxCoeff(), 1e-8 * std::max(1.0, tau.cwiseAbs().maxCoeff())) << robot->name;
       // And the other way round: the acceleration that produced a torque is recovered.
       const JointVector wanted = testing_support::randomVector(n, rng, 3.0);
       JointVector recovered;

@@ -72,8 +72,8 @@ std::array<Eigen::Matrix4d, 7> dhFrames(const DhTable& table, const JointVector&
   frames[0].setIdentity();
   for (int i = 0; i < 6; ++i) {
     const DhRow& row = table[i];
-    frames[i + 1] = frames[i] * rotZ(q[i] + row.theta_offset) * translation(0, 0, row.d) *
-                    translation(row.a, 0, 0) * rotX(row.alpha);
+    frames[i + 1] = frames[i] * rotZ(q[i] + row.theta_offset) * translation(0, 0, row.d) * translation(row.a, 0, 0) *
+                    rotX(row.alpha);
   }
   return frames;
 }
@@ -104,10 +104,9 @@ void expectToolMatchesDh(const Robot& robot, const DhTable& table, unsigned seed
     worst_position = std::max(worst_position, c.position);
     worst_rotation = std::max(worst_rotation, c.rotation);
     // The rotation part must stay orthonormal.
-    ASSERT_LT((ws.tool_pose.linear().transpose() * ws.tool_pose.linear() - Eigen::Matrix3d::Identity())
-                  .cwiseAbs()
-                  .maxCoeff(),
-              1e-14);
+    ASSERT_LT(
+        (ws.tool_pose.linear().transpose() * ws.tool_pose.linear() - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff(),
+        1e-14);
   }
   EXPECT_LT(worst_position, 1e-12) << robot.name;
   EXPECT_LT(worst_rotation, 1e-12) << robot.name;
@@ -130,8 +129,8 @@ void expectJointFramesMatchDh(const Robot& robot, const DhTable& table, unsigned
       ASSERT_LT((ws.origin[i] - frames[i].block<3, 1>(0, 3)).norm(), 1e-12) << robot.name << " joint " << i;
       ASSERT_LT((ws.axis[i] - frames[i].block<3, 1>(0, 2)).norm(), 1e-12) << robot.name << " joint " << i;
       // The centre of mass rides with the body: fixed in the joint frame.
-      const Eigen::Vector3d com_expected = joint_frame.block<3, 3>(0, 0) * robot.joints[i].body.com +
-                                           joint_frame.block<3, 1>(0, 3);
+      const Eigen::Vector3d com_expected =
+          joint_frame.block<3, 3>(0, 0) * robot.joints[i].body.com + joint_frame.block<3, 1>(0, 3);
       ASSERT_LT((ws.com[i] - com_expected).norm(), 1e-12) << robot.name << " joint " << i;
     }
   }
@@ -251,15 +250,15 @@ TEST(PoseError, IsThePositionDifferenceAndTheRotationVectorFromTo) {
   std::uniform_real_distribution<double> uniform(-1.0, 1.0);
   for (int sample = 0; sample < 100; ++sample) {
     Eigen::Isometry3d from = Eigen::Isometry3d::Identity();
-    from.linear() = Eigen::Quaterniond(uniform(rng), uniform(rng), uniform(rng), uniform(rng)).normalized()
-                        .toRotationMatrix();
+    from.linear() =
+        Eigen::Quaterniond(uniform(rng), uniform(rng), uniform(rng), uniform(rng)).normalized().toRotationMatrix();
     from.translation() = Eigen::Vector3d(uniform(rng), uniform(rng), uniform(rng));
-    const Eigen::Vector3d rotation_vector = 2.5 * Eigen::Vector3d(uniform(rng), uniform(rng), uniform(rng)) /
-                                            std::sqrt(3.0);  // angle below pi
+    const Eigen::Vector3d rotation_vector =
+        2.5 * Eigen::Vector3d(uniform(rng), uniform(rng), uniform(rng)) / std::sqrt(3.0);  // angle below pi
     const Eigen::Vector3d shift(uniform(rng), uniform(rng), uniform(rng));
     Eigen::Isometry3d to = Eigen::Isometry3d::Identity();
-    to.linear() = Eigen::AngleAxisd(rotation_vector.norm(), rotation_vector.normalized()).toRotationMatrix() *
-                  from.linear();
+    to.linear() =
+        Eigen::AngleAxisd(rotation_vector.norm(), rotation_vector.normalized()).toRotationMatrix() * from.linear();
     to.translation() = from.translation() + shift;
     const Vector6 error = poseError(from, to);
     EXPECT_LT((error.head<3>() - shift).norm(), 1e-14);

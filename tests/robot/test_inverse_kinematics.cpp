@@ -9,9 +9,9 @@
 #include <set>
 #include <tuple>
 
-#include <Eigen/SVD>
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
+#include <Eigen/SVD>
 
 #include "model/common/errors.hpp"
 #include "model/robot/inverse_kinematics.hpp"
@@ -67,9 +67,9 @@ TEST(InverseKinematics, ClosedFormIsDetectedForTheRx170Only) {
   InverseKinematics ur10(testing_support::ur10());
   EXPECT_FALSE(ur10.hasClosedForm());
   std::array<IkSolution, 8> solutions;
-  EXPECT_THROW(ur10.allSolutions(toolPose(testing_support::ur10(), JointVector::Zero(6)), JointVector::Zero(6),
-                                 solutions),
-               InvalidArgument);
+  EXPECT_THROW(
+      ur10.allSolutions(toolPose(testing_support::ur10(), JointVector::Zero(6)), JointVector::Zero(6), solutions),
+      InvalidArgument);
 }
 
 TEST(InverseKinematics, Rx170RoundTripsOverRandomReachablePoses) {
@@ -263,7 +263,8 @@ TEST(InverseKinematics, Rx170TargetReachableOnlyBeyondTheLimitsIsUnreachable) {
   const int without_limits = unlimited.allSolutions(target, q, solutions);
   ASSERT_GT(without_limits, 0);
   bool found_original = false;
-  for (int s = 0; s < without_limits; ++s) found_original = found_original || maxWrappedDifference(solutions[s].q, q) < 1e-8;
+  for (int s = 0; s < without_limits; ++s)
+    found_original = found_original || maxWrappedDifference(solutions[s].q, q) < 1e-8;
   EXPECT_TRUE(found_original);
 
   InverseKinematics limited(robot);

@@ -2,8 +2,8 @@
 // the orientation through the rotation vector of R(q + h e_i) R(q - h e_i)^T divided by 2h.
 #include <random>
 
-#include <Eigen/SVD>
 #include <gtest/gtest.h>
+#include <Eigen/SVD>
 
 #include "model/robot/kinematics.hpp"
 #include "robot_test_support.hpp"

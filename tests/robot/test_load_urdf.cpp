@@ -134,7 +134,9 @@ TEST(LoadUrdf, MissingFileNamesThePath) { expectUrdfError("does_not_exist.urdf",
 
 TEST(LoadUrdf, MalformedXmlNamesTheFile) { expectUrdfError("malformed.urdf", {}); }
 
-TEST(LoadUrdf, PrismaticJointOnTheChainIsRejected) { expectUrdfError("prismatic_joint.urdf", {"joint_2", "prismatic"}); }
+TEST(LoadUrdf, PrismaticJointOnTheChainIsRejected) {
+  expectUrdfError("prismatic_joint.urdf", {"joint_2", "prismatic"});
+}
 
 TEST(LoadUrdf, FloatingJointOnTheChainIsRejected) { expectUrdfError("floating_joint.urdf", {"joint_2", "floating"}); }
 
@@ -356,10 +358,9 @@ TEST(LoadUrdf, FoldedMassesGiveTheHandComputedGravityTorques) {
     const Eigen::Vector3d c_tool = elbow + r2 * Eigen::Vector3d(0, 0, 0.5);
     const Eigen::Vector3d weight(0, 0, -9.81);
     // Holding torque = minus the moment of the weights about each axis.
-    const double tau1 = -Eigen::Vector3d::UnitY().dot((c1 - shoulder).cross(3.0 * weight) +
-                                                       (c_mid - shoulder).cross(2.0 * weight) +
-                                                       (c2 - shoulder).cross(1.5 * weight) +
-                                                       (c_tool - shoulder).cross(0.5 * weight));
+    const double tau1 =
+        -Eigen::Vector3d::UnitY().dot((c1 - shoulder).cross(3.0 * weight) + (c_mid - shoulder).cross(2.0 * weight) +
+                                      (c2 - shoulder).cross(1.5 * weight) + (c_tool - shoulder).cross(0.5 * weight));
     const double tau2 = -elbow_axis.dot((c2 - elbow).cross(1.5 * weight) + (c_tool - elbow).cross(0.5 * weight));
     gravityTorques(robot, ws, q, tau);
     EXPECT_NEAR(tau[0], tau1, 1e-12);

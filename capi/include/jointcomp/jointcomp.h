@@ -51,11 +51,11 @@ typedef int32_t jc_status;
 #define JC_ERROR_SOLVER (-4)           /* no convergence, integrator failure */
 #define JC_ERROR_WRONG_HANDLE (-5)     /* a handle of another kind, or one already freed */
 #define JC_ERROR_OUT_OF_MEMORY (-6)
-#define JC_ERROR_INTERNAL (-7)         /* a bug: please report it with the message */
+#define JC_ERROR_INTERNAL (-7) /* a bug: please report it with the message */
 
 /* Opaque handles. */
-typedef struct jc_robot jc_robot; /* a robot, its joint-error model and (optionally) its drives */
-typedef struct jc_plant jc_plant; /* a simulated flexible-joint robot, integrated by CVODE */
+typedef struct jc_robot jc_robot;   /* a robot, its joint-error model and (optionally) its drives */
+typedef struct jc_plant jc_plant;   /* a simulated flexible-joint robot, integrated by CVODE */
 typedef struct jc_report jc_report; /* the report of an identification, a calibration or a discovery */
 
 /* ---- Library ---------------------------------------------------------------------------------------- */
@@ -153,9 +153,8 @@ JOINTCOMP_API jc_status jc_compensate_point(jc_robot* robot, const char* effects
    (m x n); m is planned_len / n. *max_iterations and *max_correction (optional) receive the largest
    iteration count and the largest |planned - reference| (rad). */
 JOINTCOMP_API jc_status jc_compensate_trajectory(jc_robot* robot, const char* effects, const double* planned,
-                                                 int32_t planned_len, const double* velocities,
-                                                 int32_t velocities_len, double* references,
-                                                 int32_t references_len, int32_t* max_iterations,
+                                                 int32_t planned_len, const double* velocities, int32_t velocities_len,
+                                                 double* references, int32_t references_len, int32_t* max_iterations,
                                                  double* max_correction);
 
 /* ---- The paper's spiral (Olabi et al., IEEE ICIT 2012) --------------------------------------------------
