@@ -27,15 +27,12 @@ BacklashEffect::BacklashEffect(const Robot& robot, const std::vector<double>& wi
 
 std::unique_ptr<Effect> BacklashEffect::fromJson(const nlohmann::json& json, const Robot& robot, const GearTrain&,
                                                  const std::string& path) {
-  JsonFields fields(json, path);
-  fields.text("type");
-  const std::vector<double> width = readFields(fields, layout(), robot.dof());
-  const std::vector<double> scalars = readScalars(fields, scalarLayout());
-  const std::string note = fields.textOr("estimate", "");
-  fields.rejectUnknownKeys();
-  auto effect = std::make_unique<BacklashEffect>(robot, width, scalars[0]);
-  effect->estimate_note = note;
-  return effect;
+  return readAs<BacklashEffect>(json, robot, path);
+}
+
+std::unique_ptr<Effect> BacklashEffect::fromValues(const Robot& robot, const std::vector<double>& values,
+                                                   const std::vector<double>& scalars) {
+  return std::make_unique<BacklashEffect>(robot, values, scalars[0]);
 }
 
 void BacklashEffect::addJointError(const Robot&, const JointContext& ctx, JointVector& dq) const {

@@ -29,6 +29,12 @@ public:
   static std::unique_ptr<Effect> fromJson(const nlohmann::json& json, const Robot& robot, const GearTrain& gears,
                                           const std::string& path);
 
+  // The file format: the fields (and scalars) the parameter file holds.
+  static const std::vector<Scalar>& scalarLayout();  // velocity_scale_rad_per_s
+  static const std::vector<Field>& layout();         // "<joint>.backlash_width_rad"
+  static std::unique_ptr<Effect> fromValues(const Robot& robot, const std::vector<double>& values,
+                                            const std::vector<double>& scalars);
+
   std::string type() const override { return kType; }
   EffectRole role() const override { return EffectRole::JointError; }
   void addJointError(const Robot& robot, const JointContext& ctx, JointVector& dq) const override;
@@ -37,10 +43,6 @@ public:
   double velocityScale() const { return scalar(0); }
   // The factor of b_j in dq_j: -tanh(v / v_s) / 2.
   static double feature(double velocity, double velocity_scale) { return -0.5 * std::tanh(velocity / velocity_scale); }
-
-private:
-  static const std::vector<Scalar>& scalarLayout();  // velocity_scale_rad_per_s
-  static const std::vector<Field>& layout();         // "<joint>.backlash_width_rad"
 };
 
 // Discovery: "backlash", one column per joint, -tanh(v_j / v_s) / 2 with v_j from the command sequence.

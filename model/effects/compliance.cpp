@@ -22,14 +22,12 @@ ComplianceEffect::ComplianceEffect(const Robot& robot, const std::vector<double>
 
 std::unique_ptr<Effect> ComplianceEffect::fromJson(const nlohmann::json& json, const Robot& robot,
                                                    const std::string& path) {
-  JsonFields fields(json, path);
-  fields.text("type");
-  const std::vector<double> stiffness = readFields(fields, layout(), robot.dof());
-  const std::string note = fields.textOr("estimate", "");
-  fields.rejectUnknownKeys();
-  auto effect = std::make_unique<ComplianceEffect>(robot, stiffness);
-  effect->estimate_note = note;
-  return effect;
+  return readAs<ComplianceEffect>(json, robot, path);
+}
+
+std::unique_ptr<Effect> ComplianceEffect::fromValues(const Robot& robot, const std::vector<double>& values,
+                                                     const std::vector<double>&) {
+  return std::make_unique<ComplianceEffect>(robot, values);
 }
 
 void ComplianceEffect::parametersChanged() {

@@ -17,6 +17,11 @@ public:
   ComplianceEffect(const Robot& robot, const std::vector<double>& stiffness_nm_per_rad);
   static std::unique_ptr<Effect> fromJson(const nlohmann::json& json, const Robot& robot, const std::string& path);
 
+  // The file format: the fields (and scalars) the parameter file holds.
+  static const std::vector<Field>& layout();  // "<joint>.stiffness_nm_per_rad"
+  static std::unique_ptr<Effect> fromValues(const Robot& robot, const std::vector<double>& values,
+                                            const std::vector<double>& scalars);
+
   std::string type() const override { return kType; }
   EffectRole role() const override { return EffectRole::JointError; }
   void addJointError(const Robot& robot, const JointContext& ctx, JointVector& dq) const override;
@@ -27,7 +32,6 @@ public:
   double calibrationValue(int joint) const override { return compliance_[joint]; }
 
 private:
-  static const std::vector<Field>& layout();  // "<joint>.stiffness_nm_per_rad"
   void parametersChanged() override;
   JointVector compliance_;  // rad / (N m), 1 / stiffness
 };

@@ -39,6 +39,12 @@ public:
   static std::unique_ptr<Effect> fromJson(const nlohmann::json& json, const Robot& robot, const GearTrain& gears,
                                           const std::string& path);
 
+  // The file format: the fields (and scalars) the parameter file holds.
+  static const std::vector<Scalar>& scalarLayout();  // velocity_scale_rad_per_s
+  static const std::vector<Field>& layout();         // "<joint>.hysteresis_width_rad_per_nm"
+  static std::unique_ptr<Effect> fromValues(const Robot& robot, const std::vector<double>& values,
+                                            const std::vector<double>& scalars);
+
   std::string type() const override { return kType; }
   EffectRole role() const override { return EffectRole::JointError; }
   void addJointError(const Robot& robot, const JointContext& ctx, JointVector& dq) const override;
@@ -49,10 +55,6 @@ public:
   static double feature(double velocity, double torque, double velocity_scale) {
     return -0.5 * std::abs(torque) * std::tanh(velocity / velocity_scale);
   }
-
-private:
-  static const std::vector<Scalar>& scalarLayout();  // velocity_scale_rad_per_s
-  static const std::vector<Field>& layout();         // "<joint>.hysteresis_width_rad_per_nm"
 };
 
 // Discovery: "hysteresis", one column per joint, -|tau_j| tanh(v_j / v_s) / 2 (needs the load torque).

@@ -21,14 +21,12 @@ JointOffsetEffect::JointOffsetEffect(const Robot& robot, const std::vector<doubl
 
 std::unique_ptr<Effect> JointOffsetEffect::fromJson(const nlohmann::json& json, const Robot& robot, const GearTrain&,
                                                     const std::string& path) {
-  JsonFields fields(json, path);
-  fields.text("type");
-  const std::vector<double> offsets = readFields(fields, layout(), robot.dof());
-  const std::string note = fields.textOr("estimate", "");
-  fields.rejectUnknownKeys();
-  auto effect = std::make_unique<JointOffsetEffect>(robot, offsets);
-  effect->estimate_note = note;
-  return effect;
+  return readAs<JointOffsetEffect>(json, robot, path);
+}
+
+std::unique_ptr<Effect> JointOffsetEffect::fromValues(const Robot& robot, const std::vector<double>& values,
+                                                      const std::vector<double>&) {
+  return std::make_unique<JointOffsetEffect>(robot, values);
 }
 
 void JointOffsetEffect::addJointError(const Robot&, const JointContext&, JointVector& dq) const {

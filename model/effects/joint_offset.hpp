@@ -19,6 +19,11 @@ public:
   static std::unique_ptr<Effect> fromJson(const nlohmann::json& json, const Robot& robot, const GearTrain& gears,
                                           const std::string& path);
 
+  // The file format: the fields (and scalars) the parameter file holds.
+  static const std::vector<Field>& layout();  // "<joint>.offset_rad"
+  static std::unique_ptr<Effect> fromValues(const Robot& robot, const std::vector<double>& values,
+                                            const std::vector<double>& scalars);
+
   std::string type() const override { return kType; }
   EffectRole role() const override { return EffectRole::JointError; }
   void addJointError(const Robot& robot, const JointContext& ctx, JointVector& dq) const override;
@@ -27,9 +32,6 @@ public:
   double offset(int joint) const { return field(0)[static_cast<std::size_t>(joint)]; }
   std::optional<CalibrationParameter> calibrationParameter() const override { return CalibrationParameter::Offset; }
   double calibrationValue(int joint) const override { return offset(joint); }
-
-private:
-  static const std::vector<Field>& layout();  // "<joint>.offset_rad"
 };
 
 // Discovery: "offset", a joint's zero, freed in the kinematic calibration.

@@ -21,14 +21,12 @@ NonlinearComplianceEffect::NonlinearComplianceEffect(const Robot& robot, const s
 
 std::unique_ptr<Effect> NonlinearComplianceEffect::fromJson(const nlohmann::json& json, const Robot& robot,
                                                             const GearTrain&, const std::string& path) {
-  JsonFields fields(json, path);
-  fields.text("type");
-  const std::vector<double> cubic = readFields(fields, layout(), robot.dof());
-  const std::string note = fields.textOr("estimate", "");
-  fields.rejectUnknownKeys();
-  auto effect = std::make_unique<NonlinearComplianceEffect>(robot, cubic);
-  effect->estimate_note = note;
-  return effect;
+  return readAs<NonlinearComplianceEffect>(json, robot, path);
+}
+
+std::unique_ptr<Effect> NonlinearComplianceEffect::fromValues(const Robot& robot, const std::vector<double>& values,
+                                                              const std::vector<double>&) {
+  return std::make_unique<NonlinearComplianceEffect>(robot, values);
 }
 
 void NonlinearComplianceEffect::addJointError(const Robot&, const JointContext& ctx, JointVector& dq) const {

@@ -19,15 +19,17 @@ public:
   static std::unique_ptr<Effect> fromJson(const nlohmann::json& json, const Robot& robot, const GearTrain& gears,
                                           const std::string& path);
 
+  // The file format: the fields (and scalars) the parameter file holds.
+  static const std::vector<Field>& layout();  // "<joint>.cubic_compliance_rad_per_nm3"
+  static std::unique_ptr<Effect> fromValues(const Robot& robot, const std::vector<double>& values,
+                                            const std::vector<double>& scalars);
+
   std::string type() const override { return kType; }
   EffectRole role() const override { return EffectRole::JointError; }
   void addJointError(const Robot& robot, const JointContext& ctx, JointVector& dq) const override;
   std::unique_ptr<Effect> clone() const override { return std::make_unique<NonlinearComplianceEffect>(*this); }
 
   static double feature(double torque) { return -torque * torque * torque; }
-
-private:
-  static const std::vector<Field>& layout();  // "<joint>.cubic_compliance_rad_per_nm3"
 };
 
 // Discovery: "nonlinear_compliance", one column per joint, tau_j^3 (needs the load torque).

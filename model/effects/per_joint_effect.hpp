@@ -3,6 +3,7 @@
 // type derived from it keeps only its physics (and its own extra keys, if any).
 #pragma once
 
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -47,6 +48,25 @@ protected:
   // Throws ParameterError naming the scalar (derived constructors call it: type() is theirs).
   void setScalars(const std::vector<double>& values);
   double scalar(std::size_t k) const { return scalar_values_[k]; }
+  // No scalars: the default for a type that declares none.
+  static const std::vector<Scalar>& scalarLayout() {
+    static const std::vector<Scalar> none;
+    return none;
+  }
+  // A per-joint effect of type T from its parameter-file object: T's fields and scalars (T::layout(),
+  // T::scalarLayout()), its estimate note, nothing else; then T::fromValues(robot, values, scalars).
+  template <typename T>
+  static std::unique_ptr<Effect> readAs(const nlohmann::json& json, const Robot& robot, const std::string& path) {
+    JsonFields fields(json, path);
+    fields.text("type");
+    const std::vector<double> values = readFields(fields, T::layout(), robot.dof());
+    const std::vector<double> scalars = readScalars(fields, T::scalarLayout());
+    const std::string note = fields.textOr("estimate", "");
+    fields.rejectUnknownKeys();
+    std::unique_ptr<Effect> effect = T::fromValues(robot, values, scalars);
+    effect->estimate_note = note;
+    return effect;
+  }
   // Joins per-field vectors into the order of setParameters.
   static std::vector<double> joined(std::initializer_list<const std::vector<double>*> vectors);
 

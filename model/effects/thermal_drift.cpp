@@ -36,18 +36,15 @@ ThermalDriftEffect::ThermalDriftEffect(const Robot& robot, const std::vector<dou
 
 std::unique_ptr<Effect> ThermalDriftEffect::fromJson(const nlohmann::json& json, const Robot& robot, const GearTrain&,
                                                      const std::string& path) {
-  JsonFields fields(json, path);
-  fields.text("type");
-  const std::vector<double> values = readFields(fields, layout(), robot.dof());
-  const std::vector<double> scalars = readScalars(fields, scalarLayout());
-  const std::string note = fields.textOr("estimate", "");
-  fields.rejectUnknownKeys();
+  return readAs<ThermalDriftEffect>(json, robot, path);
+}
+
+std::unique_ptr<Effect> ThermalDriftEffect::fromValues(const Robot& robot, const std::vector<double>& values,
+                                                       const std::vector<double>& scalars) {
   const auto n = static_cast<long>(robot.dof());
-  auto effect =
-      std::make_unique<ThermalDriftEffect>(robot, std::vector<double>(values.begin(), values.begin() + n), scalars[0],
-                                           std::vector<double>(values.begin() + n, values.end()), scalars[1]);
-  effect->estimate_note = note;
-  return effect;
+  return std::make_unique<ThermalDriftEffect>(robot, std::vector<double>(values.begin(), values.begin() + n),
+                                              scalars[0], std::vector<double>(values.begin() + n, values.end()),
+                                              scalars[1]);
 }
 
 void ThermalDriftEffect::addJointError(const Robot&, const JointContext& ctx, JointVector& dq) const {

@@ -22,6 +22,12 @@ public:
   static std::unique_ptr<Effect> fromJson(const nlohmann::json& json, const Robot& robot, const GearTrain& gears,
                                           const std::string& path);
 
+  // The file format: the fields (and scalars) the parameter file holds.
+  static const std::vector<Field>& layout();
+  static const std::vector<Scalar>& scalarLayout();  // reference_temperature_degc, reference_time_s
+  static std::unique_ptr<Effect> fromValues(const Robot& robot, const std::vector<double>& values,
+                                            const std::vector<double>& scalars);
+
   std::string type() const override { return kType; }
   EffectRole role() const override { return EffectRole::JointError; }
   void addJointError(const Robot& robot, const JointContext& ctx, JointVector& dq) const override;
@@ -29,11 +35,6 @@ public:
 
   double referenceTemperature() const { return scalar(0); }
   double referenceTime() const { return scalar(1); }
-
-private:
-  // "<joint>.thermal_rad_per_degc" for every joint, then "<joint>.drift_rad_per_s" for every joint.
-  static const std::vector<Field>& layout();
-  static const std::vector<Scalar>& scalarLayout();  // reference_temperature_degc, reference_time_s
 };
 
 // Discovery: "thermal", per joint a temperature drift (when every row has a temperature) and a time
