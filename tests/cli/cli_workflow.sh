@@ -109,6 +109,19 @@ expect_error "--warm-up takes" simulate --protocol random --truth "$params" --wa
 expect_error "time constant must be positive" simulate --protocol random --truth "$params" --warm-up 5,0 --out "$work/x.csv"
 expect_error "missing.csv" discover --campaign "$work/missing.csv" --out "$work/x"
 expect_error "unknown effect type 'gremlin'" discover --campaign "$work/fit.csv" --types gremlin --out "$work/x"
+# A malformed "plant" object is an error in every command that reads the file, not only in those that
+# simulate (the parameter set is read once, whole).
+"$python" - "$params" "$work/bad_plant.json" <<'PY'
+import json, sys
+document = json.load(open(sys.argv[1]))
+document["plant"]["joints"][1]["kp_nm_per_rad"] = -5
+json.dump(document, open(sys.argv[2], "w"), indent=2)
+PY
+for command in calibrate discover; do
+  expect_error "kp_nm_per_rad" $command --urdf "$urdf" --params "$work/bad_plant.json" --campaign "$work/fit.csv" --out "$work/x"
+done
+expect_error "kp_nm_per_rad" identify stiffness --params "$work/bad_plant.json" --campaign "$work/fit.csv" --out "$work/x"
+expect_error "kp_nm_per_rad" paper --quasi-static --params "$work/bad_plant.json" --out "$work/x"
 expect_error "identify: unknown kind 'speed'" identify speed --campaign "$work/fit.csv" --out "$work/x"
 test ! -e "$work/x.csv" || fail "a refused simulate wrote its output"
 echo "cli_workflow: every step gave what the truth says"

@@ -18,6 +18,7 @@
 
 #include "model/common/errors.hpp"
 #include "model/effects/compliance.hpp"
+#include "model/effects/registry.hpp"
 #include "model/effects/spring_balancer.hpp"
 #include "model/effects/transmission_error.hpp"
 #include "model/io/parameter_file.hpp"
@@ -411,6 +412,38 @@ TEST(ParameterFileEdits, StageOneIsTheMotor) {
   b.effect(2).addJointError(b.robot(), ctx, dqb);
   EXPECT_EQ(dqa, dqb);
   EXPECT_NE(dqa[0], 0.0);
+}
+
+// The parameter set is the file read once: its model equals what the model-only reader gives, its drives
+// what the plant reader gives, and a file without "plant" has no drives.
+TEST(ParameterSet, ReadsTheModelAndTheDrivesOnce) {
+  const ParameterSet set = loadParameterSet(rx170ParametersPath(), rx170());
+  expectSameModel(set.model, loadParameterFile(rx170ParametersPath(), rx170()));
+  ASSERT_TRUE(set.hasDrives());
+  EXPECT_TRUE(
+      bitIdentical(driveParameters(set.drives), driveParameters(loadDriveParameters(rx170ParametersPath(), *rx170()))));
+  nlohmann::json without = goodJson();
+  without.erase("plant");
+  const ParameterSet model_only =
+      parseParameterSet(without.dump(), "no_plant.json", rx170(), EffectRegistry::builtin());
+  EXPECT_FALSE(model_only.hasDrives());
+  expectSameModel(model_only.model, set.model);
+}
+
+// A malformed "plant" object is an error for every reader of the file, named by file and field.
+TEST(ParameterSet, AMalformedPlantIsAnErrorEvenForTheModelAlone) {
+  nlohmann::json bad = goodJson();
+  bad["plant"]["joints"][2]["motor_inertia_kgm2"] = -1.0;
+  try {
+    parseParameters(bad.dump(), "bad_plant.json", rx170());
+    ADD_FAILURE() << "a negative motor inertia was accepted";
+  } catch (const ParameterError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("bad_plant.json: plant"));
+    EXPECT_THAT(e.what(), HasSubstr("motor_inertia_kgm2"));
+  }
+  bad = goodJson();
+  bad["plant"]["joints"][0]["gain"] = 1.0;
+  EXPECT_THROW(parseParameterSet(bad.dump(), "bad_plant.json", rx170(), EffectRegistry::builtin()), ParameterError);
 }
 
 }  // namespace
