@@ -192,7 +192,7 @@ Eigen::Isometry3d poseInput(const double* pose, std::int32_t length, const char*
 }
 
 void copyPose(const Eigen::Isometry3d& pose, double* out) {
-  const Eigen::Matrix4d matrix = pose.matrix();
+  const Eigen::Matrix4d& matrix = pose.matrix();
   for (int r = 0; r < 4; ++r) {
     for (int c = 0; c < 4; ++c) out[4 * r + c] = matrix(r, c);
   }

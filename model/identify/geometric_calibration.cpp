@@ -403,7 +403,7 @@ Eigen::Vector3d predictMeasurement(const Robot& robot, const GeometricParameters
   const Eigen::Matrix3d tool_rotation = rotation * robot.tool.linear();
   const Eigen::Vector3d point = position + rotation * robot.tool.translation() + tool_rotation * p.target;
   const Eigen::Matrix3d frame_rotation = expRotation(p.frame_rotation);
-  const Eigen::Vector3d measured = frame_rotation * point + p.frame_translation;
+  Eigen::Vector3d measured = frame_rotation * point + p.frame_translation;
   if (!jacobian) return measured;
 
   Eigen::MatrixXd& jac = *jacobian;
@@ -578,7 +578,7 @@ ParameterChoice candidateParameters(const Robot& robot, const CalibrationData& d
     bool enabled;
     double change;
     if (i < 6) {
-      group = 0, enabled = fit_frame, change = i < 3 ? 1e-3 : 1e-3;
+      group = 0, enabled = fit_frame, change = 1e-3;  // m for the translations, rad for the rotations
       if (!fit_frame) reason[static_cast<std::size_t>(i)] = "the campaign is in the base frame: no frame to fit";
     } else if (i < 9) {
       group = 1, enabled = options.fit_target, change = 1e-3;
@@ -928,7 +928,7 @@ MeasurementCampaign simulateGeometricCampaign(const JointErrorModel& prior, cons
     campaign.command.push_back(commands[k]);
     campaign.position.emplace_back(Eigen::Vector3d::Zero());
     campaign.temperature.push_back(kNaN);
-    campaign.wrench.push_back(Vector6::Zero());
+    campaign.wrench.emplace_back(Vector6::Zero());
     campaign.payload.push_back(0.0);
   }
   const CalibrationData data = prepareCalibrationData(prior, campaign);

@@ -165,6 +165,114 @@ void fillStiffness(StiffnessEstimate& e, double c, double se, double t_factor) {
 
 }  // namespace
 
+namespace {
+
+// One local test's observation: the pose's intercept, the joint's torque, its deflection (link - command)
+// and the deflection's 1-sigma noise.
+struct Observation {
+  int group;
+  double torque, deflection, sigma;
+};
+
+// The observations of joint j's local tests: from its levels when the campaign has any for it, else from
+// the tracker (the angle about the joint's axis, less what the other joints' deflections add). `groups`:
+// the poses, one intercept each.
+std::vector<Observation> localObservations(const Robot& robot, const MeasurementCampaign& campaign,
+                                           const Classified& classified, int j, bool& by_levels, int& groups) {
+  const Eigen::Vector3d target = targetOf(campaign);
+  RobotWorkspace ws(robot);
+  RobotWorkspace settled(robot);
+  std::vector<Observation> observations;
+  by_levels = false;
+  for (const Group& g : classified.groups)
+    by_levels = by_levels || std::count(g.level_joints.begin(), g.level_joints.end(), j) > 0;
+  std::vector<int> intercept_of_pose(classified.poses, -1);
+  groups = 0;
+  for (const Group& g : classified.groups) {
+    const bool levels_here = std::count(g.level_joints.begin(), g.level_joints.end(), j) > 0;
+    const bool tracker_here = !by_levels && g.kind == GroupKind::LocalTracker && g.joint == j;
+    if (!levels_here && !tracker_here) continue;
+    const int before = static_cast<int>(observations.size());
+    const int intercept = intercept_of_pose[g.pose] >= 0 ? intercept_of_pose[g.pose] : groups;
+    for (std::size_t k = g.first; k < g.last; ++k) {
+      const double tau = g.torque(k)[j];
+      if (levels_here) {
+        const double qm = campaign.measured_angles[k][j];
+        if (!std::isfinite(qm)) continue;
+        observations.push_back(
+            {intercept, tau, qm - campaign.command[k][j],
+             campaign.angle_noise > 0.0 ? campaign.angle_noise : std::numeric_limits<double>::quiet_NaN()});
+      } else {
+        if (!hasPosition(campaign, k)) continue;
+        const RowPrediction& predicted = g.row[k - g.first];
+        forwardKinematics(robot, settled, predicted.settled);
+        forwardKinematics(robot, ws, campaign.command[k]);
+        const Eigen::Vector3d nominal_target = ws.tool_pose * target;
+        double lever = 0.0;
+        const double measured = angleAboutAxis(ws.axis[j], ws.origin[j], nominal_target, campaign.position[k], &lever);
+        // What the other joints' deflections add to the angle about this axis, as the nominal model
+        // predicts it (a few per cent of the signal: the load is designed for the commanded pose, the
+        // links sag under gravity, and soft joints pick up the difference).
+        const double predicted_angle =
+            angleAboutAxis(ws.axis[j], ws.origin[j], nominal_target, settled.tool_pose * target);
+        const double cross_talk = predicted_angle - (predicted.settled[j] - campaign.command[k][j]);
+        const double angle = measured - cross_talk;
+        if (lever < 1e-3) {
+          throw MeasurementError(campaign.source + ": local stiffness test of " + robot.joints[j].name + " (rows " +
+                                 std::to_string(g.first + 1) + "-" + std::to_string(g.last) +
+                                 "): the target is within 1 mm of the joint's axis, so the tracker cannot see it turn");
+        }
+        observations.push_back({intercept, tau, angle, classified.sigma[k] / lever});
+      }
+    }
+    if (static_cast<int>(observations.size()) > before && intercept_of_pose[g.pose] < 0)
+      intercept_of_pose[g.pose] = groups++;
+  }
+  return observations;
+}
+
+// The slope of deflection against torque, one intercept per pose: the joint's compliance and its interval.
+void fitLocalCompliance(const std::vector<Observation>& observations, int groups, const Robot& robot, int j,
+                        const MeasurementCampaign& campaign, const StiffnessIdentificationOptions& options,
+                        StiffnessEstimate& e) {
+  const int points = static_cast<int>(observations.size());
+  if (points < groups + 2) {
+    throw MeasurementError(campaign.source + ": local stiffness test of " + robot.joints[j].name + ": " +
+                           std::to_string(points) + " measured points for " + std::to_string(groups + 1) +
+                           " unknowns (a slope and one offset per pose); at least " + std::to_string(groups + 2) +
+                           " are needed");
+  }
+  Eigen::MatrixXd a = Eigen::MatrixXd::Zero(points, groups + 1);
+  Eigen::VectorXd y(points);
+  std::vector<double> sigma(points);
+  for (int r = 0; r < points; ++r) {
+    a(r, observations[r].group) = 1.0;
+    a(r, groups) = -observations[r].torque;
+    y[r] = observations[r].deflection;
+    sigma[r] = observations[r].sigma;
+  }
+  const bool noise_known = fillUnknownSigma(sigma);
+  const LinearFit fit = weightedLeastSquares(a, y, Eigen::Map<const Eigen::VectorXd>(sigma.data(), points));
+  if (fit.rank < groups + 1) {
+    throw MeasurementError(campaign.source + ": local stiffness test of " + robot.joints[j].name +
+                           ": the torque does not vary within any of its poses");
+  }
+  e.points = points;
+  e.groups = groups;
+  e.dof = fit.dof;
+  e.residual_rms = std::sqrt(fit.residuals.squaredNorm() / points);
+  e.reduced_chi2 = noise_known ? fit.scale2 : 0.0;
+  fillStiffness(e, fit.coefficients[groups], std::sqrt(fit.covariance(groups, groups)),
+                tIntervalFactor(options.confidence, fit.dof));
+  for (int r = 0; r < points; ++r) {
+    e.torque.push_back(observations[r].torque);
+    e.deflection.push_back(fit.coefficients[observations[r].group] - observations[r].deflection);
+    e.deflection_sigma.push_back(sigma[r] * std::sqrt(fit.scale2));
+  }
+}
+
+}  // namespace
+
 std::vector<StiffnessEstimate> identifyStiffnessLocal(const JointErrorModel& nominal,
                                                       const MeasurementCampaign& campaign,
                                                       const StiffnessIdentificationOptions& options) {
@@ -173,106 +281,20 @@ std::vector<StiffnessEstimate> identifyStiffnessLocal(const JointErrorModel& nom
   checkCampaign(robot, campaign, campaign.has_position, "local stiffness identification");
   const int n = robot.dof();
   const Classified classified = classify(nominal, campaign, options);
-  const Eigen::Vector3d target = targetOf(campaign);
-  RobotWorkspace ws(robot);
-  RobotWorkspace settled(robot);
   std::vector<StiffnessEstimate> estimates(n);
   bool any_test = false;
   for (int j = 0; j < n; ++j) {
     StiffnessEstimate& e = estimates[j];
-    // Observations: group index, torque, deflection (link - command), sigma. Levels are preferred.
-    struct Observation {
-      int group;
-      double torque, deflection, sigma;
-    };
-    std::vector<Observation> observations;
     bool by_levels = false;
-    for (const Group& g : classified.groups)
-      by_levels = by_levels || std::count(g.level_joints.begin(), g.level_joints.end(), j) > 0;
-    std::vector<int> intercept_of_pose(classified.poses, -1);
     int groups = 0;
-    for (const Group& g : classified.groups) {
-      const bool levels_here = std::count(g.level_joints.begin(), g.level_joints.end(), j) > 0;
-      const bool tracker_here = !by_levels && g.kind == GroupKind::LocalTracker && g.joint == j;
-      if (!levels_here && !tracker_here) continue;
-      const int before = static_cast<int>(observations.size());
-      const int intercept = intercept_of_pose[g.pose] >= 0 ? intercept_of_pose[g.pose] : groups;
-      for (std::size_t k = g.first; k < g.last; ++k) {
-        const double tau = g.torque(k)[j];
-        if (levels_here) {
-          const double qm = campaign.measured_angles[k][j];
-          if (!std::isfinite(qm)) continue;
-          observations.push_back(
-              {intercept, tau, qm - campaign.command[k][j],
-               campaign.angle_noise > 0.0 ? campaign.angle_noise : std::numeric_limits<double>::quiet_NaN()});
-        } else {
-          if (!hasPosition(campaign, k)) continue;
-          const RowPrediction& predicted = g.row[k - g.first];
-          forwardKinematics(robot, settled, predicted.settled);
-          forwardKinematics(robot, ws, campaign.command[k]);
-          const Eigen::Vector3d nominal_target = ws.tool_pose * target;
-          double lever = 0.0;
-          const double measured =
-              angleAboutAxis(ws.axis[j], ws.origin[j], nominal_target, campaign.position[k], &lever);
-          // What the other joints' deflections add to the angle about this axis, as the nominal model
-          // predicts it (a few per cent of the signal: the load is designed for the commanded pose, the
-          // links sag under gravity, and soft joints pick up the difference).
-          const double predicted_angle =
-              angleAboutAxis(ws.axis[j], ws.origin[j], nominal_target, settled.tool_pose * target);
-          const double cross_talk = predicted_angle - (predicted.settled[j] - campaign.command[k][j]);
-          const double angle = measured - cross_talk;
-          if (lever < 1e-3) {
-            throw MeasurementError(
-                campaign.source + ": local stiffness test of " + robot.joints[j].name + " (rows " +
-                std::to_string(g.first + 1) + "-" + std::to_string(g.last) +
-                "): the target is within 1 mm of the joint's axis, so the tracker cannot see it turn");
-          }
-          observations.push_back({intercept, tau, angle, classified.sigma[k] / lever});
-        }
-      }
-      if (static_cast<int>(observations.size()) > before && intercept_of_pose[g.pose] < 0)
-        intercept_of_pose[g.pose] = groups++;
-    }
+    const std::vector<Observation> observations = localObservations(robot, campaign, classified, j, by_levels, groups);
     if (groups == 0) {
       e.reason = "no local test of this joint in the campaign";
       continue;
     }
     any_test = true;
     e.method = by_levels ? "levels" : "tracker";
-    const int points = static_cast<int>(observations.size());
-    if (points < groups + 2) {
-      throw MeasurementError(campaign.source + ": local stiffness test of " + robot.joints[j].name + ": " +
-                             std::to_string(points) + " measured points for " + std::to_string(groups + 1) +
-                             " unknowns (a slope and one offset per pose); at least " + std::to_string(groups + 2) +
-                             " are needed");
-    }
-    Eigen::MatrixXd a = Eigen::MatrixXd::Zero(points, groups + 1);
-    Eigen::VectorXd y(points);
-    std::vector<double> sigma(points);
-    for (int r = 0; r < points; ++r) {
-      a(r, observations[r].group) = 1.0;
-      a(r, groups) = -observations[r].torque;
-      y[r] = observations[r].deflection;
-      sigma[r] = observations[r].sigma;
-    }
-    const bool noise_known = fillUnknownSigma(sigma);
-    const LinearFit fit = weightedLeastSquares(a, y, Eigen::Map<const Eigen::VectorXd>(sigma.data(), points));
-    if (fit.rank < groups + 1) {
-      throw MeasurementError(campaign.source + ": local stiffness test of " + robot.joints[j].name +
-                             ": the torque does not vary within any of its poses");
-    }
-    e.points = points;
-    e.groups = groups;
-    e.dof = fit.dof;
-    e.residual_rms = std::sqrt(fit.residuals.squaredNorm() / points);
-    e.reduced_chi2 = noise_known ? fit.scale2 : 0.0;
-    fillStiffness(e, fit.coefficients[groups], std::sqrt(fit.covariance(groups, groups)),
-                  tIntervalFactor(options.confidence, fit.dof));
-    for (int r = 0; r < points; ++r) {
-      e.torque.push_back(observations[r].torque);
-      e.deflection.push_back(fit.coefficients[observations[r].group] - observations[r].deflection);
-      e.deflection_sigma.push_back(sigma[r] * std::sqrt(fit.scale2));
-    }
+    fitLocalCompliance(observations, groups, robot, j, campaign, options, e);
   }
   if (!any_test) {
     throw MeasurementError(campaign.source +

@@ -23,7 +23,7 @@ std::vector<std::string> split(const std::string& line, char separator) {
   std::string cell;
   std::istringstream stream(line);
   while (std::getline(stream, cell, separator)) cells.push_back(trim(cell));
-  if (!line.empty() && line.back() == separator) cells.push_back("");
+  if (!line.empty() && line.back() == separator) cells.emplace_back();
   return cells;
 }
 
@@ -161,7 +161,7 @@ MeasurementCampaign parseIpaUr10(const std::string& text, const std::string& mea
                                    number("measurement_z") * 1e-3);
     campaign.temperature.push_back(has_temperature ? number("measurement_temperature")
                                                    : std::numeric_limits<double>::quiet_NaN());
-    campaign.wrench.push_back(Vector6::Zero());
+    campaign.wrench.emplace_back(Vector6::Zero());
     campaign.payload.push_back(0.0);
     stamps.push_back(timestampSeconds(cells[column_of.at("Timestamp")]));
   }
