@@ -29,6 +29,41 @@ double scaledConditionNumber(const Eigen::MatrixXd& jacobian, const std::vector<
   return sigma[0] / sigma[sigma.size() - 1];
 }
 
+namespace {
+
+// What each fixed column is redundant with: its least-squares fit by the kept columns (the largest four
+// contributions of at least a fifth of the largest).
+void findRedundancies(const Eigen::MatrixXd& jacobian, IdentifiabilityResult& result) {
+  const Eigen::Index m = jacobian.rows();
+  if (!result.kept.empty()) {
+    Eigen::MatrixXd kept(m, static_cast<Eigen::Index>(result.kept.size()));
+    for (std::size_t k = 0; k < result.kept.size(); ++k) {
+      kept.col(static_cast<Eigen::Index>(k)) = jacobian.col(result.kept[k]) / result.column_norm[result.kept[k]];
+    }
+    const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(kept);
+    for (int j : result.fixed) {
+      if (result.no_effect[static_cast<std::size_t>(j)]) continue;
+      const Eigen::VectorXd c = qr.solve(Eigen::VectorXd(jacobian.col(j) / result.column_norm[j]));
+      const double largest = c.cwiseAbs().maxCoeff();
+      std::vector<Redundancy> list;
+      for (std::size_t k = 0; k < result.kept.size(); ++k) {
+        const double ck = c[static_cast<Eigen::Index>(k)];
+        if (std::abs(ck) >= 0.2 * largest && std::abs(ck) > 1e-6) {
+          const int column = result.kept[k];
+          list.push_back({column, ck * result.column_norm[j] / result.column_norm[column]});
+        }
+      }
+      std::sort(list.begin(), list.end(), [&](const Redundancy& a, const Redundancy& b) {
+        return std::abs(a.ratio * result.column_norm[a.column]) > std::abs(b.ratio * result.column_norm[b.column]);
+      });
+      if (list.size() > 4) list.resize(4);
+      result.redundant_with[static_cast<std::size_t>(j)] = list;
+    }
+  }
+}
+
+}  // namespace
+
 IdentifiabilityResult analyseIdentifiability(const Eigen::MatrixXd& jacobian, const std::vector<int>& priority,
                                              const std::vector<double>& typical_change,
                                              const IdentifiabilityOptions& options) {
@@ -110,32 +145,7 @@ IdentifiabilityResult analyseIdentifiability(const Eigen::MatrixXd& jacobian, co
   }
   result.condition_number = scaledConditionNumber(jacobian, result.kept);
 
-  // What each fixed column is redundant with: its least-squares fit by the kept columns.
-  if (!result.kept.empty()) {
-    Eigen::MatrixXd kept(m, static_cast<Eigen::Index>(result.kept.size()));
-    for (std::size_t k = 0; k < result.kept.size(); ++k) {
-      kept.col(static_cast<Eigen::Index>(k)) = jacobian.col(result.kept[k]) / result.column_norm[result.kept[k]];
-    }
-    const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(kept);
-    for (int j : result.fixed) {
-      if (result.no_effect[static_cast<std::size_t>(j)]) continue;
-      const Eigen::VectorXd c = qr.solve(Eigen::VectorXd(jacobian.col(j) / result.column_norm[j]));
-      const double largest = c.cwiseAbs().maxCoeff();
-      std::vector<Redundancy> list;
-      for (std::size_t k = 0; k < result.kept.size(); ++k) {
-        const double ck = c[static_cast<Eigen::Index>(k)];
-        if (std::abs(ck) >= 0.2 * largest && std::abs(ck) > 1e-6) {
-          const int column = result.kept[k];
-          list.push_back({column, ck * result.column_norm[j] / result.column_norm[column]});
-        }
-      }
-      std::sort(list.begin(), list.end(), [&](const Redundancy& a, const Redundancy& b) {
-        return std::abs(a.ratio * result.column_norm[a.column]) > std::abs(b.ratio * result.column_norm[b.column]);
-      });
-      if (list.size() > 4) list.resize(4);
-      result.redundant_with[static_cast<std::size_t>(j)] = list;
-    }
-  }
+  findRedundancies(jacobian, result);
   return result;
 }
 

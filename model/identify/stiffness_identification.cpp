@@ -553,7 +553,7 @@ StiffnessIdentificationResult identifyStiffness(const JointErrorModel& nominal, 
     result.global_shares_rows = result.global_groups == 0;
     result.global = identifyStiffnessGlobal(nominal, campaign, options, false);
     if (result.global_shares_rows) {
-      result.notes.push_back(
+      result.notes.emplace_back(
           "the campaign has no poses besides the local tests: the global fit uses the local tests' "
           "rows, so the two methods are not independent");
     }
