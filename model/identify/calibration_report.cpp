@@ -55,13 +55,15 @@ CalibrationRun runCalibration(const JointErrorModel& prior, const MeasurementCam
     run.before = evaluateOnCampaign(prior, nominalParameters(prior, held), held, true, options);
     run.after = evaluateOnCampaign(prior, result.estimate, held, true, options);
     run.shared_frame = evaluateOnCampaign(prior, result.estimate, held, false, options);
+    run.residual = rowResiduals(prior, run.after.parameters, held);
     runs.push_back(std::move(run));
   }
   auto calibrated_robot = std::make_shared<const Robot>(correctedRobot(prior.robot(), result.estimate));
   std::vector<std::string> left_out;
   JointErrorModel calibrated = calibratedJointErrorModel(prior, calibrated_robot, result, left_out);
-  return CalibrationRun{std::move(result),     std::move(runs),     calibrated_robot,
-                        std::move(calibrated), std::move(left_out), seconds};
+  std::vector<RowResidual> residual = rowResiduals(prior, result.estimate, campaign);
+  return CalibrationRun{std::move(result),   std::move(runs), calibrated_robot,   std::move(calibrated),
+                        std::move(left_out), seconds,         std::move(residual)};
 }
 
 nlohmann::ordered_json calibrationReportJson(const CalibrationRun& run, const MeasurementCampaign& campaign,
@@ -193,15 +195,24 @@ std::string calibrationResidualsCsv(const CalibrationRun& run, const Calibration
   const GeometricCalibrationResult& result = run.result;
   std::ostringstream csv;
   csv.precision(9);
-  csv << "campaign,role,row,before_mm,after_mm,weight\n";
+  csv << "campaign,role,row,before_mm,after_mm,weight,dx_mm,dy_mm,dz_mm";
+  for (const Joint& joint : run.calibrated_robot->joints) csv << ",dq_" << joint.name << "_mrad";
+  csv << "\n";
+  auto residualColumns = [&csv](const RowResidual& r) {
+    for (int a = 0; a < 3; ++a) csv << ',' << r.error[a] * 1e3;
+    for (int j = 0; j < r.joint_error.size(); ++j) csv << ',' << r.joint_error[j] * 1e3;
+    csv << "\n";
+  };
   for (std::size_t k = 0; k < result.row.size(); ++k) {
     csv << baseName(sources.campaign) << ",calibration," << result.row[k] << ',' << result.error_before[k] * 1e3 << ','
-        << result.error_after[k] * 1e3 << ',' << result.weight[k] << "\n";
+        << result.error_after[k] * 1e3 << ',' << result.weight[k];
+    residualColumns(run.residual[k]);
   }
   for (const CalibrationHoldoutRun& held : run.holdouts) {
     for (std::size_t k = 0; k < held.after.row.size(); ++k) {
       csv << baseName(held.name) << ",holdout," << held.after.row[k] << ',' << held.before.error[k] * 1e3 << ','
-          << held.after.error[k] * 1e3 << ',' << held.after.weight[k] << "\n";
+          << held.after.error[k] * 1e3 << ',' << held.after.weight[k];
+      residualColumns(held.residual[k]);
     }
   }
   return csv.str();

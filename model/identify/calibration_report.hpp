@@ -15,10 +15,11 @@
 namespace jointcomp {
 
 struct CalibrationHoldoutRun {
-  std::string name;                // the campaign's file name, as given
-  HoldoutEvaluation before;        // nominal robot, frame re-fitted
-  HoldoutEvaluation after;         // calibrated robot, frame re-fitted
-  HoldoutEvaluation shared_frame;  // calibrated robot in the calibration campaign's frame
+  std::string name;                   // the campaign's file name, as given
+  HoldoutEvaluation before;           // nominal robot, frame re-fitted
+  HoldoutEvaluation after;            // calibrated robot, frame re-fitted
+  HoldoutEvaluation shared_frame;     // calibrated robot in the calibration campaign's frame
+  std::vector<RowResidual> residual;  // calibrated robot, frame re-fitted (after), per used row
 };
 
 struct CalibrationRun {
@@ -28,6 +29,7 @@ struct CalibrationRun {
   JointErrorModel calibrated;                     // offsets and compliance as fitted, on calibrated_robot
   std::vector<std::string> compliance_left_out;   // "<joint>: reason" (see calibratedJointErrorModel)
   double seconds = 0.0;                           // wall time of the fit
+  std::vector<RowResidual> residual;              // calibrated, per used row of the campaign
 };
 
 CalibrationRun runCalibration(const JointErrorModel& prior, const MeasurementCampaign& campaign,
@@ -46,7 +48,9 @@ nlohmann::ordered_json calibrationReportJson(const CalibrationRun& run, const Me
                                              const GeometricCalibrationOptions& options,
                                              const CalibrationSources& sources);
 std::string calibrationSummary(const CalibrationRun& run, const CalibrationSources& sources);
-// campaign,role,row,before_mm,after_mm,weight: one line per used row of every campaign.
+// campaign,role,row,before_mm,after_mm,weight, then the residual after calibration, measured - predicted:
+// dx_mm,dy_mm,dz_mm in the campaign's frame and dq_<joint>_mrad mapped to the joints (RowResidual): one line
+// per used row of every campaign.
 std::string calibrationResidualsCsv(const CalibrationRun& run, const CalibrationSources& sources);
 
 // Statistics in the units people read (mm), as every report writes them.

@@ -821,6 +821,37 @@ GeometricCalibrationResult calibrateGeometry(const JointErrorModel& prior, const
   return result;
 }
 
+std::vector<RowResidual> rowResiduals(const JointErrorModel& model, const GeometricParameters& parameters,
+                                      const MeasurementCampaign& campaign) {
+  const Robot& robot = model.robot();
+  const int n = robot.dof();
+  const GeometricParameterLayout layout(n);
+  const CalibrationData data = prepareCalibrationData(model, campaign);
+  GeometricParameters used = parameters;
+  if (campaign.frame == MeasurementFrame::Base) {
+    used.frame_translation.setZero();
+    used.frame_rotation.setZero();
+  }
+  std::vector<RowResidual> out(data.size());
+  constexpr double kDamping = 1e-3;  // m per rad
+  Eigen::MatrixXd jacobian;
+  Eigen::Matrix<double, 3, Eigen::Dynamic> joint_columns(3, n);
+  for (std::size_t k = 0; k < data.size(); ++k) {
+    const Eigen::Vector3d predicted =
+        predictMeasurement(robot, used, data.command[k], data.load_torque[k], data.other_error[k], &jacobian);
+    RowResidual& r = out[k];
+    r.row = data.row[k];
+    r.error = data.measured[k] - predicted;
+    for (int j = 0; j < n; ++j) joint_columns.col(j) = jacobian.col(layout.offset(j));
+    // Damped least squares (minimum norm, damping 1 mm per rad): near a singular pose the plain
+    // pseudo-inverse would blow the mapping up; away from one the damping changes it by ~1e-6.
+    const Eigen::Matrix3d gram =
+        joint_columns * joint_columns.transpose() + kDamping * kDamping * Eigen::Matrix3d::Identity();
+    r.joint_error = joint_columns.transpose() * gram.ldlt().solve(r.error);
+  }
+  return out;
+}
+
 HoldoutEvaluation evaluateOnCampaign(const JointErrorModel& prior, const GeometricParameters& parameters,
                                      const MeasurementCampaign& campaign, bool refit_frame,
                                      const GeometricCalibrationOptions& options) {

@@ -105,6 +105,17 @@ Eigen::Vector3d predictMeasurement(const Robot& nominal, const GeometricParamete
                                    const JointVector& command, const JointVector& load_torque,
                                    const JointVector& other_error, Eigen::MatrixXd* jacobian = nullptr);
 
+// The residual of one used row, measured - predicted, in the campaign's frame, and the same mapped to the
+// joints: the smallest joint errors dq that explain it to first order (damped least squares on the joint
+// columns of the measurement's Jacobian), for users who analyse what a model leaves.
+struct RowResidual {
+  int row = 0;  // campaign row (0-based)
+  Eigen::Vector3d error = Eigen::Vector3d::Zero();
+  JointVector joint_error;  // rad
+};
+std::vector<RowResidual> rowResiduals(const JointErrorModel& model, const GeometricParameters& parameters,
+                                      const MeasurementCampaign& campaign);
+
 // Mean, RMS and max of the 3-D error norms (m).
 struct ErrorStatistics {
   int rows = 0;

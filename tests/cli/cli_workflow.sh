@@ -78,6 +78,16 @@ report = json.load(open(sys.argv[1]))
 held = report["campaigns"][1]
 assert held["role"].startswith("holdout") and held["after"]["rms_mm"] < 0.5 * held["before"]["rms_mm"], held
 PY
+# residuals.csv carries each row's residual vector, whose length is the row's error, and its joint mapping.
+"$python" - "$work/calibrate/residuals.csv" <<'PY'
+import csv, math, sys
+rows = list(csv.DictReader(open(sys.argv[1])))
+assert {"dx_mm", "dy_mm", "dz_mm", "dq_joint_1_mrad", "dq_joint_6_mrad"} <= set(rows[0]), list(rows[0])
+assert {r["role"] for r in rows} == {"calibration", "holdout"}
+for r in rows:
+    norm = math.sqrt(sum(float(r[k]) ** 2 for k in ("dx_mm", "dy_mm", "dz_mm")))
+    assert abs(norm - float(r["after_mm"])) < 1e-6 * max(1.0, norm), r
+PY
 test -s "$work/calibrate/rx170_calibrated.urdf" || fail "calibrate wrote no URDF"
 
 # What the calibration leaves is the tracker's noise here: its neighbours in joint space must not predict

@@ -339,5 +339,33 @@ TEST(GeometricCalibration, HeldOutCampaignRefitsOnlyItsFrame) {
   EXPECT_EQ(after.parameters.toVector().tail(57 - 6), result.estimate.toVector().tail(57 - 6));
 }
 
+TEST(GeometricCalibration, RowResidualsAreTheErrorAndJointErrorsThatExplainIt) {
+  const std::vector<JointVector> poses = randomPoses(60, 21);
+  DeterministicRandom random(8);
+  GeometricParameters truth = nominalParameters(ur10Model(), MeasurementCampaign{});
+  truth.setInstrumentFromBase(trackerFrame(random));
+  truth.target = kNominalTarget;
+  GeometricParameters model = truth;
+  truth.offset[2] = 2e-4;  // a joint-3 error the model does not have
+  const MeasurementCampaign campaign = simulateGeometricCampaign(ur10Model(), truth, poses, 0.0, 1, kNominalTarget);
+  const std::vector<RowResidual> residuals = rowResiduals(ur10Model(), model, campaign);
+  const HoldoutEvaluation evaluation = evaluateOnCampaign(ur10Model(), model, campaign, false);
+  ASSERT_EQ(residuals.size(), evaluation.error.size());
+  for (std::size_t k = 0; k < residuals.size(); ++k) {
+    const RowResidual& r = residuals[k];
+    EXPECT_EQ(r.row, evaluation.row[k]);
+    EXPECT_NEAR(r.error.norm(), evaluation.error[k], 1e-12);
+    EXPECT_GT(r.error.norm(), 1e-5);
+    // The mapped joint errors explain the residual: moving the commands by them removes it to first order
+    // (the error is 2e-4 rad, so what is left is of order 1e-8 m).
+    const JointVector moved = campaign.command[static_cast<std::size_t>(r.row)] + r.joint_error;
+    const Eigen::Vector3d predicted =
+        predictMeasurement(*ur10(), model, moved, JointVector::Zero(6), JointVector::Zero(6));
+    EXPECT_LT((campaign.position[static_cast<std::size_t>(r.row)] - predicted).norm(), 0.01 * r.error.norm());
+    // ... and they are the smallest such (no larger than the true joint-3 error that also explains it).
+    EXPECT_LE(r.joint_error.norm(), 2e-4 * (1.0 + 1e-3));
+  }
+}
+
 }  // namespace
 }  // namespace jointcomp
