@@ -184,8 +184,10 @@ std::string calibrationSummary(const CalibrationRun& run, const CalibrationSourc
     if (!p.identified) summary << parameterLine(p);
   }
   if (!run.compliance_left_out.empty()) {
-    summary << "\nCompliance effect NOT written to the parameter file (the effect needs a positive stiffness for "
-               "every joint; give a parameter file with a compliance effect to supply the missing ones):\n";
+    summary << "\nCompliance effect in the parameter file: 1 / the fitted compliance where it was identified and "
+               "positive (or the prior's stiffness where it was not fitted); these joints are written as rigid "
+               "(stiffness null: nothing to compensate; give a parameter file with a compliance effect to supply "
+               "them):\n";
     for (const std::string& item : run.compliance_left_out) summary << "  " << item << "\n";
   }
   return summary.str();

@@ -14,6 +14,7 @@
 #include "calibration_test_support.hpp"
 #include "model/effects/compliance.hpp"
 #include "model/effects/joint_offset.hpp"
+#include "model/identify/calibration_report.hpp"
 #include "model/io/parameter_file.hpp"
 #include "model/io/urdf_writer.hpp"
 #include "model/robot/kinematics.hpp"
@@ -315,6 +316,13 @@ TEST(GeometricCalibration, ComplianceFittedNotPositiveIsHeldAndLeftOut) {
   bool names_joint_4 = false;
   for (const std::string& item : left_out) names_joint_4 = names_joint_4 || item.rfind("joint_4:", 0) == 0;
   EXPECT_TRUE(names_joint_4);
+  // The summary says what the written file holds: a compliance effect, joint 4 rigid in it.
+  const CalibrationRun run = runCalibration(ur10Model(), campaign, {}, {});
+  const std::string summary = calibrationSummary(run, {});
+  EXPECT_THAT(summary, ::testing::HasSubstr("these joints are written as rigid"));
+  EXPECT_THAT(summary, ::testing::HasSubstr("  joint_4: "));
+  EXPECT_THAT(summary, ::testing::Not(::testing::HasSubstr("NOT written")));
+  EXPECT_GE(run.calibrated.findEffect(ComplianceEffect::kType), 0);
 }
 
 TEST(GeometricCalibration, HeldOutCampaignRefitsOnlyItsFrame) {
