@@ -21,7 +21,9 @@ def main():
 
     fig, ax = plt.subplots(figsize=(8, 4.5))
     ax.plot(steps, series("fitted_rms_mm"), "o-", label="fitted RMS (3-D)")
-    ax.plot(steps, series("heldout_rms_mm"), "s-", label="held-out RMS (3-D)")
+    # One column per held-out campaign (heldout_rms_mm, heldout2_rms_mm, ...; none without one).
+    for k, key in enumerate(key for key in rows[0] if key.startswith("heldout")):
+        ax.plot(steps, series(key), "s-", label=f"held-out {k + 1} RMS (3-D)")
     ax.plot(steps, series("cv_rms_mm"), "^--", label="CV RMS per axis")
     ax.set_xticks(steps)
     ax.set_xticklabels(labels, rotation=30, ha="right", fontsize=8)

@@ -448,6 +448,7 @@ public:
 
   DiscoveryResult run() {
     result_.noise_floor = noiseFloor();
+    measureCoverage();
     result_.candidates = static_cast<int>(features_.candidates.size());
     cal_ = calibrate(model_);
     lin_ = linearise(model_, campaign_, cal_, features_, active_, offered_, options_.folds, true);
@@ -473,6 +474,23 @@ private:
     int tried = 0;
     std::string runner_up;
   };
+
+  // The joint angles the fitted rows visited, and how far each held-out campaign goes beyond them.
+  void measureCoverage() {
+    result_.coverage = jointCoverage(data_.command, kCoverageHalfWidth);
+    for (const MeasurementCampaign& h : heldout_) {
+      std::vector<JointVector> rows;
+      for (std::size_t k = 0; k < h.size(); ++k) {
+        if (h.command[k].allFinite()) rows.push_back(h.command[k]);
+      }
+      HeldoutCoverage c;
+      for (int j = 0; j < prior_.robot().dof(); ++j) {
+        c.fraction_outside.push_back(result_.coverage.fractionOutside(j, rows));
+        c.flagged = c.flagged || c.fraction_outside.back() > kCoverageFlagFraction;
+      }
+      result_.heldout_coverage.push_back(c);
+    }
+  }
 
   double noiseFloor() const {
     if (options_.noise_floor > 0.0) return options_.noise_floor;

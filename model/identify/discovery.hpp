@@ -30,6 +30,7 @@
 
 #include "model/effects/registry.hpp"
 #include "model/identify/geometric_calibration.hpp"
+#include "model/identify/joint_coverage.hpp"
 
 namespace jointcomp {
 
@@ -88,6 +89,14 @@ struct DiscoveryStep {
   DiscoveryState before, after;
 };
 
+// How far a held-out campaign goes beyond the joint angles the fit visited (DiscoveryResult::coverage).
+struct HeldoutCoverage {
+  std::vector<double> fraction_outside;  // per joint, of its rows
+  bool flagged = false;                  // some joint has more than kCoverageFlagFraction of its rows outside
+};
+constexpr double kCoverageHalfWidth = 0.0436332313;  // rad (2.5 deg) around every fitted row's angle
+constexpr double kCoverageFlagFraction = 0.05;
+
 struct DiscoveryResult {
   JointErrorModel model;                   // prior + discovered effects, offsets and compliance as fitted
   GeometricCalibrationResult calibration;  // the final base fit (geometry, frame, target)
@@ -98,6 +107,8 @@ struct DiscoveryResult {
   std::string stop_reason;
   int fitted_rows = 0;
   int candidates = 0;
+  JointCoverage coverage;                         // of the fitted rows
+  std::vector<HeldoutCoverage> heldout_coverage;  // one per held-out campaign
   explicit DiscoveryResult(JointErrorModel m) : model(std::move(m)) {}
 };
 

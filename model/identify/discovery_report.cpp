@@ -37,12 +37,37 @@ nlohmann::ordered_json stateJson(const DiscoveryState& s, const DiscoverySources
           {"ra_rz_on_paths", paths}};
 }
 
-// The first held-out campaign's RMS in mm, "-" without one.
-std::string heldRms(const DiscoveryState& s) {
+// Every held-out campaign's RMS in mm, "name 0.4270, name 0.3100"; "-" without one.
+std::string heldRms(const DiscoveryState& s, const DiscoverySources& sources) {
   if (s.heldout.empty()) return "-";
-  char text[64];
-  std::snprintf(text, sizeof(text), "%.4f", s.heldout[0].rms * 1e3);
+  std::string text;
+  for (std::size_t k = 0; k < s.heldout.size(); ++k) {
+    char value[64];
+    std::snprintf(value, sizeof(value), "%.4f", s.heldout[k].rms * 1e3);
+    text += (k ? ", " : "") + campaignName(sources, true, static_cast<int>(k)) + " " + value;
+  }
   return text;
+}
+
+nlohmann::ordered_json coverageJson(const DiscoveryResult& result, const DiscoverySources& sources) {
+  constexpr double kDeg = 180.0 / 3.14159265358979323846;
+  nlohmann::ordered_json fitted = nlohmann::ordered_json::array();
+  const Robot& robot = result.model.robot();
+  for (std::size_t j = 0; j < result.coverage.visited.size(); ++j) {
+    nlohmann::ordered_json intervals = nlohmann::ordered_json::array();
+    for (const AngleInterval& i : result.coverage.visited[j]) intervals.push_back({i.low * kDeg, i.high * kDeg});
+    fitted.push_back({{"joint", robot.joints[j].name}, {"visited_deg", intervals}});
+  }
+  nlohmann::ordered_json held = nlohmann::ordered_json::array();
+  for (std::size_t k = 0; k < result.heldout_coverage.size(); ++k) {
+    held.push_back({{"campaign", campaignName(sources, true, static_cast<int>(k))},
+                    {"fraction_outside_per_joint", result.heldout_coverage[k].fraction_outside},
+                    {"flagged", result.heldout_coverage[k].flagged}});
+  }
+  return {{"half_width_deg", kCoverageHalfWidth * kDeg},
+          {"flag_fraction", kCoverageFlagFraction},
+          {"fitted", fitted},
+          {"held_out", held}};
 }
 
 std::string baseName(const DiscoveryOptions& options) { return options.base_geometry ? "textbook" : "frame"; }
@@ -77,6 +102,7 @@ nlohmann::ordered_json discoveryReportJson(const DiscoveryResult& result, const 
                          {"max_harmonic_order", options.max_harmonic_order},
                          {"candidates", result.candidates}};
   report["fitted_rows"] = result.fitted_rows;
+  report["coverage"] = coverageJson(result, sources);
   report["initial"] = stateJson(result.initial, sources);
   report["initial"]["joint_residual_rms_rad"] = result.joint_residual_rms_initial;
   nlohmann::ordered_json steps = nlohmann::ordered_json::array();
@@ -129,26 +155,43 @@ std::string discoverySummary(const DiscoveryResult& result, const DiscoveryOptio
   summary << "jointcomp discover: " << result.model.robot().name << ", " << result.fitted_rows << " fitted rows, "
           << result.candidates << " candidates, base " << baseName(options) << "\n";
   char line[512];
-  std::snprintf(line, sizeof(line), "base model: fitted RMS %.4f mm, held-out RMS %s mm\n",
-                result.initial.fitted.rms * 1e3, heldRms(result.initial).c_str());
+  std::snprintf(line, sizeof(line), "base model: fitted RMS %.4f mm, held-out RMS [mm] %s\n",
+                result.initial.fitted.rms * 1e3, heldRms(result.initial, sources).c_str());
   summary << line;
+  for (std::size_t k = 0; k < result.heldout_coverage.size(); ++k) {
+    const HeldoutCoverage& c = result.heldout_coverage[k];
+    if (!c.flagged) continue;
+    summary << "warning: held-out " << campaignName(sources, true, static_cast<int>(k))
+            << " visits joint angles the fit never covered:";
+    for (std::size_t j = 0; j < c.fraction_outside.size(); ++j) {
+      if (c.fraction_outside[j] > kCoverageFlagFraction) {
+        std::snprintf(line, sizeof(line), " %s %.0f %% of rows", result.model.robot().joints[j].name.c_str(),
+                      100.0 * c.fraction_outside[j]);
+        summary << line;
+      }
+    }
+    summary << " (fitted coverage in report.json)\n";
+  }
   int index = 0;
   for (const DiscoveryStep& s : result.steps) {
-    std::snprintf(
-        line, sizeof(line),
-        "step %d: %-44s CV %.4f -> %.4f mm/axis, dBIC %.1f; fitted RMS %.4f -> %.4f mm, held-out %s -> %s mm\n",
-        ++index, discoveryStepLabel(s).c_str(), s.cv_rms_before * 1e3, s.cv_rms_after * 1e3, s.delta_bic,
-        s.before.fitted.rms * 1e3, s.after.fitted.rms * 1e3, heldRms(s.before).c_str(), heldRms(s.after).c_str());
+    std::snprintf(line, sizeof(line), "step %d: %-44s CV %.4f -> %.4f mm/axis, dBIC %.1f; fitted RMS %.4f -> %.4f mm\n",
+                  ++index, discoveryStepLabel(s).c_str(), s.cv_rms_before * 1e3, s.cv_rms_after * 1e3, s.delta_bic,
+                  s.before.fitted.rms * 1e3, s.after.fitted.rms * 1e3);
     summary << line;
+    if (!s.after.heldout.empty()) {
+      summary << "    held-out RMS [mm] before: " << heldRms(s.before, sources) << "\n";
+      summary << "    held-out RMS [mm] after:  " << heldRms(s.after, sources) << "\n";
+    }
     for (const DiscoveredParameter& p : s.parameters) {
       std::snprintf(line, sizeof(line), "    %-48s %.6g +- %.3g\n", p.name.c_str(), p.value, p.sigma);
       summary << line;
     }
   }
   std::snprintf(line, sizeof(line),
-                "stopped: %s\nfinal: fitted RMS %.4f mm, held-out RMS %s mm; noise floor %.4f mm (3-D RMS)%s\n",
-                result.stop_reason.c_str(), result.final_state.fitted.rms * 1e3, heldRms(result.final_state).c_str(),
-                result.noise_floor * 1e3, result.noise_floor > 0.0 ? "" : " (not known: give the noise floor)");
+                "stopped: %s\nfinal: fitted RMS %.4f mm, held-out RMS [mm] %s; noise floor %.4f mm (3-D RMS)%s\n",
+                result.stop_reason.c_str(), result.final_state.fitted.rms * 1e3,
+                heldRms(result.final_state, sources).c_str(), result.noise_floor * 1e3,
+                result.noise_floor > 0.0 ? "" : " (not known: give the noise floor)");
   summary << line;
   // Paths: Ra and Rz of the Z error, base model -> final model.
   for (std::size_t k = 0; k < result.final_state.paths.size() && k < result.initial.paths.size(); ++k) {
@@ -164,14 +207,19 @@ std::string discoverySummary(const DiscoveryResult& result, const DiscoveryOptio
 
 std::string discoveryStepsCsv(const DiscoveryResult& result) {
   std::ostringstream csv;
-  csv << "step,effect,fitted_rms_mm,heldout_rms_mm,cv_rms_mm\n";
-  csv << "0,base," << result.initial.fitted.rms * 1e3 << ',' << heldRms(result.initial) << ','
-      << result.initial.cv_rms * 1e3 << "\n";
+  csv << "step,effect,fitted_rms_mm,cv_rms_mm";
+  // One column per held-out campaign, in the order of report.json's "held_out" (the first keeps its old name).
+  for (std::size_t k = 0; k < result.initial.heldout.size(); ++k)
+    csv << (k == 0 ? std::string(",heldout_rms_mm") : ",heldout" + std::to_string(k + 1) + "_rms_mm");
+  csv << "\n";
+  auto row = [&csv](int step, const std::string& label, const DiscoveryState& s) {
+    csv << step << ',' << label << ',' << s.fitted.rms * 1e3 << ',' << s.cv_rms * 1e3;
+    for (const ErrorStatistics& h : s.heldout) csv << ',' << h.rms * 1e3;
+    csv << "\n";
+  };
+  row(0, "base", result.initial);
   int index = 0;
-  for (const DiscoveryStep& s : result.steps) {
-    csv << ++index << ',' << discoveryStepLabel(s) << ',' << s.after.fitted.rms * 1e3 << ',' << heldRms(s.after) << ','
-        << s.after.cv_rms * 1e3 << "\n";
-  }
+  for (const DiscoveryStep& s : result.steps) row(++index, discoveryStepLabel(s), s.after);
   return csv.str();
 }
 

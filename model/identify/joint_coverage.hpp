@@ -1,0 +1,30 @@
+// Which joint angles a campaign visited: per joint, the union of the intervals [q - h, q + h] around every
+// row's angle. A model fitted on data says nothing about angles outside its coverage, so discovery reports
+// it, flags held-out campaigns that go beyond it, and periodic tables stay zero outside it.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "model/common/types.hpp"
+
+namespace jointcomp {
+
+struct AngleInterval {
+  double low = 0.0, high = 0.0;  // rad
+};
+
+struct JointCoverage {
+  double half_width = 0.0;                          // rad
+  std::vector<std::vector<AngleInterval>> visited;  // per joint, sorted and disjoint
+  bool covers(int joint, double angle) const;
+  // Fraction of the given rows whose angle of `joint` lies outside the coverage.
+  double fractionOutside(int joint, const std::vector<JointVector>& rows) const;
+  // "-120.0..35.5, 40.0..60.0" in degrees.
+  std::string describe(int joint) const;
+};
+
+// Throws InvalidArgument for no rows, rows of different sizes, non-finite angles or a half width <= 0.
+JointCoverage jointCoverage(const std::vector<JointVector>& rows, double half_width);
+
+}  // namespace jointcomp
