@@ -94,7 +94,7 @@ struct HeldoutCoverage {
   std::vector<double> fraction_outside;  // per joint, of its rows
   bool flagged = false;                  // some joint has more than kCoverageFlagFraction of its rows outside
 };
-constexpr double kCoverageHalfWidth = 0.0436332313;  // rad (2.5 deg) around every fitted row's angle
+constexpr double kCoverageHalfWidth = 0.0872664626;  // rad (5 deg) around every fitted row's angle
 constexpr double kCoverageFlagFraction = 0.05;
 
 struct DiscoveryResult {

@@ -10,7 +10,8 @@ namespace jointcomp {
 
 JointCoverage jointCoverage(const std::vector<JointVector>& rows, double half_width) {
   if (rows.empty()) throw InvalidArgument("joint coverage: no rows");
-  if (!(half_width > 0.0) || !std::isfinite(half_width)) throw InvalidArgument("joint coverage: half width must be > 0");
+  if (!(half_width > 0.0) || !std::isfinite(half_width))
+    throw InvalidArgument("joint coverage: half width must be > 0");
   const Eigen::Index n = rows.front().size();
   JointCoverage coverage;
   coverage.half_width = half_width;

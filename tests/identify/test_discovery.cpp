@@ -117,6 +117,35 @@ TEST(Discovery, NullCampaignAddsNothing) {
   print("null", r);
   EXPECT_TRUE(r.steps.empty());
   EXPECT_LT(r.final_state.heldout[0].rms, 1.3 * r.noise_floor);
+  // Both campaigns draw from one range of poses: the held-out one stays inside the fitted coverage.
+  ASSERT_EQ(r.heldout_coverage.size(), 1u);
+  EXPECT_FALSE(r.heldout_coverage[0].flagged);
+}
+
+TEST(Discovery, FlagsAHeldOutCampaignBeyondTheFittedAngles) {
+  // Fitted only where joint 1 is below -0.3 rad; the held-out campaign goes everywhere.
+  const MeasurementCampaign all = randomCampaign(rx170Model(), 600, 12);
+  MeasurementCampaign fit = all;
+  fit.time.clear();
+  fit.command.clear();
+  fit.position.clear();
+  for (std::size_t k = 0; k < all.size(); ++k) {
+    if (all.command[k][0] >= -0.3) continue;
+    fit.time.push_back(all.time[k]);
+    fit.command.push_back(all.command[k]);
+    fit.position.push_back(all.position[k]);
+  }
+  fit.temperature.assign(fit.size(), std::nan(""));
+  fit.wrench.assign(fit.size(), Vector6::Zero());
+  fit.payload.assign(fit.size(), 0.0);
+  const MeasurementCampaign held = randomCampaign(rx170Model(), 120, 13);
+  int beyond = 0;
+  for (const JointVector& q : held.command) beyond += q[0] > -0.3 + kCoverageHalfWidth;
+  const DiscoveryResult r = discoverEffects(rx170Model(), {fit}, {held}, {});
+  ASSERT_EQ(r.heldout_coverage.size(), 1u);
+  EXPECT_TRUE(r.heldout_coverage[0].flagged);
+  EXPECT_NEAR(r.heldout_coverage[0].fraction_outside[0], beyond / 120.0, 0.05);
+  EXPECT_GT(r.heldout_coverage[0].fraction_outside[0], 0.2);
 }
 
 TEST(Discovery, FindsBacklash) {

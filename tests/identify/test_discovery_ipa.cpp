@@ -63,6 +63,10 @@ TEST(DiscoveryIpaUr10, FindsEffectsBeyondTheTextbookPipeline) {
   ASSERT_FALSE(r.steps.empty());
   EXPECT_LT(r.final_state.heldout[0].rms, r.initial.heldout[0].rms);
   EXPECT_LT(r.final_state.heldout[0].rms, 0.43e-3);
+  // Series B reaches its goals with several joint configurations, many of them never visited by A's grid.
+  ASSERT_EQ(r.heldout_coverage.size(), 1u);
+  EXPECT_TRUE(r.heldout_coverage[0].flagged);
+  EXPECT_GT(r.heldout_coverage[0].fraction_outside[0], 0.2);
   EXPECT_EQ(r.steps[0].type, "nonlinear_compliance");
   EXPECT_EQ(r.steps[0].joint, 1);
 }

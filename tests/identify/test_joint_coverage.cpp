@@ -28,7 +28,8 @@ TEST(JointCoverage, AgreesWithABruteForceScan) {
       EXPECT_EQ(coverage.covers(j, a), near) << "joint " << j << " angle " << a;
     }
     for (std::size_t i = 1; i < coverage.visited[static_cast<std::size_t>(j)].size(); ++i)
-      EXPECT_GT(coverage.visited[static_cast<std::size_t>(j)][i].low, coverage.visited[static_cast<std::size_t>(j)][i - 1].high);
+      EXPECT_GT(coverage.visited[static_cast<std::size_t>(j)][i].low,
+                coverage.visited[static_cast<std::size_t>(j)][i - 1].high);
   }
   EXPECT_GE(coverage.visited[0].size(), 2u);  // the gap between the clusters stays a gap
   std::vector<JointVector> probe = {rows[0], rows[1]};
