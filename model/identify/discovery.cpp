@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <memory>
 #include <set>
@@ -139,10 +140,14 @@ JointErrorModel buildModel(const JointErrorModel& prior, const std::vector<Activ
 
 // The linearised problem at a calibration: residuals and the columns of every parameter and candidate.
 struct Linearised {
-  Eigen::VectorXd r;                  // weighted residuals, 3 per row
-  Eigen::MatrixXd X;                  // weighted, unit-norm columns
-  Eigen::VectorXd scale;              // column norms (X_raw = X * scale)
-  std::vector<int> fold;              // fold of each residual row block (per row)
+  Eigen::VectorXd r;      // weighted residuals, 3 per row
+  Eigen::MatrixXd X;      // weighted, unit-norm columns
+  Eigen::VectorXd scale;  // column norms (X_raw = X * scale)
+  std::vector<int> fold;  // fold of each residual row block (per row)
+  // The same rows cut into parts far apart in joint space (jointSpaceParts), for the transfer check.
+  std::vector<Eigen::MatrixXd> space_gram;
+  std::vector<Eigen::VectorXd> space_xr;
+  std::vector<double> space_rr;
   std::vector<Eigen::MatrixXd> gram;  // per fold X_f^T X_f
   std::vector<Eigen::VectorXd> xr;    // per fold X_f^T r_f
   std::vector<double> rr;             // per fold r_f^T r_f
@@ -180,6 +185,73 @@ void accumulateFolds(Linearised& lin, int folds, int rows) {
     lin.gram_total += lin.gram[fo];
     lin.xr_total += lin.xr[fo];
     lin.rr_total += lin.rr[fo];
+  }
+}
+
+// The rows cut into `parts` clusters of the joint vector (k-means, seeded deterministically by farthest
+// points from the first row): parts far apart in joint space, as the time folds are in time.
+std::vector<int> jointSpaceParts(const std::vector<JointVector>& command, int parts) {
+  const int rows = static_cast<int>(command.size());
+  std::vector<int> part(static_cast<std::size_t>(rows), 0);
+  if (rows < parts) return part;
+  std::vector<JointVector> centre = {command.front()};
+  std::vector<double> distance(static_cast<std::size_t>(rows), std::numeric_limits<double>::infinity());
+  while (static_cast<int>(centre.size()) < parts) {
+    int farthest = 0;
+    for (int i = 0; i < rows; ++i) {
+      double& d = distance[static_cast<std::size_t>(i)];
+      d = std::min(d, (command[static_cast<std::size_t>(i)] - centre.back()).squaredNorm());
+      if (d > distance[static_cast<std::size_t>(farthest)]) farthest = i;
+    }
+    centre.push_back(command[static_cast<std::size_t>(farthest)]);
+  }
+  for (int iteration = 0; iteration < 30; ++iteration) {
+    bool moved = false;
+    for (int i = 0; i < rows; ++i) {
+      int nearest = 0;
+      for (int c = 1; c < parts; ++c) {
+        if ((command[static_cast<std::size_t>(i)] - centre[static_cast<std::size_t>(c)]).squaredNorm() <
+            (command[static_cast<std::size_t>(i)] - centre[static_cast<std::size_t>(nearest)]).squaredNorm())
+          nearest = c;
+      }
+      moved = moved || part[static_cast<std::size_t>(i)] != nearest;
+      part[static_cast<std::size_t>(i)] = nearest;
+    }
+    if (!moved && iteration > 0) break;
+    std::vector<int> count(static_cast<std::size_t>(parts), 0);
+    for (auto& c : centre) c.setZero();
+    for (int i = 0; i < rows; ++i) {
+      centre[static_cast<std::size_t>(part[static_cast<std::size_t>(i)])] += command[static_cast<std::size_t>(i)];
+      ++count[static_cast<std::size_t>(part[static_cast<std::size_t>(i)])];
+    }
+    for (int c = 0; c < parts; ++c) {
+      if (count[static_cast<std::size_t>(c)] > 0)
+        centre[static_cast<std::size_t>(c)] /= count[static_cast<std::size_t>(c)];
+    }
+  }
+  return part;
+}
+
+// Gram matrices of the joint-space parts (rows in any order).
+void accumulateSpaceParts(Linearised& lin, const std::vector<int>& part, int parts) {
+  const int cols = static_cast<int>(lin.X.cols());
+  lin.space_gram.assign(static_cast<std::size_t>(parts), Eigen::MatrixXd::Zero(cols, cols));
+  lin.space_xr.assign(static_cast<std::size_t>(parts), Eigen::VectorXd::Zero(cols));
+  lin.space_rr.assign(static_cast<std::size_t>(parts), 0.0);
+  for (int p = 0; p < parts; ++p) {
+    std::vector<Eigen::Index> residual_rows;
+    for (std::size_t i = 0; i < part.size(); ++i) {
+      if (part[i] != p) continue;
+      for (int a = 0; a < 3; ++a) residual_rows.push_back(3 * static_cast<Eigen::Index>(i) + a);
+    }
+    if (residual_rows.empty()) continue;
+    const Eigen::MatrixXd Xp = lin.X(residual_rows, Eigen::all);
+    const Eigen::VectorXd rp = lin.r(residual_rows);
+    Eigen::MatrixXd& gram = lin.space_gram[static_cast<std::size_t>(p)];
+    gram.selfadjointView<Eigen::Lower>().rankUpdate(Xp.transpose());
+    gram = gram.selfadjointView<Eigen::Lower>();
+    lin.space_xr[static_cast<std::size_t>(p)] = Xp.transpose() * rp;
+    lin.space_rr[static_cast<std::size_t>(p)] = rp.squaredNorm();
   }
 }
 
@@ -272,6 +344,7 @@ Linearised linearise(const JointErrorModel& model, const MeasurementCampaign& ca
     lin.X.col(c) /= lin.scale[c];
   }
   accumulateFolds(lin, folds, rows);
+  accumulateSpaceParts(lin, jointSpaceParts(data.command, folds), folds);
   return lin;
 }
 
@@ -288,8 +361,10 @@ Eigen::VectorXd sub(const Eigen::VectorXd& v, const std::vector<int>& s) {
 }
 
 struct Fit {
-  double rss = 0.0;  // full-data residual sum of squares after the step
-  double cv = 0.0;   // CV sum of squares
+  double rss = 0.0;              // full-data residual sum of squares after the step
+  double cv = 0.0;               // CV sum of squares
+  std::vector<double> cv_fold;   // its part on each fold (time block), predicted from the other folds
+  std::vector<double> cv_space;  // the same for the joint-space parts
   int rank = 0;
   Eigen::VectorXd d;        // step (scaled columns), minimises |r + X d|
   Eigen::MatrixXd inverse;  // pseudo-inverse of the Gram matrix (scaled)
@@ -312,7 +387,14 @@ Fit fitColumns(const Linearised& lin, const std::vector<int>& s, bool need_inver
     const Eigen::MatrixXd gf = sub(lin.gram[fo], s);
     const Eigen::VectorXd bf = sub(lin.xr[fo], s);
     const Eigen::VectorXd d = -solve(g - gf, b - bf, nullptr);
-    fit.cv += std::max(0.0, lin.rr[fo] + 2.0 * d.dot(bf) + d.dot(gf * d));
+    fit.cv_fold.push_back(std::max(0.0, lin.rr[fo] + 2.0 * d.dot(bf) + d.dot(gf * d)));
+    fit.cv += fit.cv_fold.back();
+  }
+  for (std::size_t p = 0; p < lin.space_gram.size(); ++p) {
+    const Eigen::MatrixXd gp = sub(lin.space_gram[p], s);
+    const Eigen::VectorXd bp = sub(lin.space_xr[p], s);
+    const Eigen::VectorXd d = -solve(g - gp, b - bp, nullptr);
+    fit.cv_space.push_back(std::max(0.0, lin.space_rr[p] + 2.0 * d.dot(bp) + d.dot(gp * d)));
   }
   if (need_inverse) fit.inverse = g.completeOrthogonalDecomposition().pseudoInverse();
   return fit;
@@ -473,7 +555,9 @@ private:
     double dbic = 0.0;
     int tried = 0;
     std::string runner_up;
+    std::string rejected;  // the best candidate that gained overall but did not transfer, and why
   };
+  static constexpr double kFoldHurt = 0.01;  // a fold's CV error may rise by 1 % at most
 
   // The joint angles the fitted rows visited, and how far each held-out campaign goes beyond them.
   void measureCoverage() {
@@ -536,9 +620,13 @@ private:
     return state;
   }
 
-  // The candidate to accept: it must lower the time-blocked CV error by min_cv_gain and the extended BIC;
-  // of those whose CV error is within a quarter of the required gain of the best one, the one with the
-  // fewest parameters (an offset rather than the joint's whole placement).
+  // The candidate to accept. It must lower the time-blocked CV error by min_cv_gain and the extended BIC,
+  // and it must transfer: predicted from the other folds, it may not make any fold (a block of consecutive
+  // rows, far from the others in time) worse by more than kFoldHurt of that fold's error; a term that helps
+  // one part of the data and hurts another fits the data, not the robot. Of the candidates whose CV error
+  // is statistically tied with the best one (the difference within one standard error of the fold-wise
+  // differences, or within a quarter of the required gain), the one with the fewest parameters wins: an
+  // offset rather than the joint's whole placement.
   Choice choose() const {
     Choice choice;
     for (std::size_t c = 0; c < features_.candidates.size(); ++c)
@@ -547,6 +635,7 @@ private:
     const double log_n = std::log(static_cast<double>(residuals_));
     const double penalty_m = 2.0 * std::log(static_cast<double>(choice.tried));
     double runner_cv = std::numeric_limits<double>::infinity();
+    double rejected_cv = std::numeric_limits<double>::infinity();
     struct Passing {
       int index;
       Fit fit;
@@ -562,18 +651,28 @@ private:
       const int added = fit.rank - base_fit_.rank;
       if (added <= 0 || fit.rss <= 0.0 || base_fit_.rss <= 0.0) continue;
       const double dbic = residuals_ * std::log(fit.rss / base_fit_.rss) + added * log_n + penalty_m;
-      if (fit.cv < base_fit_.cv * (1.0 - options_.min_cv_gain) && dbic < 0.0) {
+      const bool gains = fit.cv < base_fit_.cv * (1.0 - options_.min_cv_gain) && dbic < 0.0;
+      const std::string hurt = gains ? hurtFold(fit) : std::string();
+      if (gains && hurt.empty()) {
         passing.push_back({static_cast<int>(c), fit, dbic, added});
-      } else if (fit.cv < runner_cv) {
+        continue;
+      }
+      if (gains && fit.cv < rejected_cv) {
+        rejected_cv = fit.cv;
+        choice.rejected = features_.candidates[c].label() + ": " + hurt;
+      }
+      if (fit.cv < runner_cv) {
         runner_cv = fit.cv;
         choice.runner_up = features_.candidates[c].label();
       }
     }
-    double best_cv = std::numeric_limits<double>::infinity();
-    for (const Passing& p : passing) best_cv = std::min(best_cv, p.fit.cv);
+    const Passing* best = nullptr;
+    for (const Passing& p : passing) {
+      if (!best || p.fit.cv < best->fit.cv) best = &p;
+    }
     const Passing* chosen = nullptr;
     for (const Passing& p : passing) {
-      if (p.fit.cv > best_cv * (1.0 + 0.25 * options_.min_cv_gain)) continue;
+      if (!tied(p.fit, best->fit)) continue;
       if (!chosen || p.added < chosen->added || (p.added == chosen->added && p.fit.cv < chosen->fit.cv)) chosen = &p;
     }
     if (!chosen) return choice;
@@ -587,6 +686,41 @@ private:
       }
     }
     return choice;
+  }
+
+  // Empty when the candidate's fit, predicted from the other parts, lowers or keeps the error of every
+  // time fold and every joint-space part; else which part it hurts.
+  std::string hurtFold(const Fit& fit) const {
+    auto check = [&](const std::vector<double>& after, const std::vector<double>& before, const char* kind) {
+      for (std::size_t p = 0; p < after.size() && p < before.size(); ++p) {
+        if (after[p] <= before[p] * (1.0 + kFoldHurt)) continue;
+        char text[200];
+        std::snprintf(text, sizeof(text), "CV error %+.1f %% overall but %+.1f %% on %s %zu of %zu",
+                      100.0 * (fit.cv / base_fit_.cv - 1.0), 100.0 * (after[p] / before[p] - 1.0), kind, p + 1,
+                      after.size());
+        return std::string(text);
+      }
+      return std::string();
+    };
+    std::string hurt = check(fit.cv_fold, base_fit_.cv_fold, "time block");
+    return hurt.empty() ? check(fit.cv_space, base_fit_.cv_space, "joint-space part") : hurt;
+  }
+
+  // Whether `fit`'s CV error is statistically tied with `best`'s: within one standard error of the
+  // fold-wise differences, or within a quarter of the gain a step must bring.
+  bool tied(const Fit& fit, const Fit& best) const {
+    const double margin = best.cv * 0.25 * options_.min_cv_gain;
+    const std::size_t folds = fit.cv_fold.size();
+    double mean = 0.0, square = 0.0;
+    for (std::size_t fo = 0; fo < folds; ++fo) {
+      const double d = fit.cv_fold[fo] - best.cv_fold[fo];
+      mean += d;
+      square += d * d;
+    }
+    mean /= static_cast<double>(folds);
+    const double variance = folds > 1 ? (square - folds * mean * mean) / static_cast<double>(folds - 1) : 0.0;
+    const double standard_error_of_sum = std::sqrt(std::max(0.0, variance) * static_cast<double>(folds));
+    return fit.cv - best.cv <= std::max(margin, standard_error_of_sum);
   }
 
   // Adds the step's solution for the active and the chosen candidate's coefficients (the freed geometry
@@ -660,7 +794,8 @@ private:
       return false;
     }
     if (choice.index < 0) {
-      result_.stop_reason = "no candidate lowers the cross-validated error and the BIC";
+      result_.stop_reason = "no candidate lowers the cross-validated error and the BIC on every part of the data";
+      result_.rejected_at_stop = choice.rejected;
       return false;
     }
     const std::size_t best = static_cast<std::size_t>(choice.index);
@@ -679,6 +814,7 @@ private:
     record.delta_bic = choice.dbic;
     record.candidates_tried = choice.tried;
     record.runner_up = choice.runner_up;
+    record.rejected = choice.rejected;
     record.before = state_;
 
     std::vector<int> newly_released;  // calibration parameters this step frees

@@ -6,6 +6,10 @@
 // feature). The candidate that most lowers the time-blocked K-fold cross-validation error (blocks of
 // consecutive rows) is accepted when it also lowers an extended BIC,
 //   dBIC = N ln(RSS_c / RSS_0) + dk ln N + 2 ln(M)      (N residuals, dk added rank, M candidates tried),
+// and when it transfers: predicted from the other folds, it makes no fold more than 1 % worse (a term that
+// helps one part of the data and hurts another is rejected, and the report says so). Of the candidates
+// statistically tied with the best (within one standard error of the fold-wise differences), the one
+// with the fewest parameters is taken. The accepted candidate is
 // then added to the model and every free parameter refitted together (Gauss-Newton steps on the effects'
 // parameters jointly with the geometry, alternated with calibrateGeometry); repeated until no candidate
 // passes or max_steps.
@@ -86,6 +90,7 @@ struct DiscoveryStep {
   double delta_bic = 0.0;
   int candidates_tried = 0;
   std::string runner_up;  // best rejected / next candidate, for the evidence
+  std::string rejected;   // the best candidate that lowered the CV error but hurt a part of the data, and why
   DiscoveryState before, after;
 };
 
@@ -105,6 +110,7 @@ struct DiscoveryResult {
   std::vector<double> joint_residual_rms_initial, joint_residual_rms_final;  // rad, residual mapped to joints
   double noise_floor = 0.0;                                                  // m, 3-D RMS
   std::string stop_reason;
+  std::string rejected_at_stop;  // as DiscoveryStep::rejected, for the step that was not taken
   int fitted_rows = 0;
   int candidates = 0;
   JointCoverage coverage;                         // of the fitted rows

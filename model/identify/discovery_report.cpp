@@ -97,6 +97,8 @@ nlohmann::ordered_json discoveryReportJson(const DiscoveryResult& result, const 
                          {"folds", options.folds},
                          {"min_cv_gain", options.min_cv_gain},
                          {"criterion", "dBIC = N ln(RSS_c/RSS_0) + dk ln N + 2 ln(candidates) < 0"},
+                         {"transfer", "no fold's CV error more than 1 % worse"},
+                         {"ties", "within one standard error of the fold-wise CV differences: fewest parameters"},
                          {"base", baseName(options)},
                          {"max_steps", options.max_steps},
                          {"max_harmonic_order", options.max_harmonic_order},
@@ -128,7 +130,8 @@ nlohmann::ordered_json discoveryReportJson(const DiscoveryResult& result, const 
                          {"cv_rms_per_axis_mm_after", s.cv_rms_after * 1e3},
                          {"delta_bic", s.delta_bic},
                          {"candidates_tried", s.candidates_tried},
-                         {"runner_up", s.runner_up}};
+                         {"runner_up", s.runner_up},
+                         {"rejected_not_transferring", s.rejected}};
     entry["before"] = stateJson(s.before, sources);
     entry["after"] = stateJson(s.after, sources);
     steps.push_back(entry);
@@ -137,6 +140,7 @@ nlohmann::ordered_json discoveryReportJson(const DiscoveryResult& result, const 
   report["final"] = stateJson(result.final_state, sources);
   report["final"]["joint_residual_rms_rad"] = result.joint_residual_rms_final;
   report["stop_reason"] = result.stop_reason;
+  report["rejected_at_stop"] = result.rejected_at_stop;
   const double final_held =
       result.final_state.heldout.empty() ? result.final_state.fitted.rms : result.final_state.heldout[0].rms;
   report["noise_floor"] = {
@@ -186,6 +190,7 @@ std::string discoverySummary(const DiscoveryResult& result, const DiscoveryOptio
       std::snprintf(line, sizeof(line), "    %-48s %.6g +- %.3g\n", p.name.c_str(), p.value, p.sigma);
       summary << line;
     }
+    if (!s.rejected.empty()) summary << "    rejected, does not transfer: " << s.rejected << "\n";
   }
   std::snprintf(line, sizeof(line),
                 "stopped: %s\nfinal: fitted RMS %.4f mm, held-out RMS [mm] %s; noise floor %.4f mm (3-D RMS)%s\n",
@@ -193,6 +198,7 @@ std::string discoverySummary(const DiscoveryResult& result, const DiscoveryOptio
                 heldRms(result.final_state, sources).c_str(), result.noise_floor * 1e3,
                 result.noise_floor > 0.0 ? "" : " (not known: give the noise floor)");
   summary << line;
+  if (!result.rejected_at_stop.empty()) summary << "rejected, does not transfer: " << result.rejected_at_stop << "\n";
   // Paths: Ra and Rz of the Z error, base model -> final model.
   for (std::size_t k = 0; k < result.final_state.paths.size() && k < result.initial.paths.size(); ++k) {
     const PathRoughness& a = result.initial.paths[k];

@@ -10,6 +10,7 @@
 #include <memory>
 #include <string>
 
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
@@ -146,6 +147,26 @@ TEST(Discovery, FlagsAHeldOutCampaignBeyondTheFittedAngles) {
   EXPECT_TRUE(r.heldout_coverage[0].flagged);
   EXPECT_NEAR(r.heldout_coverage[0].fraction_outside[0], beyond / 120.0, 0.05);
   EXPECT_GT(r.heldout_coverage[0].fraction_outside[0], 0.2);
+}
+
+TEST(Discovery, RejectsATermThatHelpsOnePartAndHurtsAnother) {
+  // Joint 3 is off by 1 mrad, but only where joint 1 is below -0.5 rad (the rest of the workspace is
+  // exact): one offset over all the data fits the average, helps one region and hurts the other.
+  const MeasurementCampaign biased = randomCampaign(withOffset(rx170Model(), 2, 1e-3), 600, 31);
+  const MeasurementCampaign exact = randomCampaign(rx170Model(), 600, 31);
+  MeasurementCampaign fit = exact;
+  for (std::size_t k = 0; k < fit.size(); ++k) {
+    if (fit.command[k][0] < -0.5) fit.position[k] = biased.position[k];
+  }
+  DiscoveryOptions options;
+  options.types = {"offset"};
+  const DiscoveryResult r = discoverEffects(rx170Model(), {fit}, {}, options);
+  EXPECT_FALSE(found(r, "offset", 2));
+  EXPECT_THAT(r.rejected_at_stop, ::testing::HasSubstr("offset joint 3"));
+  EXPECT_THAT(r.rejected_at_stop, ::testing::HasSubstr("part"));
+  // The same offset everywhere transfers and is found.
+  const DiscoveryResult everywhere = discoverEffects(rx170Model(), {biased}, {}, options);
+  EXPECT_TRUE(found(everywhere, "offset", 2));
 }
 
 TEST(Discovery, FindsBacklash) {
