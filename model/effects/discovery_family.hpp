@@ -15,6 +15,7 @@
 #include <vector>
 
 #include <Eigen/Dense>
+#include <nlohmann/json.hpp>
 
 #include "model/effects/effect.hpp"
 #include "model/effects/gear_train.hpp"
@@ -49,6 +50,9 @@ struct DiscoveryCandidate {
   std::string part;     // "motor", "stage_k", "output"; or the variant ("temperature", "time")
   double cycles = 0.0;  // harmonic order (cycles per revolution of the part)
   std::string detail;   // appended to the label, e.g. " motor order 2"
+  // What the report says of the step beside its type and joint, e.g. {"part", "stage", "order"} of a
+  // harmonic: the family says it, so the report never asks for a type by name.
+  nlohmann::ordered_json report_fields = nlohmann::ordered_json::object();
   std::vector<CalibrationParameter> releases;
   // rows x coefficients; through_compliance: rows x (coefficients * dof), block k holding the load torque
   // of every joint per unit of coefficient k.

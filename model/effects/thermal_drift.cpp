@@ -67,11 +67,13 @@ void ThermalDriftDiscovery::offer(const DiscoveryData& data, int joint,
   if (data.have_temperature) {
     candidate.part = "temperature";
     candidate.detail = " (temperature)";
+    candidate.report_fields = {{"variant", candidate.part}};
     candidate.columns = featureColumn(data, [&](int i) { return data.temperature[i] - data.temperature0; });
     candidates.push_back(candidate);
   }
   candidate.part = "time";
   candidate.detail = " (time)";
+  candidate.report_fields = {{"variant", candidate.part}};
   candidate.columns = featureColumn(data, [&](int i) { return data.time[i] - data.time0; });
   candidates.push_back(std::move(candidate));
 }

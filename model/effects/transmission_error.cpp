@@ -167,6 +167,7 @@ void HarmonicDiscovery::offer(const DiscoveryData& data, int joint, std::vector<
       candidate.part = part;
       candidate.cycles = order;
       candidate.detail = " " + part + " order " + std::to_string(order);
+      candidate.report_fields = {{"part", part}, {"stage", s}, {"order", candidate.cycles}};
       candidate.columns.resize(rows, 2);
       for (int i = 0; i < rows; ++i) {
         const double x = order * gears.stageInputAngle(joint, s, data.motor[i]);

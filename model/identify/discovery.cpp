@@ -809,6 +809,8 @@ private:
     record.stage = chosen.stage;
     record.part = chosen.part;
     record.cycles = chosen.cycles;
+    record.detail = chosen.detail;
+    record.report_fields = chosen.report_fields;
     record.cv_rms_before = std::sqrt(base_fit_.cv / residuals_);
     record.cv_rms_after = std::sqrt(choice.fit.cv / residuals_);
     record.delta_bic = choice.dbic;

@@ -85,6 +85,8 @@ struct DiscoveryStep {
   int stage = 0;           // harmonic: 1 = motor ... stageCount + 1 = output
   std::string part;        // harmonic: "motor", "stage_k", "output"; thermal: "temperature" or "time"
   double cycles = 0.0;     // harmonic order (cycles per revolution of the part)
+  std::string detail;      // the candidate's label detail, e.g. " motor order 2" or " (time)"
+  nlohmann::ordered_json report_fields;  // what the family reports beside type and joint
   std::vector<DiscoveredParameter> parameters;
   double cv_rms_before = 0.0, cv_rms_after = 0.0;  // m per axis
   double delta_bic = 0.0;

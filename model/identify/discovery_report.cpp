@@ -76,10 +76,7 @@ std::string baseName(const DiscoveryOptions& options) { return options.base_geom
 
 std::string discoveryStepLabel(const DiscoveryStep& step) {
   if (step.joint < 0) return step.type + " (tool)";
-  std::string label = step.type + " " + step.joint_name;
-  if (step.type == "harmonic") label += " " + step.part + " order " + std::to_string(static_cast<int>(step.cycles));
-  if (step.type == "thermal") label += " (" + step.part + ")";
-  return label;
+  return step.type + " " + step.joint_name + step.detail;
 }
 
 nlohmann::ordered_json discoveryReportJson(const DiscoveryResult& result, const DiscoveryOptions& options,
@@ -116,12 +113,7 @@ nlohmann::ordered_json discoveryReportJson(const DiscoveryResult& result, const 
         {"type", s.type},
         {"joint", s.joint >= 0 ? nlohmann::ordered_json(s.joint_name) : nlohmann::ordered_json(nullptr)},
         {"joint_index", s.joint >= 0 ? nlohmann::ordered_json(s.joint + 1) : nlohmann::ordered_json(nullptr)}};
-    if (s.type == "harmonic") {
-      entry["part"] = s.part;
-      entry["stage"] = s.stage;
-      entry["order"] = s.cycles;
-    }
-    if (s.type == "thermal") entry["variant"] = s.part;
+    for (const auto& [key, value] : s.report_fields.items()) entry[key] = value;
     nlohmann::ordered_json parameters = nlohmann::ordered_json::array();
     for (const DiscoveredParameter& p : s.parameters)
       parameters.push_back({{"name", p.name}, {"value", p.value}, {"sigma", p.sigma}});

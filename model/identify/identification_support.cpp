@@ -5,6 +5,7 @@
 #include <cstdio>
 
 #include "model/common/errors.hpp"
+#include "model/effects/compliance.hpp"
 #include "model/robot/kinematics.hpp"
 
 namespace jointcomp::identify_detail {
@@ -69,7 +70,7 @@ RowPrediction predictRow(const JointErrorModel& nominal, const MeasurementCampai
   ctx.time = campaign.time[k];
   ctx.payload_mass = campaign.payload[k];
   ctx.payload_com = target;
-  const EffectMask mask = nominal.loadsAnd({"compliance"});
+  const EffectMask mask = nominal.loadsAnd({ComplianceEffect::kType});
   RowPrediction prediction;
   ctx.q = ctx.command;
   forwardKinematics(robot, ws.robot, ctx.command);

@@ -5,6 +5,7 @@
 #include <limits>
 
 #include "model/common/errors.hpp"
+#include "model/effects/compliance.hpp"
 #include "model/identify/identification_statistics.hpp"
 #include "model/identify/identification_support.hpp"
 #include "model/io/instrument_noise.hpp"
@@ -146,7 +147,7 @@ std::vector<double> sweepSamples(const JointErrorModel& nominal, const Measureme
   const bool by_tracker = campaign.has_position;
   const Eigen::Vector3d target = targetOf(campaign);
   const std::vector<double> position_sigma = positionSigmaPerRow(campaign);
-  const EffectMask stiffness_mask = nominal.loadsAnd({"compliance"});
+  const EffectMask stiffness_mask = nominal.loadsAnd({ComplianceEffect::kType});
   JointErrorWorkspace ws(robot);
   RobotWorkspace predicted(robot);
   JointContext ctx(n);
