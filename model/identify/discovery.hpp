@@ -80,12 +80,12 @@ struct DiscoveryState {
 
 struct DiscoveryStep {
   std::string type;
-  int joint = -1;          // -1 for payload (the whole robot)
-  std::string joint_name;  // "" for payload
-  int stage = 0;           // harmonic: 1 = motor ... stageCount + 1 = output
-  std::string part;        // harmonic: "motor", "stage_k", "output"; thermal: "temperature" or "time"
-  double cycles = 0.0;     // harmonic order (cycles per revolution of the part)
-  std::string detail;      // the candidate's label detail, e.g. " motor order 2" or " (time)"
+  int joint = -1;                        // -1 for payload (the whole robot)
+  std::string joint_name;                // "" for payload
+  int stage = 0;                         // harmonic: 1 = motor ... stageCount + 1 = output
+  std::string part;                      // harmonic: "motor", "stage_k", "output"; thermal: "temperature" or "time"
+  double cycles = 0.0;                   // harmonic order (cycles per revolution of the part)
+  std::string detail;                    // the candidate's label detail, e.g. " motor order 2" or " (time)"
   nlohmann::ordered_json report_fields;  // what the family reports beside type and joint
   std::vector<DiscoveredParameter> parameters;
   double cv_rms_before = 0.0, cv_rms_after = 0.0;  // m per axis
