@@ -35,17 +35,22 @@ std::unique_ptr<Effect> BacklashEffect::fromValues(const Robot& robot, const std
   return std::make_unique<BacklashEffect>(robot, values, scalars[0]);
 }
 
+double lostMotionSide(const JointContext& ctx, int j, double velocity_scale) {
+  if (ctx.approach.size() > j) return ctx.approach[j];
+  if (ctx.velocity.size() > j) return std::tanh(ctx.velocity[j] / velocity_scale);
+  return 0.0;
+}
+
 void BacklashEffect::addJointError(const Robot&, const JointContext& ctx, JointVector& dq) const {
-  if (ctx.velocity.size() != dq.size()) return;  // no motion (or load) known
   const std::vector<double>& width = field(0);
   for (std::size_t i = 0; i < width.size(); ++i) {
     const int j = static_cast<int>(i);
-    dq[j] += width[i] * feature(ctx.velocity[j], scalar(0));
+    dq[j] += width[i] * feature(lostMotionSide(ctx, j, scalar(0)));
   }
 }
 
 double BacklashDiscovery::feature(const DiscoveryData& data, int row, int joint) const {
-  return BacklashEffect::feature(data.velocity[row][joint], data.velocity_scale);
+  return BacklashEffect::feature(data.approach[row][joint]);
 }
 
 std::unique_ptr<Effect> BacklashDiscovery::effectOf(const DiscoveryData& data, const std::vector<double>& width) const {

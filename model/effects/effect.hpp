@@ -20,14 +20,18 @@ namespace jointcomp {
 // Everything an effect may depend on at one instant. The caller fills q, command, motor, velocity,
 // time and temperature; JointErrorModel fills load_torque before asking for errors.
 struct JointContext {
-  JointVector q;                          // link-side joint positions: where the robot actually is (rad)
-  JointVector command;                    // commanded joint positions as the controller sees them (rad)
-  JointVector motor;                      // motor angles (rad), motor = G * command through the gear train
-  JointVector velocity;                   // link-side joint velocities (rad/s): the direction of motion
-  double time = 0.0;                      // s
-  double temperature = 20.0;              // degC
-  Vector6 tool_wrench = Vector6::Zero();  // wrench applied by the environment at the tool, base frame
-  double payload_mass = 0.0;              // kg, carried at the tool
+  JointVector q;         // link-side joint positions: where the robot actually is (rad)
+  JointVector command;   // commanded joint positions as the controller sees them (rad)
+  JointVector motor;     // motor angles (rad), motor = G * command through the gear train
+  JointVector velocity;  // link-side joint velocities (rad/s): the direction of motion
+  // The side of each joint's lost motion as its last move set it (LostMotionMemory, backlash.hpp): +1
+  // approached from below, -1 from above, 0 not known (no move seen yet). Set for a robot at rest between
+  // moves (measurement campaigns); empty for continuous motion, where the side follows `velocity`.
+  JointVector approach;
+  double time = 0.0;                                      // s
+  double temperature = 20.0;                              // degC
+  Vector6 tool_wrench = Vector6::Zero();                  // wrench applied by the environment at the tool, base frame
+  double payload_mass = 0.0;                              // kg, carried at the tool
   Eigen::Vector3d payload_com = Eigen::Vector3d::Zero();  // m, tool frame
   // Torque each joint's transmission carries to hold the link (N m): gravity and payload and wrench,
   // plus what the load effects add. Positive like gravityTorques().

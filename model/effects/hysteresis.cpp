@@ -6,6 +6,7 @@
 
 #include "model/common/errors.hpp"
 #include "model/common/json_fields.hpp"
+#include "model/effects/backlash.hpp"
 
 namespace jointcomp {
 
@@ -36,16 +37,16 @@ std::unique_ptr<Effect> HysteresisEffect::fromValues(const Robot& robot, const s
 }
 
 void HysteresisEffect::addJointError(const Robot&, const JointContext& ctx, JointVector& dq) const {
-  if (ctx.velocity.size() != dq.size() || ctx.load_torque.size() != dq.size()) return;  // no motion (or load) known
+  if (ctx.load_torque.size() != dq.size()) return;  // no load known
   const std::vector<double>& width = field(0);
   for (std::size_t i = 0; i < width.size(); ++i) {
     const int j = static_cast<int>(i);
-    dq[j] += width[i] * feature(ctx.velocity[j], ctx.load_torque[j], scalar(0));
+    dq[j] += width[i] * feature(lostMotionSide(ctx, j, scalar(0)), ctx.load_torque[j]);
   }
 }
 
 double HysteresisDiscovery::feature(const DiscoveryData& data, int row, int joint) const {
-  return HysteresisEffect::feature(data.velocity[row][joint], data.load_torque[row][joint], data.velocity_scale);
+  return HysteresisEffect::feature(data.approach[row][joint], data.load_torque[row][joint]);
 }
 
 std::unique_ptr<Effect> HysteresisDiscovery::effectOf(const DiscoveryData& data,

@@ -2,8 +2,8 @@
 // direction it was approached, by half a lost motion that grows with the torque the joint carries,
 //   dq_j = -h_j / 2 * |tau_j| * tanh(v_j / v_s)
 // with h_j the width of the loop per N m (rad / (N m)), tau_j the joint's load torque
-// (JointContext::load_torque), v_j the direction of approach (JointContext::velocity, as backlash) and v_s
-// the same small velocity scale as backlash.
+// (JointContext::load_torque) and s_j the side of the lost motion, remembered at rest and tanh(v_j / v_s)
+// in continuous motion exactly as for backlash (backlash.hpp), with the same small velocity scale v_s.
 //
 // Why this model: in a gear transmission under load (harmonic drives in particular) the teeth, the wave
 // generator and the flexspline slide under a normal force proportional to the transmitted torque, so the
@@ -14,8 +14,8 @@
 // motion. Backlash (backlash.hpp) is the part of the lost motion that does not depend on the load (play
 // between teeth): b/2 for every pose; hysteresis is zero for an unloaded joint and largest where gravity
 // loads it most, so the two are told apart by how the lag varies with the pose. The model is linear in h_j,
-// which discovery fits; it is memoryless (no Dahl or Bouc-Wen internal state), so a joint at rest (v = 0)
-// gets no error, as with backlash. Parameter file:
+// which discovery fits; its only memory is the side of the last move (no Dahl or Bouc-Wen internal state).
+// Parameter file:
 //   {"type": "hysteresis", "width_rad_per_nm": [n values], "velocity_scale_rad_per_s": 0.001}
 // A negative width (the link leads) is accepted: discovery fits the sign.
 #pragma once
@@ -51,10 +51,8 @@ public:
   std::unique_ptr<Effect> clone() const override { return std::make_unique<HysteresisEffect>(*this); }
 
   double velocityScale() const { return scalar(0); }
-  // The factor of h_j in dq_j: -|tau| tanh(v / v_s) / 2.
-  static double feature(double velocity, double torque, double velocity_scale) {
-    return -0.5 * std::abs(torque) * std::tanh(velocity / velocity_scale);
-  }
+  // The factor of h_j in dq_j: -|tau| s / 2.
+  static double feature(double side, double torque) { return -0.5 * std::abs(torque) * side; }
 };
 
 // Discovery: "hysteresis", one column per joint, -|tau_j| tanh(v_j / v_s) / 2 (needs the load torque).

@@ -12,6 +12,7 @@
 #include "model/common/errors.hpp"
 #include "model/common/random.hpp"
 #include "model/compensation/joint_trajectory.hpp"
+#include "model/effects/backlash.hpp"
 #include "model/effects/compliance.hpp"
 #include "model/experiment/spiral_experiment.hpp"
 #include "model/identify/identification_support.hpp"
@@ -45,7 +46,8 @@ public:
         ws_(robot_),
         random_(spec.seed ^ 0xA5A5A5A55A5A5A5AULL),
         noise_(spec.seed),
-        ctx_(robot_.dof()) {
+        ctx_(robot_.dof()),
+        lost_motion_(robot_.dof()) {
     if (!spec.target_in_flange.allFinite()) throw InvalidArgument("simulation: target_in_flange is not finite");
     if (!(spec.tracker.constant_m >= 0.0 && spec.tracker.per_metre >= 0.0 &&
           spec.tracker.tracker_position.allFinite())) {
@@ -83,12 +85,15 @@ public:
   MeasurementCampaign& campaign() { return campaign_; }
 
   // The quasi-static robot at `command` under a wrench at the target and a payload: the link angles.
+  // `velocity` is that of the move into `command` (zero for a joint that did not move): the side of each
+  // joint's lost motion is the one its last move set, remembered across rows as on a real robot.
   JointVector settle(const JointVector& command, const JointVector& velocity, const Vector6& wrench_at_target,
                      double payload, double t) {
     ctx_.command = command;
     ctx_.time = t;
     ctx_.temperature = spec_.temperature.enabled ? spec_.temperature.at(t) : JointContext().temperature;
     ctx_.velocity = velocity;
+    ctx_.approach = lost_motion_.move(velocity);
     ctx_.payload_mass = payload;
     ctx_.payload_com = spec_.target_in_flange;
     forwardKinematics(robot_, ws_.robot, command);
@@ -185,6 +190,7 @@ private:
   DeterministicRandom random_;
   DeterministicRandom noise_;
   JointContext ctx_;
+  LostMotionMemory lost_motion_;
   JointVector stiffness_;
   MeasurementCampaign campaign_;
   double sigma_sum2_ = 0.0;

@@ -14,6 +14,7 @@
 
 #include "model/common/errors.hpp"
 #include "model/common/random.hpp"
+#include "model/effects/backlash.hpp"
 #include "model/effects/compliance.hpp"
 #include "model/effects/joint_offset.hpp"
 #include "model/robot/dynamics.hpp"
@@ -332,24 +333,26 @@ CalibrationData prepareCalibrationData(const JointErrorModel& prior, const Measu
   }
   JointErrorWorkspace ws(robot);
   JointContext ctx(robot.dof());
+  // The robot rests at each row: the side of each joint's lost motion is the one its last move set,
+  // remembered along every row with a finite command (used or not), not known before the first move.
+  LostMotionMemory memory(robot.dof());
+  const JointVector* previous = nullptr;
   for (std::size_t k = 0; k < rows; ++k) {
     const JointVector& command = campaign.command[k];
+    const bool command_known = command.size() == robot.dof() && command.allFinite();
+    if (command_known) {
+      if (previous) memory.move(command - *previous);
+      previous = &command;
+    }
     const Eigen::Vector3d& position = campaign.position[k];
-    if (command.size() != robot.dof() || !command.allFinite() || !position.allFinite()) {
+    if (!command_known || !position.allFinite()) {
       ++data.skipped_rows;
       continue;
     }
     ctx.q = command;
     ctx.command = command;
-    // Direction of approach from the command sequence (the previous row's command, whether used or not):
-    // the mean velocity of the move into this row; the first row is at rest.
     ctx.velocity.setZero();
-    if (k > 0 && campaign.command[k - 1].size() == command.size() && campaign.command[k - 1].allFinite()) {
-      const double dt = k < campaign.time.size() && campaign.time[k] > campaign.time[k - 1]
-                            ? campaign.time[k] - campaign.time[k - 1]
-                            : 1.0;
-      ctx.velocity = (command - campaign.command[k - 1]) / dt;
-    }
+    ctx.approach = memory.sides();
     ctx.time = k < campaign.time.size() ? campaign.time[k] : 0.0;
     const double temperature = k < campaign.temperature.size() ? campaign.temperature[k] : kNaN;
     ctx.temperature = std::isfinite(temperature) ? temperature : 20.0;
@@ -368,6 +371,7 @@ CalibrationData prepareCalibrationData(const JointErrorModel& prior, const Measu
     data.row.push_back(static_cast<int>(k));
     data.command.push_back(command);
     data.load_torque.push_back(ctx.load_torque);
+    data.approach.push_back(ctx.approach);
     data.other_error.push_back(other);
     data.measured.push_back(position);
   }

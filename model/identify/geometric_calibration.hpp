@@ -88,6 +88,7 @@ struct CalibrationData {
   std::vector<int> row;                   // campaign row (0-based) of each used row
   std::vector<JointVector> command;       // rad
   std::vector<JointVector> load_torque;   // N m
+  std::vector<JointVector> approach;      // side of each joint's lost motion, remembered along all rows
   std::vector<JointVector> other_error;   // rad, the prior's other joint-error effects
   std::vector<Eigen::Vector3d> measured;  // m, in the campaign's frame
   int skipped_rows = 0;                   // rows without a measured position (NaN / empty cells)
