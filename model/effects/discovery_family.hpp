@@ -30,7 +30,7 @@ struct DiscoveryData {
   const GearTrain* gears = nullptr;
   std::vector<JointVector> command;      // rad
   std::vector<JointVector> motor;        // rad, through the gear train
-  std::vector<JointVector> velocity;     // rad/s, from the command sequence (direction of approach)
+  std::vector<JointVector> approach;     // side of each joint's lost motion (+1, -1; 0 not known yet)
   std::vector<JointVector> load_torque;  // N m, what each joint's transmission carries
   std::vector<double> time;              // s
   std::vector<double> temperature;       // degC; NaN where not measured
@@ -40,6 +40,9 @@ struct DiscoveryData {
   double temperature0 = 20.0;            // degC, the rows' mean temperature (the reference of thermal drift)
   double velocity_scale = 1e-3;          // rad/s, smooth sign of lost motion
   int max_harmonic_order = 4;
+  // The base fit's residual mapped to the joints (per joint, per row, rad), for families that scan it for
+  // what their fixed candidates miss (harmonic orders beyond max_harmonic_order); empty when not known.
+  std::vector<std::vector<double>> joint_residual;
   int rows() const { return static_cast<int>(command.size()); }
 };
 

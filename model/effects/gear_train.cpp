@@ -1,5 +1,8 @@
 #include "model/effects/gear_train.hpp"
 
+#include <algorithm>
+#include <cmath>
+
 #include <nlohmann/json.hpp>
 
 #include "model/common/errors.hpp"
@@ -10,6 +13,7 @@ namespace jointcomp {
 GearTrain GearTrain::direct(int dof) {
   GearTrain gears;
   gears.stage_ratios_.assign(dof, std::vector<double>{1.0});
+  gears.stage_input_teeth_.assign(dof, std::vector<int>{0});
   gears.motor_from_joint_ = JointMatrix::Identity(dof, dof);
   gears.updateDerived();
   return gears;
@@ -44,6 +48,20 @@ GearTrain GearTrain::fromJson(const nlohmann::json& gears_json, const Robot& rob
       total *= ratios[k];
     }
     gears.stage_ratios_[j] = ratios;
+    gears.stage_input_teeth_[j].assign(ratios.size(), 0);
+    if (joint.has("stage_input_teeth")) {
+      const std::vector<double> teeth = joint.numbers("stage_input_teeth");
+      if (teeth.size() != ratios.size()) {
+        joint.fail("stage_input_teeth", "expected one tooth count per stage (" + std::to_string(ratios.size()) +
+                                            "), found " + std::to_string(teeth.size()));
+      }
+      for (std::size_t k = 0; k < teeth.size(); ++k) {
+        if (!(teeth[k] >= 0.0 && teeth[k] <= 10000.0) || teeth[k] != std::floor(teeth[k]))
+          joint.fail("stage_input_teeth[" + std::to_string(k) + "]",
+                     "must be a whole number from 0 (not known) to 10000");
+        gears.stage_input_teeth_[j][k] = static_cast<int>(teeth[k]);
+      }
+    }
     gears.motor_from_joint_(j, j) = total;
     joint.rejectUnknownKeys();
   }
@@ -73,8 +91,12 @@ GearTrain GearTrain::fromJson(const nlohmann::json& gears_json, const Robot& rob
 
 nlohmann::json GearTrain::toJson(const Robot& robot) const {
   nlohmann::json joints = nlohmann::json::array();
-  for (int j = 0; j < dof(); ++j)
-    joints.push_back({{"joint", robot.joints[j].name}, {"stage_ratios", stage_ratios_[j]}});
+  for (int j = 0; j < dof(); ++j) {
+    nlohmann::json entry = {{"joint", robot.joints[j].name}, {"stage_ratios", stage_ratios_[j]}};
+    const auto& teeth = stage_input_teeth_[j];
+    if (std::any_of(teeth.begin(), teeth.end(), [](int t) { return t > 0; })) entry["stage_input_teeth"] = teeth;
+    joints.push_back(entry);
+  }
   nlohmann::json coupling = nlohmann::json::array();
   for (int m = 0; m < dof(); ++m) {
     for (int j = 0; j < dof(); ++j) {

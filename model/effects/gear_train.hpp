@@ -22,6 +22,9 @@ public:
   int dof() const { return static_cast<int>(stage_ratios_.size()); }
   int stageCount(int joint) const { return static_cast<int>(stage_ratios_[joint].size()); }
   const std::vector<double>& stageRatios(int joint) const { return stage_ratios_[joint]; }
+  // Teeth of the gear on each stage's input shaft (the gear-mesh order per revolution of that shaft), from
+  // the optional "stage_input_teeth"; 0 where not given.
+  int stageInputTeeth(int joint, int stage) const { return stage_input_teeth_[joint][stage - 1]; }
   double totalRatio(int joint) const { return motor_from_joint_(joint, joint); }
   const JointMatrix& motorFromJoint() const { return motor_from_joint_; }
 
@@ -31,8 +34,9 @@ public:
   double stageInputAngle(int joint, int stage, const JointVector& motor) const;
 
 private:
-  std::vector<std::vector<double>> stage_ratios_;  // per joint, motor side first
-  std::vector<std::vector<double>> ratio_before_;  // product of the ratios before each stage input
+  std::vector<std::vector<double>> stage_ratios_;    // per joint, motor side first
+  std::vector<std::vector<int>> stage_input_teeth_;  // per joint and stage; 0: not known
+  std::vector<std::vector<double>> ratio_before_;    // product of the ratios before each stage input
   JointMatrix motor_from_joint_;
   void updateDerived();
 };

@@ -7,6 +7,7 @@
 
 #include "model/common/errors.hpp"
 #include "model/common/json_fields.hpp"
+#include "model/common/periodogram.hpp"
 #include "model/effects/joint_error_model.hpp"
 
 namespace jointcomp {
@@ -154,11 +155,12 @@ void HarmonicDiscovery::offer(const DiscoveryData& data, int joint, std::vector<
     if (seen) continue;
     ratios.push_back(ratio);
     const std::string part = s == 1 ? "motor" : s == stages + 1 ? "output" : "stage_" + std::to_string(s);
-    for (int order = 1; order <= data.max_harmonic_order; ++order) {
+    // `why` says how an order beyond the default range came to be offered.
+    auto offerOrder = [&](int order, const std::string& why) {
       const double frequency = std::abs(ratio) * order;
       bool duplicate = false;
       for (double fr : frequencies) duplicate = duplicate || std::abs(fr - frequency) <= 1e-9 * std::max(1.0, fr);
-      if (duplicate) continue;
+      if (duplicate) return;
       frequencies.push_back(frequency);
       DiscoveryCandidate candidate;
       candidate.type = name();
@@ -166,8 +168,9 @@ void HarmonicDiscovery::offer(const DiscoveryData& data, int joint, std::vector<
       candidate.stage = s;
       candidate.part = part;
       candidate.cycles = order;
-      candidate.detail = " " + part + " order " + std::to_string(order);
+      candidate.detail = " " + part + " order " + std::to_string(order) + (why.empty() ? "" : " (" + why + ")");
       candidate.report_fields = {{"part", part}, {"stage", s}, {"order", candidate.cycles}};
+      if (!why.empty()) candidate.report_fields["proposed_by"] = why;
       candidate.columns.resize(rows, 2);
       for (int i = 0; i < rows; ++i) {
         const double x = order * gears.stageInputAngle(joint, s, data.motor[i]);
@@ -175,6 +178,22 @@ void HarmonicDiscovery::offer(const DiscoveryData& data, int joint, std::vector<
         candidate.columns(i, 1) = std::cos(x);
       }
       candidates.push_back(std::move(candidate));
+    };
+    for (int order = 1; order <= data.max_harmonic_order; ++order) offerOrder(order, "");
+    // The gear mesh of the stage (its input gear's teeth per revolution of its input shaft).
+    if (s <= stages) {
+      const int teeth = gears.stageInputTeeth(joint, s);
+      if (teeth > data.max_harmonic_order) offerOrder(teeth, "gear mesh");
+    }
+    // Orders beyond the range, where the base fit's residual of this joint repeats with the part's angle:
+    // a spectrum scan proposes the strongest when it stands out of the rest.
+    if (static_cast<int>(data.joint_residual.size()) > joint && rows >= 8) {
+      std::vector<double> angle(static_cast<std::size_t>(rows));
+      for (int i = 0; i < rows; ++i)
+        angle[static_cast<std::size_t>(i)] = gears.stageInputAngle(joint, s, data.motor[i]);
+      const OrderPeak peak = strongestOrder(data.joint_residual[static_cast<std::size_t>(joint)], angle,
+                                            data.max_harmonic_order + 1, kMaxScannedHarmonicOrder);
+      if (peak.stands_out) offerOrder(peak.order, "spectrum scan");
     }
   }
 }

@@ -47,9 +47,13 @@ private:
 };
 
 // Discovery: "harmonic", per joint a sine and a cosine column, a sin(k x) + b cos(k x), x the angle of
-// the motor, of each stage's input or of the output (distinct parts only), k = 1 .. max_harmonic_order; a
-// part's order at the frequency of an earlier part's order is the same column and is not offered twice.
-// Written as the harmonics (amplitude, phase) of one transmission_error effect.
+// the motor, of each stage's input or of the output (distinct parts only), k = 1 .. max_harmonic_order;
+// beyond that range, each stage's gear-mesh order (stage_input_teeth of the gear data) and the order a
+// spectrum scan of the base fit's joint residual finds standing out (up to kMaxScannedHarmonicOrder), so
+// that a high order is proposed rather than missed silently. A part's order at the frequency of an earlier
+// part's order is the same column and is not offered twice. Written as the harmonics (amplitude, phase) of
+// one transmission_error effect.
+constexpr int kMaxScannedHarmonicOrder = 24;
 class HarmonicDiscovery : public DiscoveryFamily {
 public:
   std::string name() const override { return "harmonic"; }

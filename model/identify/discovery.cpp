@@ -30,16 +30,16 @@ bool wanted(const DiscoveryOptions& options, const std::string& type) {
   return options.types.empty() || std::find(options.types.begin(), options.types.end(), type) != options.types.end();
 }
 
-// The used rows as the families see them: commands, motor angles, the direction of approach from the
-// command sequence (the previous campaign row, used or not), load torques, times and temperatures.
+// The used rows as the families see them: commands, motor angles, the side of each joint's lost motion
+// (remembered along the command sequence, prepareCalibrationData), load torques, times and temperatures.
 DiscoveryData discoveryData(const JointErrorModel& prior, const MeasurementCampaign& campaign,
                             const CalibrationData& data, const DiscoveryOptions& options) {
-  const int n = prior.robot().dof();
   const int rows = static_cast<int>(data.size());
   DiscoveryData d;
   d.robot = &prior.robot();
   d.gears = &prior.gears();
   d.command = data.command;
+  d.approach = data.approach;
   d.load_torque = data.load_torque;
   d.torque_known = data.torque_known;
   d.velocity_scale = options.velocity_scale;
@@ -59,12 +59,6 @@ DiscoveryData discoveryData(const JointErrorModel& prior, const MeasurementCampa
     JointVector motor;
     prior.gears().motorAngles(data.command[i], motor);
     d.motor.push_back(motor);
-    JointVector velocity = JointVector::Zero(n);
-    if (k > 0 && campaign.command[k - 1].allFinite()) {
-      const double dt = campaign.time[k] > campaign.time[k - 1] ? campaign.time[k] - campaign.time[k - 1] : 1.0;
-      velocity = (campaign.command[k] - campaign.command[k - 1]) / dt;
-    }
-    d.velocity.push_back(velocity);
   }
   d.have_temperature = tcount == rows && rows > 0;
   d.temperature0 = d.have_temperature ? tsum / tcount : 20.0;
@@ -158,6 +152,8 @@ struct Linearised {
   std::vector<std::vector<int>> candidate_columns;  // per candidate, empty when not offered
   std::vector<std::vector<int>> active_of;          // per active, its columns
   std::vector<std::vector<double>> joint_residual;  // per joint, per row (pinv mapping)
+  std::vector<double> residual_norm;                // per row, |measured - predicted| (m), with the mapping
+  std::vector<std::vector<double>> joint_lever;     // per joint, per row, |dm/dq_j| (m/rad), with the mapping
 };
 
 // The per-fold Gram matrices X_f^T X_f, X_f^T r_f and r_f^T r_f, and their totals, for the fast
@@ -305,8 +301,11 @@ Linearised linearise(const JointErrorModel& model, const MeasurementCampaign& ca
   lin.r.resize(3 * rows);
   lin.X.resize(3 * rows, cols);
   lin.fold.resize(static_cast<std::size_t>(rows));
-  if (map_joints)
+  if (map_joints) {
     lin.joint_residual.assign(static_cast<std::size_t>(n), std::vector<double>(static_cast<std::size_t>(rows)));
+    lin.residual_norm.resize(static_cast<std::size_t>(rows));
+    lin.joint_lever.assign(static_cast<std::size_t>(n), std::vector<double>(static_cast<std::size_t>(rows)));
+  }
   Eigen::MatrixXd J;
   for (int i = 0; i < rows; ++i) {
     const Eigen::Vector3d m =
@@ -335,6 +334,9 @@ Linearised linearise(const JointErrorModel& model, const MeasurementCampaign& ca
       for (int j = 0; j < n; ++j) Jq.col(j) = J.col(layout.offset(j));
       const Eigen::VectorXd dq = Jq.completeOrthogonalDecomposition().solve(-(m - data.measured[i]));
       for (int j = 0; j < n; ++j) lin.joint_residual[static_cast<std::size_t>(j)][static_cast<std::size_t>(i)] = dq[j];
+      lin.residual_norm[static_cast<std::size_t>(i)] = (m - data.measured[i]).norm();
+      for (int j = 0; j < n; ++j)
+        lin.joint_lever[static_cast<std::size_t>(j)][static_cast<std::size_t>(i)] = Jq.col(j).norm();
     }
   }
   lin.scale.resize(cols);
@@ -509,16 +511,8 @@ public:
         campaign_(concatenateCampaigns(fitted)),
         names_(geometricParameterNames(prior.robot())),
         data_(discoveryData(prior, campaign_, prepareCalibrationData(prior, campaign_), options)),
-        features_(offerCandidates(data_, options)),
-        offered_(features_.candidates.size(), true),
         model_(prior),
         result_(prior) {
-    if (options.base_geometry) {
-      // The textbook base frees the calibration's parameters from the start: only feature columns compete.
-      for (std::size_t c = 0; c < features_.candidates.size(); ++c) {
-        if (features_.candidates[c].columns.cols() == 0) offered_[c] = false;
-      }
-    }
     std::size_t first = 0;
     for (const auto& c : fitted) {
       first_row_.push_back(first);
@@ -531,8 +525,8 @@ public:
   DiscoveryResult run() {
     result_.noise_floor = noiseFloor();
     measureCoverage();
-    result_.candidates = static_cast<int>(features_.candidates.size());
     cal_ = calibrate(model_);
+    offerFamiliesCandidates();
     lin_ = linearise(model_, campaign_, cal_, features_, active_, offered_, options_.folds, true);
     result_.joint_residual_rms_initial = jointRms(lin_);
     residuals_ = static_cast<int>(lin_.r.size());
@@ -574,6 +568,20 @@ private:
       }
       result_.heldout_coverage.push_back(c);
     }
+  }
+
+  // The families' candidates, offered once the base fit's residual is known (families may scan it).
+  void offerFamiliesCandidates() {
+    data_.joint_residual = linearise(model_, campaign_, cal_, Features(), {}, {}, options_.folds, true).joint_residual;
+    features_ = offerCandidates(data_, options_);
+    offered_.assign(features_.candidates.size(), true);
+    if (options_.base_geometry) {
+      // The textbook base frees the calibration's parameters from the start: only feature columns compete.
+      for (std::size_t c = 0; c < features_.candidates.size(); ++c) {
+        if (features_.candidates[c].columns.cols() == 0) offered_[c] = false;
+      }
+    }
+    result_.candidates = static_cast<int>(features_.candidates.size());
   }
 
   double noiseFloor() const {
@@ -845,6 +853,10 @@ private:
     lin_ = linearise(model_, campaign_, cal_, features_, active_, std::vector<bool>(features_.candidates.size(), false),
                      options_.folds, true);
     result_.joint_residual_rms_final = jointRms(lin_);
+    // Where what is left lies (reported when it is well above the noise floor).
+    const ResidualRows rows{lin_.joint_residual, lin_.joint_lever,   data_.command,
+                            data_.motor,         lin_.residual_norm, lin_.fold};
+    result_.unexplained = analyseUnexplained(prior_.robot(), rows, cal_.after.rms, result_.noise_floor);
     result_.final_state = state_;
     result_.fitted_rows = cal_.used_rows;
     std::vector<std::string> left_out;
@@ -860,8 +872,8 @@ private:
   const DiscoveryOptions& options_;
   const MeasurementCampaign campaign_;
   const std::vector<std::string> names_;
-  const DiscoveryData data_;
-  const Features features_;
+  DiscoveryData data_;
+  Features features_;
   std::vector<std::size_t> first_row_;  // each fitted campaign's first row in the concatenation, and the end
   bool fitted_path_ = false;
   std::vector<bool> offered_;

@@ -35,6 +35,7 @@
 #include "model/effects/registry.hpp"
 #include "model/identify/geometric_calibration.hpp"
 #include "model/identify/joint_coverage.hpp"
+#include "model/identify/residual_analysis.hpp"
 
 namespace jointcomp {
 
@@ -117,6 +118,7 @@ struct DiscoveryResult {
   int candidates = 0;
   JointCoverage coverage;                         // of the fitted rows
   std::vector<HeldoutCoverage> heldout_coverage;  // one per held-out campaign
+  UnexplainedResidual unexplained;                // where the final fit's residual lies
   explicit DiscoveryResult(JointErrorModel m) : model(std::move(m)) {}
 };
 

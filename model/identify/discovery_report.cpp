@@ -72,6 +72,35 @@ nlohmann::ordered_json coverageJson(const DiscoveryResult& result, const Discove
 
 std::string baseName(const DiscoveryOptions& options) { return options.base_geometry ? "textbook" : "frame"; }
 
+// Where the final fit's residual lies: joints, repeating orders of their angles, time blocks.
+nlohmann::ordered_json unexplainedJson(const DiscoveryResult& result) {
+  const UnexplainedResidual& u = result.unexplained;
+  const Robot& robot = result.model.robot();
+  nlohmann::ordered_json joints = nlohmann::ordered_json::array();
+  for (int j : u.joints) {
+    joints.push_back({{"joint", robot.joints[j].name},
+                      {"rms_rad", u.joint_rms_rad[j]},
+                      {"rms_at_target_mm", u.joint_rms_m[j] * 1e3}});
+  }
+  nlohmann::ordered_json orders = nlohmann::ordered_json::array();
+  for (const ResidualOrder& o : u.orders) {
+    orders.push_back({{"joint", robot.joints[o.joint].name},
+                      {"angle", o.angle},
+                      {"order", o.order},
+                      {"amplitude_rad", o.amplitude_rad},
+                      {"stands_out", o.stands_out}});
+  }
+  nlohmann::ordered_json blocks = nlohmann::ordered_json::array();
+  for (double b : u.block_rms) blocks.push_back(b * 1e3);
+  return {
+      {"above_noise_floor", u.floor_known ? nlohmann::ordered_json(u.above_floor) : nlohmann::ordered_json(nullptr)},
+      {"fitted_over_floor", u.over_floor},
+      {"joints_by_rms", joints},
+      {"strongest_orders", orders},
+      {"time_block_rms_mm", blocks},
+      {"summary", u.summary}};
+}
+
 }  // namespace
 
 std::string discoveryStepLabel(const DiscoveryStep& step) {
@@ -139,6 +168,7 @@ nlohmann::ordered_json discoveryReportJson(const DiscoveryResult& result, const 
       {"rms_3d_mm", result.noise_floor * 1e3},
       {"final_over_floor", result.noise_floor > 0.0 ? nlohmann::ordered_json(final_held / result.noise_floor)
                                                     : nlohmann::ordered_json(nullptr)}};
+  report["unexplained"] = unexplainedJson(result);
   report["not_candidates"] = nlohmann::ordered_json::array();
   report["seconds"] = seconds;
   report["outputs"] = sources.outputs;
@@ -191,6 +221,7 @@ std::string discoverySummary(const DiscoveryResult& result, const DiscoveryOptio
                 result.noise_floor > 0.0 ? "" : " (not known: give the noise floor)");
   summary << line;
   if (!result.rejected_at_stop.empty()) summary << "rejected, does not transfer: " << result.rejected_at_stop << "\n";
+  if (result.unexplained.above_floor || !result.unexplained.floor_known) summary << result.unexplained.summary << "\n";
   // Paths: Ra and Rz of the Z error, base model -> final model.
   for (std::size_t k = 0; k < result.final_state.paths.size() && k < result.initial.paths.size(); ++k) {
     const PathRoughness& a = result.initial.paths[k];
