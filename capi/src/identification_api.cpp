@@ -12,6 +12,7 @@
 
 #include "api_support.hpp"
 #include "model/common/json_fields.hpp"
+#include "model/common/strict_json.hpp"
 #include "model/experiment/campaign_simulation.hpp"
 #include "model/identify/calibration_report.hpp"
 #include "model/identify/discovery_report.hpp"
@@ -31,9 +32,12 @@ constexpr double kDegree = 3.14159265358979323846 / 180.0;
 // keys and bad values become JC_ERROR_INVALID_ARGUMENT naming the key (e.g. "options_json.seed: ...").
 template <class Read>
 void readOptions(const char* options_json, Read&& read) {
-  const nlohmann::json options =
-      options_json ? nlohmann::json::parse(options_json, nullptr, false) : nlohmann::json::object();
-  if (options.is_discarded()) invalid("options_json is not valid JSON");
+  nlohmann::json options = nlohmann::json::object();
+  try {
+    if (options_json) options = parseStrictJson(options_json, "options_json");
+  } catch (const ParameterError& error) {
+    invalid(error.what());
+  }
   if (!options.is_object()) invalid("options_json must be a JSON object, like {\"seed\": 3}");
   try {
     JsonFields fields(options, "options_json");

@@ -37,7 +37,7 @@ jc_status jc_robot_load(const char* urdf_path, const char* parameter_path, jc_ro
     }
     std::string text;
     try {
-      text = readTextFile(parameter_path, "parameter file");
+      text = readTextFile(parameter_path, "parameter file", kMaxJsonFileBytes);
     } catch (const ParameterError&) {
       throw;
     } catch (const Error& error) {

@@ -3,12 +3,21 @@
 // the file system allows, so that a process killed part-way leaves neither a partial file nor a temporary.
 #pragma once
 
+#include <cstdint>
 #include <string>
 
 namespace jointcomp {
 
+// Inputs have sane sizes, checked before they are read: a parameter or robot file is a few kilobytes, a
+// measurement campaign of a million rows about 150 MB.
+constexpr std::uintmax_t kMaxJsonFileBytes = 16u << 20;           // 16 MiB
+constexpr std::uintmax_t kMaxMeasurementFileBytes = 2048u << 20;  // 2 GiB
+
 // Throws Error naming the path when the file cannot be written.
 void writeFileAtomically(const std::string& path, const std::string& contents);
-std::string readTextFile(const std::string& path, const char* what);
+// The whole file; throws Error naming the path when it cannot be read or holds more than max_bytes (a
+// file that is not regular, such as a pipe or a device, is read up to the limit, never past it).
+std::string readTextFile(const std::string& path, const char* what,
+                         std::uintmax_t max_bytes = kMaxMeasurementFileBytes);
 
 }  // namespace jointcomp

@@ -4,6 +4,7 @@
 
 #include "model/common/errors.hpp"
 #include "model/common/json_fields.hpp"
+#include "model/common/strict_json.hpp"
 #include "model/effects/registry.hpp"
 #include "model/io/atomic_file.hpp"
 
@@ -13,18 +14,12 @@ namespace {
 constexpr const char* kFormat = "jointcomp-parameters/1";
 
 nlohmann::json parseDocument(const std::string& json_text, const std::string& source_name) {
-  try {
-    return nlohmann::json::parse(json_text);
-  } catch (const nlohmann::json::parse_error& error) {
-    throw ParameterError(source_name + ": not valid JSON (byte " + std::to_string(error.byte) + "): " + error.what());
-  } catch (const nlohmann::json::exception& error) {  // e.g. a number too large for a double
-    throw ParameterError(source_name + ": not valid JSON: " + error.what());
-  }
+  return parseStrictJson(json_text, source_name);
 }
 
 std::string readParameterText(const std::string& path) {
   try {
-    return readTextFile(path, "parameter file");
+    return readTextFile(path, "parameter file", kMaxJsonFileBytes);
   } catch (const Error& error) {
     throw ParameterError(error.what());
   }

@@ -9,6 +9,7 @@
 #include "model/common/bits.hpp"
 #include "model/common/errors.hpp"
 #include "model/common/json_fields.hpp"
+#include "model/common/strict_json.hpp"
 #include "model/io/atomic_file.hpp"
 
 namespace jointcomp {
@@ -139,11 +140,9 @@ std::string robotToJson(const Robot& robot) {
 Robot robotFromJson(const std::string& json_text, const std::string& source_name) {
   nlohmann::json document;
   try {
-    document = nlohmann::json::parse(json_text);
-  } catch (const nlohmann::json::parse_error& error) {
-    throw UrdfError(source_name + ": not valid JSON (byte " + std::to_string(error.byte) + "): " + error.what());
-  } catch (const nlohmann::json::exception& error) {
-    throw UrdfError(source_name + ": not valid JSON: " + error.what());
+    document = parseStrictJson(json_text, source_name);
+  } catch (const ParameterError& error) {
+    throw UrdfError(error.what());
   }
   try {
     JsonFields fields(document, source_name + ": ");
@@ -176,7 +175,7 @@ Robot robotFromJson(const std::string& json_text, const std::string& source_name
 Robot loadRobotFile(const std::string& path) {
   std::string text;
   try {
-    text = readTextFile(path, "robot file");
+    text = readTextFile(path, "robot file", kMaxJsonFileBytes);
   } catch (const Error& error) {
     throw UrdfError(error.what());
   }

@@ -21,6 +21,7 @@
 #include "model/effects/registry.hpp"
 #include "model/effects/spring_balancer.hpp"
 #include "model/effects/transmission_error.hpp"
+#include "model/io/atomic_file.hpp"
 #include "model/io/parameter_file.hpp"
 #include "model/robot/load_urdf.hpp"
 
@@ -444,6 +445,44 @@ TEST(ParameterSet, AMalformedPlantIsAnErrorEvenForTheModelAlone) {
   bad = goodJson();
   bad["plant"]["joints"][0]["gain"] = 1.0;
   EXPECT_THROW(parseParameterSet(bad.dump(), "bad_plant.json", rx170(), EffectRegistry::builtin()), ParameterError);
+}
+
+// ---- bounded input ---------------------------------------------------------------------------------
+
+TEST(ParameterFile, ARepeatedKeyIsAnErrorNamingIt) {
+  const std::string text = readText(rx170ParametersPath());
+  const std::size_t brace = text.find('{');
+  const std::string repeated = text.substr(0, brace + 1) + "\"notes\": \"first\", " + text.substr(brace + 1);
+  try {
+    parseParameters(repeated, "repeated.json", rx170());
+    ADD_FAILURE() << "a repeated key was accepted";
+  } catch (const ParameterError& error) {
+    EXPECT_THAT(error.what(), HasSubstr("repeated.json"));
+    EXPECT_THAT(error.what(), HasSubstr("'notes' appears twice"));
+  }
+}
+
+TEST(ParameterFile, AnOversizedFileIsRefusedBeforeItIsRead) {
+  const std::filesystem::path directory = std::filesystem::path(::testing::TempDir()) / "jointcomp_parameter_size_test";
+  std::filesystem::create_directories(directory);
+  const std::string path = (directory / "huge.json").string();
+  {
+    // A number string longer than any parameter file: the file is sparse, nothing is written but its end.
+    std::ofstream out(path, std::ios::binary);
+    out << "{\"format\": 1";
+    out.seekp(static_cast<std::streamoff>(kMaxJsonFileBytes) + 10);
+    out << "}";
+  }
+  try {
+    loadParameterFile(path, rx170());
+    ADD_FAILURE() << "an oversized file was read";
+  } catch (const ParameterError& error) {
+    EXPECT_THAT(error.what(), HasSubstr("larger than 16 MiB"));
+    EXPECT_LT(std::string(error.what()).size(), 400u);
+  }
+  std::filesystem::remove(path);
+  // A device that never ends is read up to the limit and refused, never past it.
+  EXPECT_THROW(loadParameterFile("/dev/zero", rx170()), ParameterError);
 }
 
 }  // namespace
