@@ -287,7 +287,14 @@ Status Instance::ensureReference(const char* function) {
     ctx.velocity = velocity;
     ctx.time = state_.time;
     ctx.tool_wrench = state_.values[role::compensate_wrench] != 0.0 ? wrenchOf(state_.values) : Vector6::Zero();
-    const FixedPointReport report = m.compensator->compensate(ctx, reference_);
+    FixedPointReport report;
+    try {
+      report = m.compensator->compensate(ctx, reference_);
+    } catch (const UnreachableError& error) {
+      char text[400];
+      std::snprintf(text, sizeof text, "at t = %.9g s: %s", state_.time, error.what());
+      return fail(Status::Discard, function, text);
+    }
     if (!report.converged) {
       char text[160];
       std::snprintf(text, sizeof text,

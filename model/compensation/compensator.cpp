@@ -1,6 +1,7 @@
 #include "model/compensation/compensator.hpp"
 
 #include <cmath>
+#include <cstdio>
 
 #include "model/common/errors.hpp"
 
@@ -37,7 +38,21 @@ FixedPointReport Compensator::compensate(JointContext& ctx, JointVector& referen
   }
   report.iterations = std::min(report.iterations, options_.max_iterations);
   updateMotorAngles(model_, ctx);
+  if (report.converged) requireWithinLimits(model_.robot(), reference);
   return report;
+}
+
+void requireWithinLimits(const Robot& robot, const JointVector& reference) {
+  for (int j = 0; j < reference.size(); ++j) {
+    const Joint& joint = robot.joints[static_cast<std::size_t>(j)];
+    if (reference[j] >= joint.lower && reference[j] <= joint.upper) continue;
+    char text[320];
+    std::snprintf(text, sizeof text,
+                  "compensation: the reference of %s would be %.6g rad, outside its limits [%.6g, %.6g] rad: the "
+                  "planned pose cannot be reached under its loads",
+                  joint.name.c_str(), reference[j], joint.lower, joint.upper);
+    throw UnreachableError(text);
+  }
 }
 
 TrajectoryCompensationReport compensateTrajectory(const JointErrorModel& model, EffectMask mask,

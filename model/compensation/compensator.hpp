@@ -11,12 +11,16 @@
 
 namespace jointcomp {
 
+// Throws UnreachableError naming the joint, its value and its limits when `reference` leaves them.
+void requireWithinLimits(const Robot& robot, const JointVector& reference);
+
 class Compensator {
 public:
   Compensator(const JointErrorModel& model, EffectMask mask, FixedPointOptions options = {});
 
   // Q_ref for the planned link positions ctx.q (ctx.velocity, time, wrench and payload as planned).
-  // Fills ctx.command and ctx.motor with the result. Allocates nothing.
+  // Fills ctx.command and ctx.motor with the result. Allocates nothing. Throws UnreachableError when the
+  // converged reference leaves a joint's limits (a result that cannot be commanded is no result).
   FixedPointReport compensate(JointContext& ctx, JointVector& reference);
 
   const JointErrorModel& model() const { return model_; }

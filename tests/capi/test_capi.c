@@ -393,6 +393,11 @@ static void test_errors_and_compensation(jc_robot* robot) {
                 jc_compensate_point(robot, NULL, kPosture, 6, NULL, 0, reference, 7, NULL));
   EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "'nothing'",
                 jc_compensate_point(robot, "nothing", kPosture, 6, NULL, 0, reference, 6, NULL));
+  /* A payload the joints cannot carry: the reference would leave the joint limits, which is an error. */
+  EXPECT_OK(jc_robot_set_payload(robot, 1e6, com, 3));
+  EXPECT_STATUS(JC_ERROR_UNREACHABLE, "outside its limits",
+                jc_compensate_point(robot, NULL, kPosture, 6, NULL, 0, reference, 6, NULL));
+  EXPECT_OK(jc_robot_set_payload(robot, 0.0, com, 3));
 
   /* Solvers that fail say so. */
   EXPECT_OK(jc_robot_load_json(JOINTCOMP_TEST_URDF, kSoftParameters, &soft));

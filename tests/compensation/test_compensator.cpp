@@ -280,5 +280,34 @@ TEST(Compensator, RejectsBadOptionsAndReportsNonConvergence) {
   }
 }
 
+// A reference beyond a joint's limits cannot be commanded: a payload of 1e6 kg bends the model's joints so
+// far that the fixed point converges outside them, and that is an error naming the joint, not an answer.
+TEST(Compensator, AReferenceBeyondTheJointLimitsIsAnError) {
+  const JointErrorModel model = rx170Model();
+  Compensator compensator(model, model.allEffects());
+  JointContext ctx(6);
+  ctx.q = plannedLine().q.front();
+  JointVector reference;
+  ASSERT_TRUE(compensator.compensate(ctx, reference).converged);  // the plan itself is fine
+  for (int j = 0; j < 6; ++j) {
+    EXPECT_GE(reference[j], model.robot().joints[j].lower);
+    EXPECT_LE(reference[j], model.robot().joints[j].upper);
+  }
+  ctx.payload_mass = 1e6;
+  try {
+    compensator.compensate(ctx, reference);
+    ADD_FAILURE() << "a reference beyond the limits was returned";
+  } catch (const UnreachableError& error) {
+    EXPECT_THAT(error.what(), HasSubstr("outside its limits"));
+    EXPECT_THAT(error.what(), HasSubstr("joint_"));
+  }
+  // The same check on its own: a reference just past a limit is refused, one at the limit is not.
+  JointVector at_limit = plannedLine().q.front();
+  at_limit[1] = model.robot().joints[1].upper;
+  EXPECT_NO_THROW(requireWithinLimits(model.robot(), at_limit));
+  at_limit[1] = std::nextafter(at_limit[1], 10.0);
+  EXPECT_THROW(requireWithinLimits(model.robot(), at_limit), UnreachableError);
+}
+
 }  // namespace
 }  // namespace jointcomp
