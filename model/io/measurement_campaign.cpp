@@ -2,10 +2,12 @@
 
 #include <charconv>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <sstream>
 
 #include "model/common/errors.hpp"
+#include "model/common/strict_json.hpp"
 #include "model/io/atomic_file.hpp"
 
 namespace jointcomp {
@@ -52,12 +54,22 @@ public:
     if (*begin == '+') ++begin;
     const auto result = std::from_chars(begin, end, value);
     if (result.ec == std::errc::result_out_of_range)
-      fail(line, "column '" + column + "': '" + cell + "' is not finite");
+      fail(line, "column '" + column + "': '" + shortExcerpt(cell) + "' is not finite");
     if (result.ec != std::errc() || result.ptr != end) {
-      fail(line, "column '" + column + "': '" + cell + "' is not a number");
+      fail(line, "column '" + column + "': '" + shortExcerpt(cell) + "' is not a number");
     }
-    if (!std::isfinite(value)) fail(line, "column '" + column + "': '" + cell + "' is not finite");
+    if (!std::isfinite(value)) fail(line, "column '" + column + "': '" + shortExcerpt(cell) + "' is not finite");
     return value;
+  }
+
+  // Absurd values are refused where they stand, before they reach a fit: far beyond any robot cell, yet
+  // wide enough for any real campaign (a laser tracker reaches 80 m; a continuous joint may wind many turns).
+  void requirePlausible(double value, double limit, int line, const std::string& column, const char* unit) const {
+    if (std::isnan(value) || std::abs(value) <= limit) return;
+    char text[200];
+    std::snprintf(text, sizeof text, "column '%s': %.6g %s is beyond the plausible range of +-%g %s", column.c_str(),
+                  value, unit, limit, unit);
+    fail(line, text);
   }
 
   MeasurementCampaign parse(const std::string& text) {
@@ -149,13 +161,16 @@ private:
       const auto found = column_of.find(column);
       return found == column_of.end() ? nullptr : &cells[found->second];
     };
-    auto optional = [&](const std::string& column, double scale, double absent) {
+    // `limit` in the file's unit (mm, deg, degC, N, N m, kg).
+    auto optional = [&](const std::string& column, double scale, double absent, double limit, const char* unit) {
       const std::string* text = cell(column);
       if (!text) return absent;
       const double value = number(*text, line, column, false, kNotMeasured);
+      requirePlausible(value, limit, line, column, unit);
       return std::isnan(value) ? absent : value * scale;
     };
     const double t = number(*cell("t"), line, "t", true, 0.0);
+    requirePlausible(t, 1e10, line, "t", "s");
     if (!campaign.time.empty() && t < campaign.time.back()) {
       fail(line, "column 't': time decreases (" + cell("t")->substr(0, 32) + " after " +
                      std::to_string(campaign.time.back()) + ")");
@@ -164,12 +179,15 @@ private:
     JointVector command(campaign.dof);
     for (int j = 0; j < campaign.dof; ++j) {
       const std::string column = "q" + std::to_string(j + 1);
-      command[j] = number(*cell(column), line, column, true, 0.0) * kDegree;
+      const double degrees = number(*cell(column), line, column, true, 0.0);
+      requirePlausible(degrees, 1e5, line, column, "deg");
+      command[j] = degrees * kDegree;
     }
     campaign.command.push_back(command);
     if (campaign.has_position) {
-      campaign.position.emplace_back(optional("x", 1e-3, kNotMeasured), optional("y", 1e-3, kNotMeasured),
-                                     optional("z", 1e-3, kNotMeasured));
+      campaign.position.emplace_back(optional("x", 1e-3, kNotMeasured, 1e6, "mm"),
+                                     optional("y", 1e-3, kNotMeasured, 1e6, "mm"),
+                                     optional("z", 1e-3, kNotMeasured, 1e6, "mm"));
       const Eigen::Vector3d& p = campaign.position.back();
       if (std::isnan(p.x()) != std::isnan(p.y()) || std::isnan(p.x()) != std::isnan(p.z())) {
         fail(line, "columns x, y, z: measured in part only (all three or none)");
@@ -178,15 +196,15 @@ private:
     if (campaign.has_measured_angles) {
       JointVector measured(campaign.dof);
       for (int j = 0; j < campaign.dof; ++j)
-        measured[j] = optional("qm" + std::to_string(j + 1), kDegree, kNotMeasured);
+        measured[j] = optional("qm" + std::to_string(j + 1), kDegree, kNotMeasured, 1e5, "deg");
       campaign.measured_angles.push_back(measured);
     }
-    campaign.temperature.push_back(optional("temp", 1.0, kNotMeasured));
+    campaign.temperature.push_back(optional("temp", 1.0, kNotMeasured, 1000.0, "degC"));
     Vector6 wrench;
     const char* names[6] = {"fx", "fy", "fz", "mx", "my", "mz"};
-    for (int k = 0; k < 6; ++k) wrench[k] = optional(names[k], 1.0, 0.0);
+    for (int k = 0; k < 6; ++k) wrench[k] = optional(names[k], 1.0, 0.0, 1e7, k < 3 ? "N" : "N m");
     campaign.wrench.push_back(wrench);
-    const double payload = optional("payload", 1.0, 0.0);
+    const double payload = optional("payload", 1.0, 0.0, 1e5, "kg");
     if (payload < 0.0) fail(line, "column 'payload': negative mass");
     campaign.payload.push_back(payload);
   }

@@ -190,6 +190,8 @@ INSTANTIATE_TEST_SUITE_P(
         BrokenFile{"non_finite.csv", 4, "column 'x': 'inf' is not finite"},
         BrokenFile{"nan_cell.csv", 4, "column 'y': 'nan' is not finite"},
         BrokenFile{"overflow.csv", 4, "column 'z': '1e999' is not finite"},
+        BrokenFile{"absurd_position.csv", 4, "column 'z': 1e+308 mm is beyond the plausible range of +-1e+06 mm"},
+        BrokenFile{"absurd_angle.csv", 4, "column 'q2': 4e+07 deg is beyond the plausible range"},
         BrokenFile{"decreasing_t.csv", 5, "column 't': time decreases"},
         BrokenFile{"wrong_cell_count.csv", 4, "row has 5 cells, the header has 6"},
         BrokenFile{"partial_xyz_header.csv", 2, "columns x, y and z go together"},
