@@ -15,6 +15,8 @@
 #include "model/effects/compliance.hpp"
 #include "model/effects/joint_error_model.hpp"
 #include "model/effects/perturbation.hpp"
+#include "model/effects/transmission_error.hpp"
+#include "model/experiment/campaign_simulation.hpp"
 #include "model/io/parameter_file.hpp"
 #include "model/robot/load_urdf.hpp"
 
@@ -39,6 +41,28 @@ inline JointErrorModel truthModel(std::uint64_t seed) {
   PerturbationSpec perturbation;
   perturbation.seed = seed;
   return perturbedModel(rx170Model(), perturbation);
+}
+
+// A campaign of `count` random well-conditioned poses measured on `truth` (seeded tracker noise).
+inline MeasurementCampaign randomCampaign(const JointErrorModel& truth, int count, std::uint64_t seed) {
+  CampaignSimulationSpec spec;
+  spec.protocol = CampaignProtocol::RandomPoses;
+  spec.seed = seed;
+  spec.random.count = count;
+  return simulateCampaign(truth, spec);
+}
+
+// `model` with one more transmission-error harmonic.
+inline JointErrorModel withHarmonic(JointErrorModel model, int joint, int stage, double cycles, double amplitude,
+                                    double phase = 0.6) {
+  Harmonic h;
+  h.joint = joint;
+  h.stage = stage;
+  h.cycles_per_revolution = cycles;
+  h.amplitude_rad = amplitude;
+  h.phase_rad = phase;
+  model.addEffect(std::make_unique<TransmissionErrorEffect>(model.robot(), model.gears(), std::vector<Harmonic>{h}));
+  return model;
 }
 
 // `call` must throw a MeasurementError whose message contains `fragment`.

@@ -35,14 +35,6 @@ namespace {
 
 using namespace identify_test;
 
-MeasurementCampaign randomCampaign(const JointErrorModel& truth, int count, std::uint64_t seed) {
-  CampaignSimulationSpec spec;
-  spec.protocol = CampaignProtocol::RandomPoses;
-  spec.seed = seed;
-  spec.random.count = count;
-  return simulateCampaign(truth, spec);
-}
-
 struct Scenario {
   std::string name;
   JointErrorModel truth;
@@ -71,17 +63,6 @@ JointErrorModel withHysteresis(JointErrorModel model, int joint, double width_pe
 
 JointErrorModel withPayload(JointErrorModel model, double mass, const Eigen::Vector3d& com) {
   model.addEffect(std::make_unique<PayloadEffect>(model.robot(), mass, com));
-  return model;
-}
-
-JointErrorModel withHarmonic(JointErrorModel model, int joint, int stage, double cycles, double amplitude) {
-  Harmonic h;
-  h.joint = joint;
-  h.stage = stage;
-  h.cycles_per_revolution = cycles;
-  h.amplitude_rad = amplitude;
-  h.phase_rad = 0.6;
-  model.addEffect(std::make_unique<TransmissionErrorEffect>(model.robot(), model.gears(), std::vector<Harmonic>{h}));
   return model;
 }
 

@@ -92,14 +92,6 @@ EffectRegistry registryWithCoupling() {
   return registry;
 }
 
-MeasurementCampaign randomCampaign(const JointErrorModel& truth, int count, std::uint64_t seed) {
-  CampaignSimulationSpec spec;
-  spec.protocol = CampaignProtocol::RandomPoses;
-  spec.seed = seed;
-  spec.random.count = count;
-  return simulateCampaign(truth, spec);
-}
-
 TEST(DiscoveryNewEffect, ARegisteredTypeIsFoundNamedAndWritten) {
   const EffectRegistry registry = registryWithCoupling();
   const double truth_coupling = 1.5e-3;  // rad per rad: 0.15 mm per metre of reach per radian of joint 3

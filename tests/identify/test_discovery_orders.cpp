@@ -22,25 +22,6 @@ namespace {
 
 using namespace identify_test;
 
-MeasurementCampaign randomCampaign(const JointErrorModel& truth, int count, std::uint64_t seed) {
-  CampaignSimulationSpec spec;
-  spec.protocol = CampaignProtocol::RandomPoses;
-  spec.seed = seed;
-  spec.random.count = count;
-  return simulateCampaign(truth, spec);
-}
-
-JointErrorModel withHarmonic(JointErrorModel model, int joint, int stage, double cycles, double amplitude) {
-  Harmonic h;
-  h.joint = joint;
-  h.stage = stage;
-  h.cycles_per_revolution = cycles;
-  h.amplitude_rad = amplitude;
-  h.phase_rad = 1.1;
-  model.addEffect(std::make_unique<TransmissionErrorEffect>(model.robot(), model.gears(), std::vector<Harmonic>{h}));
-  return model;
-}
-
 // The shipped RX170 parameter file with joint 3's second stage given `teeth` input teeth.
 JointErrorModel rx170WithTeeth(int teeth) {
   std::ifstream in(std::string(JOINTCOMP_DATA_DIR) + "/params/rx170.json");
@@ -67,7 +48,7 @@ DiscoveryResult discoverHarmonics(const JointErrorModel& prior, const JointError
 
 TEST(DiscoveryOrders, FindsAMotorOrderBeyondTheDefaultRangeByTheSpectrumScan) {
   ASSERT_LT(DiscoveryOptions().max_harmonic_order, 6);
-  const DiscoveryResult r = discoverHarmonics(rx170Model(), withHarmonic(rx170Model(), 1, 1, 6.0, 8e-5));
+  const DiscoveryResult r = discoverHarmonics(rx170Model(), withHarmonic(rx170Model(), 1, 1, 6.0, 8e-5, 1.1));
   const DiscoveryStep* step = harmonicStep(r, 1, 1, 6.0);
   ASSERT_NE(step, nullptr) << "steps: " << r.steps.size() << ", stop: " << r.stop_reason;
   EXPECT_EQ(step->report_fields.value("proposed_by", ""), "spectrum scan");
@@ -78,7 +59,7 @@ TEST(DiscoveryOrders, FindsAGearMeshOrderFromTheGearData) {
   constexpr int kMesh = 31;  // beyond the scan (kMaxScannedHarmonicOrder)
   ASSERT_GT(kMesh, kMaxScannedHarmonicOrder);
   const JointErrorModel prior = rx170WithTeeth(kMesh);
-  const JointErrorModel truth = withHarmonic(prior, 2, 2, kMesh, 8e-5);
+  const JointErrorModel truth = withHarmonic(prior, 2, 2, kMesh, 8e-5, 1.1);
   const DiscoveryResult r = discoverHarmonics(prior, truth);
   const DiscoveryStep* step = harmonicStep(r, 2, 2, kMesh);
   ASSERT_NE(step, nullptr) << "steps: " << r.steps.size() << ", stop: " << r.stop_reason;

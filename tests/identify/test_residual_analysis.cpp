@@ -19,14 +19,6 @@ namespace {
 
 using namespace identify_test;
 
-MeasurementCampaign randomCampaign(const JointErrorModel& truth, int count, std::uint64_t seed) {
-  CampaignSimulationSpec spec;
-  spec.protocol = CampaignProtocol::RandomPoses;
-  spec.seed = seed;
-  spec.random.count = count;
-  return simulateCampaign(truth, spec);
-}
-
 DiscoveryResult discoverOffsets(const JointErrorModel& truth) {
   DiscoveryOptions options;
   options.types = {"offset"};
