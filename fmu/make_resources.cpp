@@ -4,6 +4,7 @@
 //   jointcomp_fmu_resources <robot.urdf> <parameters.json> <out robot.json> <out parameter-values.json>
 // Fails (exit 1, with the reason) when the robot does not survive the round trip through JSON bit for
 // bit, when the parameter file does not fit the robot, or when a plant cannot be built from them.
+#include <cmath>
 #include <cstdio>
 #include <exception>
 #include <memory>
@@ -39,7 +40,14 @@ int run(const std::string& urdf, const std::string& parameters, const std::strin
   nlohmann::ordered_json values;
   values["robot"] = robot->name;
   values["dof"] = robot->dof();
-  for (const Joint& joint : robot->joints) values["joints"].push_back(joint.name);
+  for (const Joint& joint : robot->joints) {
+    values["joints"].push_back(joint.name);
+    // null for a continuous joint (no limit)
+    values["joint_limits"]["lower"].push_back(std::isfinite(joint.lower) ? nlohmann::ordered_json(joint.lower)
+                                                                         : nullptr);
+    values["joint_limits"]["upper"].push_back(std::isfinite(joint.upper) ? nlohmann::ordered_json(joint.upper)
+                                                                         : nullptr);
+  }
   std::set<std::string> seen;
   for (int i = 0; i < model.effectCount(); ++i) {
     const Effect& effect = model.effect(i);

@@ -8,7 +8,8 @@ Inputs (modelDescription/):
   enumerations.csv  the items of the enumeration types
   model.json        model-level attributes, default experiment, log categories
 and the parameter values of the shipped robot (written at build time by fmu/make_resources.cpp), from
-which the start values of bound parameters are taken, so that a number is written down only once.
+which the start values of bound parameters are taken, so that a number is written down only once; its
+joint limits become the min and max of the desired joint positions (null: a continuous joint).
 
 Outputs (into --out-dir, in the build tree):
   fmi2/modelDescription.xml, fmi3/modelDescription.xml   the two model descriptions
@@ -245,6 +246,18 @@ def load(tables, values_path):
     for group in ("q_desired", "q_ref", "q_link"):
         if group not in roles or len(roles[group]["members"]) != dof:
             fail("variables.csv", f"role '{group}' must have one variable per joint ({dof})")
+    # The desired positions are bounded by the robot's joint limits (from its URDF, through the values
+    # file), so that the FMU declares them and refuses a position the robot cannot take.
+    limits = values.get("joint_limits")
+    if limits is not None:
+        for k, index in roles["q_desired"]["members"].items():
+            v = variables[index]
+            for bound, value in (("min", limits["lower"][k]), ("max", limits["upper"][k])):
+                if value is not None and v[bound] is None:
+                    v[bound] = float(value)
+            if v["start"] is not None and ((v["min"] is not None and v["start"] < v["min"]) or
+                                           (v["max"] is not None and v["start"] > v["max"])):
+                fail(v["where"], f"start {v['start']} is outside the joint's limits [{v['min']}, {v['max']}]")
     return units, enumerations, model, values, variables, roles
 
 

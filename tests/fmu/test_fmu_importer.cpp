@@ -1119,6 +1119,11 @@ TEST_P(FmuTest, BadValuesAreRefusedAndChangeNothing) {
   m->messages.clear();
   EXPECT_EQ(m->setReals({m->vr("plant.joint_2.stiffness")}, {-5.0}), kDiscard);
   EXPECT_EQ(m->setInteger(m->vr("integrator.max_order"), 9), kDiscard);
+  // A desired position beyond the joint's limits (the URDF's, declared as min and max) is refused too.
+  EXPECT_EQ(m->setReals({m->vr("q_desired_2")}, {2.5}), kDiscard);
+  EXPECT_TRUE(m->logged("is outside")) << m->log();
+  EXPECT_EQ(m->setReals({m->vr("q_desired_2")}, {-2.3}), kOK);
+  EXPECT_EQ(m->setReals({m->vr("q_desired_2")}, {0.0}), kOK);
   // The instance still works.
   ASSERT_EQ(m->enterInitialization(), kOK);
   ASSERT_EQ(m->exitInitialization(), kOK);
