@@ -1,5 +1,6 @@
 #include "model/plant/flexible_joint_plant.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -98,6 +99,26 @@ FlexibleJointPlant::FlexibleJointPlant(const JointErrorModel& truth, std::vector
     if (!(d.coulomb_velocity_scale_rad_per_s > 0.0)) {
       throw InvalidArgument(where + "coulomb_velocity_scale_rad_per_s must be positive");
     }
+    // Gains no drive can have would make the integration crawl at micro-second steps (kp 1e12 ran for
+    // minutes): the position loop's frequency sqrt(kp / J), its damping rate kd / J and the integral's
+    // ki / J (a frequency cubed) are bounded well above any real servo.
+    const double inertia = d.motor_inertia_kgm2;
+    char text[320];
+    auto refuse = [&](const char* name, double value, double rate, double limit, const char* unit) {
+      std::snprintf(text, sizeof text,
+                    "%s = %.6g with motor_inertia_kgm2 = %.6g gives %.3g %s, beyond the %.3g %s of any real drive "
+                    "(the plant would need micro-second steps)",
+                    name, value, inertia, rate, unit, limit, unit);
+      throw InvalidArgument(where + text);
+    };
+    const double position_loop = std::sqrt(d.kp_nm_per_rad / inertia);
+    if (position_loop > kMaxLoopFrequency)
+      refuse("kp_nm_per_rad", d.kp_nm_per_rad, position_loop, kMaxLoopFrequency, "rad/s");
+    if (d.kd_nms_per_rad / inertia > kMaxLoopFrequency)
+      refuse("kd_nms_per_rad", d.kd_nms_per_rad, d.kd_nms_per_rad / inertia, kMaxLoopFrequency, "1/s");
+    const double integral_limit = kMaxLoopFrequency * kMaxLoopFrequency * kMaxLoopFrequency;
+    if (d.ki_nm_per_rad_s / inertia > integral_limit)
+      refuse("ki_nm_per_rad_s", d.ki_nm_per_rad_s, d.ki_nm_per_rad_s / inertia, integral_limit, "rad/s^3");
   }
   compliance_index_ = truth_.findEffect(ComplianceEffect::kType);
   if (compliance_index_ < 0)
@@ -364,6 +385,12 @@ void FlexibleJointPlant::advance(double end_time) {
     restart_ = false;
   }
   check(CVodeSetStopTime(s.cvode, end_time), "CVodeSetStopTime");
+  // The work budget of this advance: a floor for the start-up transients plus a rate per simulated second
+  // far above what the plant needs (about 800 steps per second on the paper's spiral), so that a plant
+  // that cannot be integrated fails within seconds instead of running for minutes.
+  const double budget = std::min(static_cast<double>(options_.max_steps_per_advance),
+                                 kStepBudgetFloor + kStepBudgetPerSecond * (end_time - time_));
+  check(CVodeSetMaxNumSteps(s.cvode, static_cast<long>(budget)), "CVodeSetMaxNumSteps");
   s.last_error.clear();
   realtype reached = time_;
   const int flag = CVode(s.cvode, end_time, s.y, &reached, CV_NORMAL);
@@ -383,6 +410,14 @@ void FlexibleJointPlant::advance(double end_time) {
     // Keep the last good state: CVODE leaves y at the last successful step.
     time_ = reached;
     restart_ = true;
+    if (flag == CV_TOO_MUCH_WORK) {
+      throw SolverError("plant: the integration spent its work budget (" + std::to_string(static_cast<long>(budget)) +
+                        " steps, CV_TOO_MUCH_WORK) between t = " + std::to_string(reached) + " s and " +
+                        std::to_string(end_time) +
+                        " s: the plant is too stiff for its parameters (look at the drive gains and the joint "
+                        "stiffnesses) or the motion leaves what it can follow" +
+                        (s.last_error.empty() ? std::string() : "; CVODE: " + s.last_error));
+    }
     throw SolverError("plant: CVODE failed between t = " + std::to_string(reached) + " s and " +
                       std::to_string(end_time) + " s: " + (s.last_error.empty() ? flagName(flag) : s.last_error));
   }

@@ -24,6 +24,11 @@
 
 namespace jointcomp {
 
+// Bounds that keep every integration's work finite (flexible_joint_plant.cpp says why).
+constexpr double kMaxLoopFrequency = 1e4;     // rad/s: sqrt(kp / J), kd / J; ki / J below its cube
+constexpr double kStepBudgetFloor = 2000.0;   // CVODE steps per advance, whatever its length
+constexpr double kStepBudgetPerSecond = 1e5;  // and per simulated second on top
+
 struct PlantOptions {
   double relative_tolerance = 1e-6;
   double absolute_tolerance = 1e-8;          // rad on positions and on the integral state (0.02 um at 2 m);
