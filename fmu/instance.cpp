@@ -465,15 +465,23 @@ Status Instance::doStep(const char* function, double current_time, double step, 
     state_.applied_wrench = wrench;
   }
   plant.setReference(reference_, reference_velocity_);
-  try {
-    plant.advance(end);
-  } catch (const SolverError& error) {
+  // CVODE failed (SolverError: the plant stays at its last good time), or the watchdog stopped a run that
+  // left its joint limits or tracking envelope (PlantLimitError: the plant is at the end, and goes on
+  // only from a reset or an earlier FMU state). Either way the step is discarded with the reason.
+  const auto discard = [&](const char* why) {
     state_.time = plant.time();
     state_.phase = kStepDiscarded;
     reference_valid_ = false;
     outputs_valid_ = 0;
     if (last_successful_time) *last_successful_time = state_.time;
-    return fail(Status::Discard, function, error.what());
+    return fail(Status::Discard, function, why);
+  };
+  try {
+    plant.advance(end);
+  } catch (const SolverError& error) {
+    return discard(error.what());
+  } catch (const PlantLimitError& error) {
+    return discard(error.what());
   }
   state_.has_last_step = true;
   state_.last_q_desired = gather(state_.values, role::q_desired);

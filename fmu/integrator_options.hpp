@@ -1,4 +1,5 @@
-// The plant's integrator options by name, as the FMU's "integrator:" parameters bind to them. Shared by
+// The plant's options by name (the integrator's and the watchdog's), as the FMU's "integrator:" parameters
+// bind to them. Shared by
 // the build-time tool (which lists their defaults as start values) and the instance (which sets them).
 #pragma once
 
@@ -26,6 +27,10 @@ inline constexpr IntegratorOption kIntegratorOptions[] = {
      [](PlantOptions& o, double v) { o.max_steps_per_advance = static_cast<long>(v); }},
     {"max_order", [](const PlantOptions& o) { return static_cast<double>(o.max_order); },
      [](PlantOptions& o, double v) { o.max_order = static_cast<int>(v); }},
+    {"tracking_envelope_rad", [](const PlantOptions& o) { return o.tracking_envelope_rad; },
+     [](PlantOptions& o, double v) { o.tracking_envelope_rad = v; }},
+    {"joint_limit_margin_rad", [](const PlantOptions& o) { return o.joint_limit_margin_rad; },
+     [](PlantOptions& o, double v) { o.joint_limit_margin_rad = v; }},
 };
 
 // The option of that name, nullptr if there is none.

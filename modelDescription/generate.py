@@ -20,7 +20,7 @@ The binding column says what a variable is to the instance code:
   a role, name or name[index] (time, compensation, q_desired[0], ...): the code refers to it by that name;
   plant:<parameter>, compensator:<parameter>: a named effect parameter of the plant's (true) or the
     compensator's (nominal) joint-error model; drive:<joint>.<field>: a drive or controller parameter;
-    integrator:<option>: a CVODE option of the plant.
+    integrator:<option>: an option of the plant (CVODE's, or its watchdog's).
 The depends column lists the input roles an output depends on directly (empty: none).
 
 Usage: generate.py --tables <dir> --values <parameter-values.json> --version <x.y.z> --out-dir <dir>

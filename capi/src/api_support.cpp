@@ -247,6 +247,7 @@ const char* jc_status_name(jc_status status) {
     case JC_ERROR_WRONG_HANDLE: return "JC_ERROR_WRONG_HANDLE";
     case JC_ERROR_OUT_OF_MEMORY: return "JC_ERROR_OUT_OF_MEMORY";
     case JC_ERROR_INTERNAL: return "JC_ERROR_INTERNAL";
+    case JC_ERROR_PLANT_LIMIT: return "JC_ERROR_PLANT_LIMIT";
     default: return "JC_UNKNOWN_STATUS";
   }
 }

@@ -114,6 +114,14 @@ jc_status jc_plant_advance(jc_plant* plant, double end_time) {
   });
 }
 
+jc_status jc_plant_set_watchdog(jc_plant* plant, double tracking_envelope_rad, double joint_limit_margin_rad) {
+  return CAPI_ENTRY({
+    jc_plant& handle = plantHandle(plant);
+    const std::lock_guard<std::mutex> lock(handle.mutex);
+    handle.plant->setWatchdog(tracking_envelope_rad, joint_limit_margin_rad);
+  });
+}
+
 jc_status jc_plant_time(jc_plant* plant, double* time) {
   return CAPI_ENTRY({
     jc_plant& handle = plantHandle(plant);

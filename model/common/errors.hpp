@@ -49,4 +49,11 @@ public:
   using Error::Error;
 };
 
+// A simulation that left what it may do: a link beyond its joint limits, a drive beyond its tracking
+// envelope (following error). The integration itself succeeded; the run is not worth continuing.
+class PlantLimitError : public Error {
+public:
+  using Error::Error;
+};
+
 }  // namespace jointcomp

@@ -143,6 +143,26 @@ FlexibleJointPlant::FlexibleJointPlant(const JointErrorModel& truth, std::vector
       !(options_.velocity_tolerance_factor > 0.0) || options_.max_step < 0.0 || options_.max_steps_per_advance < 1) {
     throw InvalidArgument("plant: tolerances must be positive, max_step non-negative, max_steps_per_advance >= 1");
   }
+  setWatchdog(options_.tracking_envelope_rad, options_.joint_limit_margin_rad);
+  // Anti-windup by back-calculation: while a drive's torque is clamped, its integral is pulled back by
+  // the clamped excess over ki Tt, with the tracking time Tt = sqrt(Ti Td) = sqrt(kd / ki) (Astrom and
+  // Hagglund), Ti = kp / ki for a drive without kd, and the integral's own time scale cbrt(J / ki) for a
+  // pure integral drive.
+  windup_gain_.resize(n_);
+  for (int j = 0; j < n_; ++j) {
+    const DriveParameters& d = drives_[j];
+    double tracking_time = 0.0;
+    if (d.ki_nm_per_rad_s > 0.0) {
+      if (d.kd_nms_per_rad > 0.0) {
+        tracking_time = std::sqrt(d.kd_nms_per_rad / d.ki_nm_per_rad_s);
+      } else if (d.kp_nm_per_rad > 0.0) {
+        tracking_time = d.kp_nm_per_rad / d.ki_nm_per_rad_s;
+      } else {
+        tracking_time = std::cbrt(d.motor_inertia_kgm2 / d.ki_nm_per_rad_s);
+      }
+    }
+    windup_gain_[j] = tracking_time > 0.0 ? 1.0 / (d.ki_nm_per_rad_s * tracking_time) : 0.0;
+  }
 
   Solver& s = *solver_;
   check(SUNContext_Create(nullptr, &s.context), "SUNContext_Create");
@@ -213,6 +233,7 @@ void FlexibleJointPlant::reset(const JointVector& command, double start_time) {
     y[4 * n_ + j] = ki > 0.0 ? (motor_reaction[j] - feedforward_[j]) / ki : 0.0;
   }
   restart_ = true;
+  tripped_.clear();
 }
 
 void FlexibleJointPlant::setReference(const JointVector& position, const JointVector& velocity) {
@@ -252,9 +273,16 @@ void FlexibleJointPlant::setPayload(double mass, const Eigen::Vector3d& com_in_t
   restart_ = true;
 }
 
+double FlexibleJointPlant::referenceAt(int joint, double t) const {
+  const double dt = t - reference_time_;
+  return reference_[joint] + reference_velocity_[joint] * dt + 0.5 * reference_acceleration_[joint] * dt * dt;
+}
+
 void FlexibleJointPlant::computeMotorTorques(double t, const JointVector& p, const JointVector& pd,
-                                             const JointVector& integral, JointVector& torque) const {
+                                             const JointVector& integral, JointVector& torque,
+                                             JointVector* clamped_excess) const {
   torque.resize(n_);
+  if (clamped_excess) clamped_excess->setZero(n_);
   for (int j = 0; j < n_; ++j) {
     if (!options_.control) {
       torque[j] = 0.0;
@@ -262,17 +290,18 @@ void FlexibleJointPlant::computeMotorTorques(double t, const JointVector& p, con
     }
     const DriveParameters& d = drives_[j];
     const double dt = t - reference_time_;
-    const double wanted = reference_[j] + reference_velocity_[j] * dt + 0.5 * reference_acceleration_[j] * dt * dt;
+    const double wanted = referenceAt(j, t);
     const double wanted_velocity = reference_velocity_[j] + reference_acceleration_[j] * dt;
     // Feed-forward of the static load at the reference and of the friction at the reference velocity,
     // as industrial drives do: the feedback then only corrects what the drive does not know.
     const double friction = d.viscous_friction_nms_per_rad * wanted_velocity +
                             d.coulomb_friction_nm * std::tanh(wanted_velocity / d.coulomb_velocity_scale_rad_per_s);
-    double value = d.kp_nm_per_rad * (wanted - p[j]) + d.kd_nms_per_rad * (wanted_velocity - pd[j]) +
-                   d.ki_nm_per_rad_s * integral[j] + feedforward_[j] + feedforward_rate_[j] * dt + friction;
+    const double value = d.kp_nm_per_rad * (wanted - p[j]) + d.kd_nms_per_rad * (wanted_velocity - pd[j]) +
+                         d.ki_nm_per_rad_s * integral[j] + feedforward_[j] + feedforward_rate_[j] * dt + friction;
     const double limit = truth_.robot().joints[j].effort_limit;
-    if (limit > 0.0) value = std::max(-limit, std::min(limit, value));
-    torque[j] = value;
+    const double clamped = limit > 0.0 ? std::max(-limit, std::min(limit, value)) : value;
+    torque[j] = clamped;
+    if (clamped_excess) (*clamped_excess)[j] = clamped - value;
   }
 }
 
@@ -334,8 +363,8 @@ void FlexibleJointPlant::derivative(double t, const double* y, double* ydot) {
   forwardDynamics(robot, ws_.robot, q, qd, link_torque, qdd);
 
   // Motor side and controller.
-  JointVector motor_torque;
-  computeMotorTorques(t, p, pd, integral, motor_torque);
+  JointVector motor_torque, clamped_excess;
+  computeMotorTorques(t, p, pd, integral, motor_torque, &clamped_excess);
   for (int j = 0; j < n_; ++j) {
     const DriveParameters& d = drives_[j];
     const double friction = d.viscous_friction_nms_per_rad * pd[j] +
@@ -349,9 +378,7 @@ void FlexibleJointPlant::derivative(double t, const double* y, double* ydot) {
       ydot[2 * n_ + j] = pd[j];
       ydot[3 * n_ + j] = (motor_torque[j] - motor_reaction[j] - friction) / d.motor_inertia_kgm2;
     }
-    const double dt = t - reference_time_;
-    const double wanted = reference_[j] + reference_velocity_[j] * dt + 0.5 * reference_acceleration_[j] * dt * dt;
-    ydot[4 * n_ + j] = options_.control ? wanted - p[j] : 0.0;
+    ydot[4 * n_ + j] = options_.control ? referenceAt(j, t) - p[j] + windup_gain_[j] * clamped_excess[j] : 0.0;
   }
 }
 
@@ -377,6 +404,9 @@ void FlexibleJointPlant::advance(double end_time) {
   if (!std::isfinite(end_time) || !(end_time > time_)) {
     throw InvalidArgument("plant: advance to t = " + std::to_string(end_time) +
                           " s, which is not after the current t = " + std::to_string(time_) + " s");
+  }
+  if (!tripped_.empty()) {
+    throw PlantLimitError(tripped_ + "; the run stopped there: reset the plant or restore a saved state to go on");
   }
   Solver& s = *solver_;
   if (restart_) {
@@ -422,6 +452,50 @@ void FlexibleJointPlant::advance(double end_time) {
                       std::to_string(end_time) + " s: " + (s.last_error.empty() ? flagName(flag) : s.last_error));
   }
   time_ = end_time;
+  checkWatchdog();
+}
+
+void FlexibleJointPlant::setWatchdog(double tracking_envelope_rad, double joint_limit_margin_rad) {
+  if (!std::isfinite(tracking_envelope_rad) || !(tracking_envelope_rad > 0.0)) {
+    throw InvalidArgument("plant: tracking_envelope_rad must be finite and positive; it is " +
+                          std::to_string(tracking_envelope_rad));
+  }
+  if (!std::isfinite(joint_limit_margin_rad) || joint_limit_margin_rad < 0.0) {
+    throw InvalidArgument("plant: joint_limit_margin_rad must be finite and not negative; it is " +
+                          std::to_string(joint_limit_margin_rad));
+  }
+  options_.tracking_envelope_rad = tracking_envelope_rad;
+  options_.joint_limit_margin_rad = joint_limit_margin_rad;
+}
+
+void FlexibleJointPlant::checkWatchdog() {
+  const Robot& robot = truth_.robot();
+  const double* y = N_VGetArrayPointer(solver_->y);
+  char text[400];
+  for (int j = 0; j < n_ && tripped_.empty(); ++j) {
+    const Joint& joint = robot.joints[j];
+    const double q = y[j];
+    const double margin = options_.joint_limit_margin_rad;
+    if (q > joint.upper + margin || q < joint.lower - margin) {  // continuous joints: +-inf
+      std::snprintf(text, sizeof text,
+                    "plant: at t = %.9g s link %s is at %.6g rad, beyond its joint limits [%.6g, %.6g] rad by more "
+                    "than the %.3g rad margin",
+                    time_, joint.name.c_str(), q, joint.lower, joint.upper, margin);
+      tripped_ = text;
+    }
+  }
+  for (int j = 0; j < n_ && tripped_.empty() && options_.control; ++j) {
+    const double following_error = referenceAt(j, time_) - y[2 * n_ + j];
+    if (std::abs(following_error) > options_.tracking_envelope_rad) {
+      std::snprintf(text, sizeof text,
+                    "plant: at t = %.9g s the drive of %s has a following error of %.6g rad (reference %.6g, motor "
+                    "%.6g), beyond its tracking envelope of %.3g rad: the drive cannot follow its reference",
+                    time_, robot.joints[j].name.c_str(), following_error, referenceAt(j, time_), y[2 * n_ + j],
+                    options_.tracking_envelope_rad);
+      tripped_ = text;
+    }
+  }
+  if (!tripped_.empty()) throw PlantLimitError(tripped_);
 }
 
 JointVector FlexibleJointPlant::linkPositions() const {
@@ -511,6 +585,7 @@ void FlexibleJointPlant::restoreState(const PlantState& state) {
   ctx_.payload_mass = state.payload_mass;
   ctx_.payload_com = state.payload_com;
   restart_ = true;
+  tripped_.clear();
 }
 
 }  // namespace jointcomp

@@ -10,8 +10,10 @@
 // Motor side: B pdd = tau_m - tau_s - friction(pd).
 // Control: a continuous-time PID on the motor position with velocity, friction and static-load feed-forward,
 // following a reference extrapolated between updates with its velocity and the acceleration seen
-// between the last two updates, torques clamped to
-// the URDF effort limits. Continuous rather than sampled so that CVODE integrates a smooth system.
+// between the last two updates, torques clamped to the URDF effort limits, with back-calculation
+// anti-windup (while the torque is clamped, the integral is pulled back at the rate of the clamped
+// excess over the tracking time sqrt(Ti Td), Astrom and Hagglund's rule). Continuous rather than sampled
+// so that CVODE integrates a smooth system.
 // State y = [q, qd, p, pd, integral of the position error], 5 n values.
 #pragma once
 
@@ -39,6 +41,12 @@ struct PlantOptions {
   // BDF order cap. The joint springs give lightly damped modes near the imaginary axis, where BDF of
   // order 4 and 5 is unstable at large steps (A(alpha)-stability 73 and 51 degrees); order 3 is not.
   int max_order = 3;
+  // The watchdog, checked at the end of every advance: a drive whose motor is further than this from its
+  // reference (the following-error window of industrial drives; a 0.5 rad step trips it, a runaway
+  // does), or a link further than joint_limit_margin_rad beyond its URDF limits, stops the run with a
+  // PlantLimitError.
+  double tracking_envelope_rad = 0.2;
+  double joint_limit_margin_rad = 0.02;
   bool control = true;         // false: no motor torque at all (free response)
   bool motors_locked = false;  // true: motor positions held where they are (static tests)
 };
@@ -82,8 +90,13 @@ public:
   void setReference(const JointVector& position, const JointVector& velocity);
   void setToolWrench(const Vector6& wrench);
   void setPayload(double mass, const Eigen::Vector3d& com_in_tool);
+  // The watchdog's limits (PlantOptions), changeable at any time; throws InvalidArgument naming a value
+  // that is not finite or out of range, and changes nothing then.
+  void setWatchdog(double tracking_envelope_rad, double joint_limit_margin_rad);
   // Integrates to `end_time` (> time()). Throws SolverError with CVODE's reason when it fails; the
-  // plant is then left at the last good time.
+  // plant is then left at the last good time. Throws PlantLimitError when the run ends outside the joint
+  // limits or the tracking envelope (PlantOptions); the plant is then at end_time and refuses to
+  // advance until reset() or restoreState().
   void advance(double end_time);
 
   JointVector linkPositions() const;
@@ -106,11 +119,16 @@ public:
   void derivative(double t, const double* y, double* ydot);
 
   const JointErrorModel& model() const { return truth_; }
+  const PlantOptions& options() const { return options_; }
 
 private:
   struct Solver;
+  // The controller's torques; `clamped_excess` (optional) receives, per joint, the clamped torque minus
+  // the unclamped one (zero unless the drive saturates), which the anti-windup feeds back.
   void computeMotorTorques(double t, const JointVector& p, const JointVector& pd, const JointVector& integral,
-                           JointVector& torque) const;
+                           JointVector& torque, JointVector* clamped_excess = nullptr) const;
+  double referenceAt(int joint, double t) const;
+  void checkWatchdog();
   void transmissionError(const JointVector& p, const JointVector& q, JointVector& error);
   void transmissionTorques(const JointVector& p, const JointVector& pd, const JointVector& q, const JointVector& qd,
                            JointVector& link_torque, JointVector& motor_reaction);
@@ -124,8 +142,10 @@ private:
   EffectMask load_mask_;
   EffectMask error_mask_;  // joint-error effects other than compliance: the transmission error
   JointVector stiffness_;
+  JointVector windup_gain_;  // per joint, 1 / (ki Tt): how fast a clamped excess pulls the integral back
   double time_ = 0.0;
   bool restart_ = true;  // the integrator restarts (fresh history) before the next step
+  std::string tripped_;  // why the watchdog stopped the run; empty while it runs
   JointVector reference_, reference_velocity_, reference_acceleration_, feedforward_, feedforward_rate_;
   double reference_time_ = 0.0;
   JointContext ctx_;

@@ -124,6 +124,7 @@ static void test_library(void) {
   CHECK(strcmp(jc_status_name(JC_ERROR_WRONG_HANDLE), "JC_ERROR_WRONG_HANDLE") == 0);
   CHECK(strcmp(jc_status_name(JC_ERROR_OUT_OF_MEMORY), "JC_ERROR_OUT_OF_MEMORY") == 0);
   CHECK(strcmp(jc_status_name(JC_ERROR_INTERNAL), "JC_ERROR_INTERNAL") == 0);
+  CHECK(strcmp(jc_status_name(JC_ERROR_PLANT_LIMIT), "JC_ERROR_PLANT_LIMIT") == 0);
   CHECK(strcmp(jc_status_name(42), "JC_UNKNOWN_STATUS") == 0);
   /* The message is cleared by the next successful call. */
   CHECK(jc_accuracy_metrics(NULL, 3, NULL, 5) == JC_ERROR_INVALID_ARGUMENT);
@@ -613,6 +614,33 @@ static void test_plant(jc_plant* plant) {
   EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "counts is NULL", jc_plant_statistics(plant, NULL, 5));
 }
 
+/* The watchdog: a 0.5 rad step of joint 1 (as an FMU master once sent) is a following error the drive
+   cannot work off, a status naming the joint rather than a run that swings away with every call OK; the
+   plant then refuses to advance until it is reset; a wider envelope lets the same step through. */
+static void test_plant_watchdog(jc_plant* plant) {
+  const double zero[6] = {0, 0, 0, 0, 0, 0};
+  double target[6], time = 0.0;
+  int32_t j;
+  for (j = 0; j < 6; ++j) target[j] = kPosture[j];
+  target[0] -= 0.5;
+  EXPECT_OK(jc_plant_reset(plant, kPosture, 6, 0.0));
+  EXPECT_OK(jc_plant_set_reference(plant, target, 6, zero, 6));
+  EXPECT_STATUS(JC_ERROR_PLANT_LIMIT, "joint_1 has a following error", jc_plant_advance(plant, 0.004));
+  EXPECT_OK(jc_plant_time(plant, &time));
+  CHECK(time == 0.004);
+  EXPECT_STATUS(JC_ERROR_PLANT_LIMIT, "reset the plant", jc_plant_advance(plant, 0.008));
+
+  EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "tracking_envelope_rad must be finite and positive",
+                jc_plant_set_watchdog(plant, 0.0, 0.02));
+  EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "joint_limit_margin_rad", jc_plant_set_watchdog(plant, 0.2, kNaN));
+  EXPECT_OK(jc_plant_set_watchdog(plant, 1.0, 0.02));
+  EXPECT_OK(jc_plant_reset(plant, kPosture, 6, 0.0));
+  EXPECT_OK(jc_plant_set_reference(plant, target, 6, zero, 6));
+  EXPECT_OK(jc_plant_advance(plant, 0.1));
+  EXPECT_OK(jc_plant_set_watchdog(plant, 0.2, 0.02));
+  EXPECT_OK(jc_plant_reset(plant, kPosture, 6, 0.0));
+}
+
 /* A report's JSON, read with the two-call protocol (length first); caller frees. */
 static char* report_text(jc_report* report, int summary) {
   int32_t length = -1;
@@ -825,6 +853,7 @@ int main(void) {
   /* The plant keeps its own copy of the model: the robot may go first. */
   EXPECT_OK(jc_robot_free(robot));
   test_plant(plant);
+  test_plant_watchdog(plant);
   EXPECT_OK(jc_plant_free(plant));
   EXPECT_OK(jc_robot_free(bare));
   EXPECT_OK(jc_robot_free(ur10));

@@ -738,7 +738,7 @@ TEST_P(FmuTest, DescribesItselfAndExportsTheStandardVersion) {
   }
   const ModelDescription md = readModelDescription(GetParam());
   EXPECT_EQ(md.outputs.size(), 45u);
-  EXPECT_EQ(md.vr.size(), 131u);
+  EXPECT_EQ(md.vr.size(), 133u);
   EXPECT_FALSE(md.token.empty());
 }
 
@@ -1165,6 +1165,41 @@ TEST_P(FmuTest, AFailingIntegrationIsDiscardedWithCvodesReason) {
   EXPECT_EQ(m->doStep(0.0, 0.01), kDiscard);  // still too few steps allowed
   EXPECT_EQ(m->terminate(), kOK);
   EXPECT_EQ(m->freeState(&before), kOK);
+}
+
+// A 0.5 rad step of q_desired_1 (once: every step OK while q_link_1 swung away to -46 rad) leaves the
+// drive's tracking envelope: the step is discarded, naming the joint and the envelope, and stepping on
+// is refused until the master goes back to an earlier state. With the envelope widened, the same step
+// is followed and settles (the controller's anti-windup), inside the joint limits.
+TEST_P(FmuTest, ARunawayIsDiscardedAndASaturatingStepSettles) {
+  auto m = makeMaster(GetParam());
+  ASSERT_TRUE(m->instantiate());
+  ASSERT_EQ(m->enterInitialization(), kOK);
+  ASSERT_EQ(m->exitInitialization(), kOK) << m->log();
+  void* before = nullptr;
+  ASSERT_EQ(m->getState(&before), kOK);
+  ASSERT_EQ(m->setReals({m->vr("q_desired_1")}, {-0.5}), kOK);
+  EXPECT_EQ(m->doStep(0.0, 0.01), kDiscard);
+  EXPECT_TRUE(m->logged("logStatusDiscard")) << m->log();
+  EXPECT_TRUE(m->logged("joint_1")) << m->log();
+  EXPECT_TRUE(m->logged("tracking envelope")) << m->log();
+  EXPECT_EQ(m->doStep(m->lastSuccessfulTime(), 0.01), kError);
+  ASSERT_EQ(m->setState(before), kOK);
+  EXPECT_EQ(m->doStep(0.0, 0.01), kOK) << m->log();  // the state before the step holds q_desired_1 = 0
+  EXPECT_EQ(m->terminate(), kOK);
+  EXPECT_EQ(m->freeState(&before), kOK);
+
+  auto wide = makeMaster(GetParam());
+  ASSERT_TRUE(wide->instantiate());
+  ASSERT_EQ(wide->enterInitialization(), kOK);
+  ASSERT_EQ(wide->setReals({wide->vr("watchdog.tracking_envelope")}, {1.0}), kOK);
+  ASSERT_EQ(wide->exitInitialization(), kOK) << wide->log();
+  ASSERT_EQ(wide->setReals({wide->vr("q_desired_1")}, {-0.5}), kOK);
+  std::vector<double> link;
+  double t = 0.0;
+  for (int k = 0; k < 800; ++k, t += 0.01) ASSERT_EQ(wide->doStep(t, 0.01), kOK) << "t = " << t << wide->log();
+  ASSERT_EQ(wide->getReals({wide->vr("q_link_1")}, link), kOK);
+  EXPECT_NEAR(link[0], -0.5, 1e-3);
 }
 
 // A parameter file extended by discovery (payload, hysteresis, joint offset) drives the FMU: it

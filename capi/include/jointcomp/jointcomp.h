@@ -51,7 +51,8 @@ typedef int32_t jc_status;
 #define JC_ERROR_SOLVER (-4)           /* no convergence, integrator failure */
 #define JC_ERROR_WRONG_HANDLE (-5)     /* a handle of another kind, or one already freed */
 #define JC_ERROR_OUT_OF_MEMORY (-6)
-#define JC_ERROR_INTERNAL (-7) /* a bug: please report it with the message */
+#define JC_ERROR_INTERNAL (-7)    /* a bug: please report it with the message */
+#define JC_ERROR_PLANT_LIMIT (-8) /* a simulation that left its joint limits or its tracking envelope */
 
 /* Opaque handles. */
 typedef struct jc_robot jc_robot;   /* a robot, its joint-error model and (optionally) its drives */
@@ -197,8 +198,14 @@ JOINTCOMP_API jc_status jc_plant_set_tool_wrench(jc_plant* plant, const double* 
 /* Payload of `mass` kg (>= 0) with its centre of mass com (3, m, tool frame). */
 JOINTCOMP_API jc_status jc_plant_set_payload(jc_plant* plant, double mass, const double* com, int32_t com_len);
 /* Integrates to end_time (s), which must be after the plant's time. JC_ERROR_SOLVER when CVODE fails; the
-   plant is then left at the last good time. */
+   plant is then left at the last good time. JC_ERROR_PLANT_LIMIT when the run ends with a link beyond
+   its joint limits (by more than the margin) or a drive beyond its tracking envelope, as a drive's
+   watchdog would stop it: the plant is at end_time and refuses to advance until reset or restored. */
 JOINTCOMP_API jc_status jc_plant_advance(jc_plant* plant, double end_time);
+/* The watchdog's limits: the largest following error |reference - motor position| (rad, > 0; 0.2 when
+   the plant is created) and how far a link may go beyond its joint limits (rad, >= 0; 0.02). */
+JOINTCOMP_API jc_status jc_plant_set_watchdog(jc_plant* plant, double tracking_envelope_rad,
+                                              double joint_limit_margin_rad);
 JOINTCOMP_API jc_status jc_plant_time(jc_plant* plant, double* time);
 /* Outputs, n values each: link positions q and velocities qd, motor positions p and velocities pd (joint
    units: motor angles divided by the gear ratios), and the motor torques the controller applies now. */

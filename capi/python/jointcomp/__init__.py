@@ -17,8 +17,8 @@ environment variable).
 """
 
 from . import _native
-from .errors import (FileError, InternalError, InvalidArgumentError, JointcompError, OutOfMemoryError, SolverError,
-                     UnreachableError, WrongHandleError)
+from .errors import (FileError, InternalError, InvalidArgumentError, JointcompError, OutOfMemoryError,
+                     PlantLimitError, SolverError, UnreachableError, WrongHandleError)
 from .identification import (Report, calibrate, discover, identify_stiffness, identify_transmission_error,
                              simulate_campaign)
 from .metrics import Metrics, accuracy_metrics, average_absolute_deviation, peak_to_peak_deviation
@@ -51,7 +51,7 @@ def last_error():
 
 __all__ = [
     "ABI_VERSION", "FileError", "InternalError", "InvalidArgumentError", "JointcompError", "Metrics",
-    "OutOfMemoryError", "Plant", "PlantStatistics", "RUN_NAMES", "Report", "Robot", "SolverError", "SpiralExperiment",
+    "OutOfMemoryError", "Plant", "PlantLimitError", "PlantStatistics", "RUN_NAMES", "Report", "Robot", "SolverError", "SpiralExperiment",
     "SpiralPlan", "TrajectoryCompensation", "UnreachableError", "WrongHandleError", "abi_version",
     "accuracy_metrics", "average_absolute_deviation", "calibrate", "discover", "identify_stiffness",
     "identify_transmission_error", "last_error", "library_path", "peak_to_peak_deviation",

@@ -67,6 +67,7 @@ PROTOTYPES = {
     "jc_plant_set_tool_wrench": (_i32, [_handle, _double_p, _i32]),
     "jc_plant_set_payload": (_i32, [_handle, _f64, _double_p, _i32]),
     "jc_plant_advance": (_i32, [_handle, _f64]),
+    "jc_plant_set_watchdog": (_i32, [_handle, _f64, _f64]),
     "jc_plant_time": (_i32, [_handle, _double_p]),
     "jc_plant_link_positions": (_i32, [_handle, _double_p, _i32]),
     "jc_plant_link_velocities": (_i32, [_handle, _double_p, _i32]),

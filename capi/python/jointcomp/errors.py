@@ -55,8 +55,14 @@ class InternalError(JointcompError):
     status, status_name = -7, "JC_ERROR_INTERNAL"
 
 
+class PlantLimitError(JointcompError):
+    """JC_ERROR_PLANT_LIMIT: a simulation that left its joint limits or its tracking envelope."""
+
+    status, status_name = -8, "JC_ERROR_PLANT_LIMIT"
+
+
 _BY_STATUS = {cls.status: cls for cls in (InvalidArgumentError, FileError, UnreachableError, SolverError,
-                                          WrongHandleError, OutOfMemoryError, InternalError)}
+                                          WrongHandleError, OutOfMemoryError, InternalError, PlantLimitError)}
 
 
 def error_for(status, message):

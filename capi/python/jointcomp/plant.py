@@ -69,8 +69,16 @@ class Plant(OwnedHandle):
         _native.check(_native.lib.jc_plant_set_payload(self.handle, float(mass), _native.pointer(com), com.size))
 
     def advance(self, end_time):
-        """Integrates to ``end_time`` (s, after the current time). Raises SolverError when CVODE fails."""
+        """Integrates to ``end_time`` (s, after the current time). Raises SolverError when CVODE fails, and
+        PlantLimitError when the run ends with a link beyond its joint limits or a drive beyond its
+        tracking envelope (see :meth:`set_watchdog`); the plant then refuses to advance until reset."""
         _native.check(_native.lib.jc_plant_advance(self.handle, float(end_time)))
+
+    def set_watchdog(self, tracking_envelope_rad=0.2, joint_limit_margin_rad=0.02):
+        """The watchdog's limits: the largest following error |reference - motor position| (rad) and how
+        far a link may go beyond its joint limits (rad)."""
+        _native.check(_native.lib.jc_plant_set_watchdog(self.handle, float(tracking_envelope_rad),
+                                                        float(joint_limit_margin_rad)))
 
     def _read(self, function, size):
         values = np.empty(size)

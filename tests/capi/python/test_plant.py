@@ -88,6 +88,26 @@ def test_input_errors(plant):
         plant.set_payload(-1.0, [0, 0, 0])
 
 
+def test_watchdog_stops_a_runaway(plant):
+    """A 0.5 rad step of joint 1 is beyond the drive's tracking envelope: PlantLimitError naming the joint,
+    then no advance until reset; a wider envelope lets the step through."""
+    target = np.array(POSTURE)
+    target[0] -= 0.5
+    plant.reset(POSTURE, 0.0)
+    plant.set_reference(target, np.zeros(6))
+    with pytest.raises(jointcomp.PlantLimitError, match="joint_1 has a following error"):
+        plant.advance(0.004)
+    with pytest.raises(jointcomp.PlantLimitError, match="reset the plant"):
+        plant.advance(0.008)
+    with pytest.raises(jointcomp.InvalidArgumentError, match="tracking_envelope_rad"):
+        plant.set_watchdog(-1.0)
+    plant.set_watchdog(tracking_envelope_rad=1.0)
+    plant.reset(POSTURE, 0.0)
+    plant.set_reference(target, np.zeros(6))
+    plant.advance(0.1)
+    assert plant.time == pytest.approx(0.1)
+
+
 def test_the_plant_outlives_its_robot(robot):
     plant = robot.plant()
     robot.close()
