@@ -15,6 +15,7 @@
 
 #include "cli/commands.hpp"
 #include "cli/options.hpp"
+#include "cli/output_paths.hpp"
 #include "cli/plot.hpp"
 #include "cli/robot_setup.hpp"
 #include "model/common/errors.hpp"
@@ -50,6 +51,7 @@ int runCalibrate(int argc, char** argv) {
   const std::string& urdf = setup.urdf;
   const std::string campaign_path = options.get("campaign", "");
   const std::string out = options.get("out", "");
+  prepareOutputFolder(out);
   const auto started = std::chrono::steady_clock::now();
 
   const std::shared_ptr<const Robot>& robot = setup.robot;
@@ -69,7 +71,6 @@ int runCalibrate(int argc, char** argv) {
   for (const std::string& path : holdouts) held.emplace_back(path, readCampaignFile(path));
   const CalibrationRun run = runCalibration(prior, campaign, held, calibration);
 
-  ::mkdir(out.c_str(), 0755);
   const std::string urdf_out = out + "/" + robot->name + "_calibrated.urdf";
   saveRobotUrdf(*run.calibrated_robot, urdf_out,
                 "  " + robot->name + " after kinematic calibration by jointcomp calibrate\n  nominal: " + urdf +

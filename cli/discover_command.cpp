@@ -17,6 +17,7 @@
 
 #include "cli/commands.hpp"
 #include "cli/options.hpp"
+#include "cli/output_paths.hpp"
 #include "cli/plot.hpp"
 #include "cli/robot_setup.hpp"
 #include "model/common/errors.hpp"
@@ -53,6 +54,7 @@ int runDiscover(int argc, char** argv) {
   const RobotSetup setup = loadRobotSetup(options, JOINTCOMP_DATA_DIR "/robots/ur10.urdf");
   const std::string& urdf = setup.urdf;
   const std::string out = options.get("out", "");
+  prepareOutputFolder(out);
   const auto started = std::chrono::steady_clock::now();
   const std::shared_ptr<const Robot>& robot = setup.robot;
   const JointErrorModel& prior = setup.parameters.model;
@@ -83,7 +85,6 @@ int runDiscover(int argc, char** argv) {
   const DiscoveryResult result = discoverEffects(prior, fitted, held, discovery);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - fit_started).count();
 
-  ::mkdir(out.c_str(), 0755);
   const std::string urdf_out = out + "/" + robot->name + "_discovered.urdf";
   saveRobotUrdf(result.model.robot(), urdf_out,
                 "  " + robot->name + " after jointcomp discover\n  nominal: " + urdf +

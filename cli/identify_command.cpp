@@ -10,6 +10,7 @@
 
 #include "cli/commands.hpp"
 #include "cli/options.hpp"
+#include "cli/output_paths.hpp"
 #include "cli/plot.hpp"
 #include "cli/robot_setup.hpp"
 #include "model/identify/identification_report.hpp"
@@ -57,6 +58,7 @@ int runIdentify(int argc, char** argv) {
   const std::string& urdf = setup.urdf;
   const std::string& params = setup.params;
   const std::string out = options.get("out", "");
+  prepareOutputFolder(out);
   const std::string use = options.get("use", "local");
   if (use != "local" && use != "global") throw std::invalid_argument("--use takes local or global");
 
@@ -68,7 +70,6 @@ int runIdentify(int argc, char** argv) {
   if (options.has("truth"))
     truth = std::make_unique<JointErrorModel>(loadParameterFile(options.get("truth", ""), robot));
 
-  std::filesystem::create_directories(out);
   ReportSources sources;
   sources.campaign = campaign_path;
   sources.parameters = params;

@@ -3,6 +3,7 @@
 
 #include "cli/commands.hpp"
 #include "cli/options.hpp"
+#include "cli/output_paths.hpp"
 #include "model/io/ipa_ur10_import.hpp"
 
 namespace jointcomp::cli {
@@ -12,6 +13,7 @@ int runImportIpa(int argc, char** argv) {
   if (!options.has("in") || !options.has("out")) {
     throw std::invalid_argument("import-ipa needs --in MEASUREMENTS.csv and --out CAMPAIGN.csv (and --trafo FILE)");
   }
+  prepareOutputFile(options.get("out", ""));
   const MeasurementCampaign campaign = importIpaUr10(options.get("in", ""), options.get("trafo", ""));
   writeCampaignFile(campaign, options.get("out", ""));
   std::printf("imported %zu rows from %s into %s (time from %s; %s rows held back in time)\n", campaign.size(),

@@ -11,6 +11,7 @@
 
 #include "cli/commands.hpp"
 #include "cli/options.hpp"
+#include "cli/output_paths.hpp"
 #include "cli/plot.hpp"
 #include "cli/robot_setup.hpp"
 #include "model/common/errors.hpp"
@@ -103,9 +104,9 @@ void printTable(const SpiralExperimentResult& result) {
               (1 - kPaperRz[2] / kPaperRz[0]) * 100);
 }
 
-// The FMUs of this build, handed out beside the results.
-void handOutFmus() {
-  ::mkdir("out/fmu", 0755);
+// The FMUs of this build, handed out beside the results (in `folder`).
+void handOutFmus(const std::string& folder) {
+  prepareOutputFolder(folder, "--out (its fmu folder)");
   for (const char* name : {"jointcomp_fmi2.fmu", "jointcomp_fmi3.fmu"}) {
     const std::string built = std::string(JOINTCOMP_FMU_DIR) + "/" + name;
     std::ifstream source(built, std::ios::binary);
@@ -115,8 +116,8 @@ void handOutFmus() {
     }
     std::ostringstream bytes;
     bytes << source.rdbuf();
-    writeFileAtomically(std::string("out/fmu/") + name, bytes.str());
-    std::printf("wrote out/fmu/%s (FMI %s co-simulation of the plant with compensation)\n", name,
+    writeFileAtomically(folder + "/" + name, bytes.str());
+    std::printf("wrote %s/%s (FMI %s co-simulation of the plant with compensation)\n", folder.c_str(), name,
                 name[13] == '2' ? "2.0" : "3.0");
   }
 }
@@ -149,6 +150,7 @@ int runPaper(int argc, char** argv) {
   const Options options(argc, argv, {"urdf", "params", "out", "seed", "compensate-joints", "no-plot", "quasi-static"},
                         {"no-plot", "quasi-static"});
   const std::string out = options.get("out", "out/paper");
+  prepareOutputFolder(out);
   const auto started = std::chrono::steady_clock::now();
 
   std::printf("jointcomp paper: the spiral test of Olabi et al. (IEEE ICIT 2012), simulated\n");
@@ -171,13 +173,11 @@ int runPaper(int argc, char** argv) {
     std::fflush(stdout);
   });
 
-  ::mkdir("out", 0755);
-  ::mkdir(out.c_str(), 0755);
   writeFileAtomically(out + "/spiral_runs.csv", runsCsv(result));
   writeFileAtomically(out + "/summary.json", summaryJson(result, spec));
   printTable(result);
   std::printf("wrote %s/spiral_runs.csv and %s/summary.json\n", out.c_str(), out.c_str());
-  handOutFmus();
+  handOutFmus(out + "/fmu");
   if (!options.has("no-plot"))
     drawPlot("plot_spiral_runs.py", out + "/spiral_runs.csv", out + "/spiral_z_error.png",
              " (in the manner of the paper's Fig. 13)");

@@ -7,6 +7,7 @@
 
 #include "cli/commands.hpp"
 #include "cli/options.hpp"
+#include "cli/output_paths.hpp"
 #include "cli/robot_setup.hpp"
 #include "model/common/errors.hpp"
 #include "model/effects/perturbation.hpp"
@@ -42,6 +43,7 @@ int runSimulate(int argc, char** argv) {
   const std::string& truth_path = setup.params;
   CampaignSimulationSpec spec = defaultCampaignSpec(protocolFromName(protocol_name));
   const std::string out = options.get("out", "out/" + protocolName(spec.protocol) + ".csv");
+  prepareOutputFile(out);
   const std::shared_ptr<const Robot>& robot = setup.robot;
   JointErrorModel truth = setup.parameters.model;
   spec.metadata["truth"] = truth_path;
@@ -110,8 +112,6 @@ int runSimulate(int argc, char** argv) {
     std::printf("  %s\n", what.c_str());
     std::fflush(stdout);
   });
-  const std::filesystem::path parent = std::filesystem::path(out).parent_path();
-  if (!parent.empty()) std::filesystem::create_directories(parent);
   writeCampaignFile(campaign, out);
   if (!truth_written.empty()) saveParameterFile(truth, truth_written);
   std::printf("wrote %zu rows (%.0f s of campaign, %s) to %s\n", campaign.size(), campaign.time.back(),

@@ -3,7 +3,7 @@
 # leaves every output file either whole (byte-identical to an uninterrupted run's) or absent, never a
 # partial file or a temporary; the input files are byte-identical afterwards.
 #   kill_during_write.sh <jointcomp binary> <model folder (robots/, params/)>
-# Runs `jointcomp paper --quasi-static` (writes out/paper/spiral_runs.csv, summary.json and out/fmu/*.fmu)
+# Runs `jointcomp paper --quasi-static` (writes out/paper/spiral_runs.csv, summary.json and out/paper/fmu/*.fmu)
 # and `jointcomp simulate --perturb` (a campaign and its perturbed truth). The plots are left out
 # (--no-plot): matplotlib writes the PNG in place (see the README's Tests section).
 set -euo pipefail

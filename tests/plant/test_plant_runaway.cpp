@@ -114,8 +114,7 @@ TEST(PlantRunaway, LeavingTheTrackingEnvelopeIsAnError) {
   JointVector target = home();
   target[0] -= 0.5;
   plant.setReference(target, JointVector::Zero(6));
-  expectLimitError([&] { plant.advance(0.004); }, {"joint_1", "following error", "tracking envelope"},
-                   "0.5 rad step");
+  expectLimitError([&] { plant.advance(0.004); }, {"joint_1", "following error", "tracking envelope"}, "0.5 rad step");
   EXPECT_EQ(plant.time(), 0.004);  // the integration itself succeeded: the state is where the run went
   expectLimitError([&] { plant.advance(0.008); }, {"joint_1", "reset"}, "advance after the watchdog");
 

@@ -1,0 +1,16 @@
+// Where a command writes, checked before it computes anything: a long calibration must not end with "cannot
+// write" because --out named a file, a read-only folder or a path nobody can create.
+#pragma once
+
+#include <string>
+
+namespace jointcomp::cli {
+
+// Makes `folder` (and its parents) if needed and proves it writable by creating and removing a file in
+// it. Throws std::invalid_argument naming `option` ("--out"), the path and the reason otherwise.
+void prepareOutputFolder(const std::string& folder, const std::string& option = "--out");
+
+// The same for a file to be written: its folder must be preparable and the path must not be a folder.
+void prepareOutputFile(const std::string& file, const std::string& option = "--out");
+
+}  // namespace jointcomp::cli
