@@ -100,6 +100,7 @@ public:
         }
         if (line.empty()) continue;
         header = splitCells(line);
+        requireCommaSeparated(header, line, line_number);
         for (std::size_t c = 0; c < header.size(); ++c) {
           if (header[c].empty()) fail(line_number, "column " + std::to_string(c + 1) + " of the header has no name");
           if (column_of.count(header[c])) fail(line_number, "column '" + header[c] + "' appears twice");
@@ -112,8 +113,13 @@ public:
       if (line.empty()) continue;
       const std::vector<std::string> cells = splitCells(line);
       if (cells.size() != header.size()) {
-        fail(line_number,
-             "row has " + std::to_string(cells.size()) + " cells, the header has " + std::to_string(header.size()));
+        // More cells than columns, in a file of numbers: most likely decimal commas ("0,365").
+        const bool decimal_commas = cells.size() > header.size() && line.find_first_of(";\t") == std::string::npos;
+        fail(line_number, "row has " + std::to_string(cells.size()) + " cells, the header has " +
+                              std::to_string(header.size()) +
+                              (decimal_commas ? " (decimal commas? the format's decimal mark is '.', as in 0.365, "
+                                                "and ',' only separates cells)"
+                                              : ""));
       }
       addRow(campaign, cells, column_of, line_number);
     }
@@ -124,6 +130,20 @@ public:
   }
 
 private:
+  // A header that is one cell holding ';' or tabs is a file written with another separator (spreadsheets
+  // in locales with decimal commas use ';'): say so, instead of "required column 't' is missing".
+  void requireCommaSeparated(const std::vector<std::string>& header, const std::string& line, int line_number) const {
+    if (header.size() != 1) return;
+    const char* separator = line.find(';') != std::string::npos    ? "';'"
+                            : line.find('\t') != std::string::npos ? "tabs"
+                                                                   : nullptr;
+    if (!separator) return;
+    fail(line_number, std::string("the header's columns are separated by ") + separator +
+                          "; the campaign format separates cells with ',' and writes numbers with '.' as the "
+                          "decimal mark (0.365, not 0,365): convert the file, e.g. by exporting it as CSV with "
+                          "',' separators");
+  }
+
   void interpretHeader(MeasurementCampaign& campaign, const std::map<std::string, int>& column_of, int line) {
     if (!column_of.count("t")) fail(line, "required column 't' is missing");
     int dof = 0;
