@@ -22,4 +22,41 @@ mkdir -p "$blocked/spiral_z_error.png"
 "$jointcomp" paper --quasi-static --out "$blocked" >log2.txt 2>&1 || { cat log2.txt; fail "paper failed"; }
 grep -q "^no plot: " log2.txt || { cat log2.txt; fail "a plot that was not written was not reported as failed"; }
 if grep -q "^wrote $blocked/spiral_z_error.png" log2.txt; then fail "reported a plot it did not write"; fi
-echo "plot_paths: hostile names are paths; failed plots are reported"
+# A plot child dies with its parent: jointcomp killed (SIGKILL) while its plot script runs leaves no
+# process behind, and no PNG appears later. Children are found through /proc (procps may be absent).
+children_of() {
+  local stat ppid rest
+  for stat in /proc/[0-9]*/stat; do
+    read -r _ _ _ ppid rest <"$stat" 2>/dev/null || continue
+    if [ "$ppid" = "$1" ]; then stat="${stat%/stat}"; echo "${stat#/proc/}"; fi
+  done
+}
+# Alive: a process that is not a zombie (a dead child whose new parent has not reaped it yet).
+alive() {
+  local state
+  state="$(cut -d ' ' -f 3 "/proc/$1/stat" 2>/dev/null)" || return 1
+  [ -n "$state" ] && [ "$state" != Z ]
+}
+killed="$work/killed"
+"$jointcomp" paper --quasi-static --out "$killed" >log3.txt 2>&1 &
+parent=$!
+child=""
+for _ in $(seq 1 500); do
+  child="$(children_of "$parent" | head -n 1)"
+  [ -n "$child" ] && break
+  sleep 0.02
+done
+[ -n "$child" ] || { cat log3.txt; fail "no plot child was seen"; }
+kill -9 "$parent"
+wait "$parent" 2>/dev/null || true
+for _ in $(seq 1 100); do
+  alive "$child" || break
+  sleep 0.02
+done
+if alive "$child"; then
+  kill -9 "$child" 2>/dev/null || true
+  fail "the plot child $child outlived its killed parent"
+fi
+sleep 1
+[ ! -e "$killed/spiral_z_error.png" ] || fail "a PNG appeared after its writer's parent was killed"
+echo "plot_paths: hostile names are paths; failed plots are reported; a plot child dies with its parent"
