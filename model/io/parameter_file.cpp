@@ -2,6 +2,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include <cmath>
+
 #include "model/common/errors.hpp"
 #include "model/common/json_fields.hpp"
 #include "model/common/strict_json.hpp"
@@ -22,6 +24,21 @@ std::string readParameterText(const std::string& path) {
     return readTextFile(path, "parameter file", kMaxJsonFileBytes);
   } catch (const Error& error) {
     throw ParameterError(error.what());
+  }
+}
+
+// Every number of a document about to be written is finite: nlohmann writes NaN and infinities as null,
+// which would read back as "rigid" or fail later, far from the fit that produced them. A rigid joint's
+// null is written as null on purpose and is not a number here.
+void requireFiniteNumbers(const nlohmann::ordered_json& node, const std::string& path) {
+  if (node.is_number_float() && !std::isfinite(node.get<double>())) {
+    throw ParameterError("refusing to write a parameter file: " + path + " is " + std::to_string(node.get<double>()) +
+                         " (a result that is not finite)");
+  }
+  if (node.is_object()) {
+    for (const auto& item : node.items()) requireFiniteNumbers(item.value(), path + "." + item.key());
+  } else if (node.is_array()) {
+    for (std::size_t k = 0; k < node.size(); ++k) requireFiniteNumbers(node[k], path + "[" + std::to_string(k) + "]");
   }
 }
 
@@ -95,6 +112,7 @@ std::string parametersToJson(const JointErrorModel& model, const std::vector<Dri
   for (int i = 0; i < model.effectCount(); ++i) effects.push_back(model.effect(i).toJson());
   document["effects"] = effects;
   if (!drives.empty()) document["plant"] = drivesToJson(drives, model.robot());
+  requireFiniteNumbers(document, "parameters");
   return document.dump(2) + "\n";
 }
 

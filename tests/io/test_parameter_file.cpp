@@ -137,6 +137,27 @@ TEST(ParameterFile, RoundTripsBitForBit) {
   EXPECT_EQ(parametersToJson(again), text);
 }
 
+// A result that is not finite is never written (nlohmann would write NaN as null, which reads back as a
+// rigid joint or fails far from the fit that made it): the writer names the value and writes nothing.
+TEST(ParameterFile, ANonFiniteResultIsNotWritten) {
+  const JointErrorModel model = loadParameterFile(rx170ParametersPath(), rx170());
+  std::vector<DriveParameters> drives = loadDriveParameters(rx170ParametersPath(), *rx170());
+  drives[1].kp_nm_per_rad = std::nan("");
+  const std::string path = ::testing::TempDir() + "/jointcomp_not_finite.json";
+  std::filesystem::remove(path);
+  try {
+    saveParameterFile(model, path, drives);
+    ADD_FAILURE() << "a NaN drive gain was written";
+  } catch (const ParameterError& error) {
+    EXPECT_THAT(error.what(), ::testing::HasSubstr("parameters.plant.joints[1].kp_nm_per_rad is nan"));
+  }
+  EXPECT_FALSE(std::filesystem::exists(path));
+  drives[1].kp_nm_per_rad = 1e5;
+  saveParameterFile(model, path, drives);  // with a finite gain the same set is written
+  EXPECT_TRUE(std::filesystem::exists(path));
+  std::filesystem::remove(path);
+}
+
 TEST(ParameterFile, RoundTripsArbitraryValuesBitForBit) {
   // Values with all 53 bits in use, so that any lossy conversion on the way shows.
   JointErrorModel model = loadParameterFile(rx170ParametersPath(), rx170());
