@@ -10,6 +10,7 @@
 #include "model/effects/joint_placement.hpp"
 #include "model/effects/nonlinear_compliance.hpp"
 #include "model/effects/payload.hpp"
+#include "model/effects/periodic_table.hpp"
 #include "model/effects/spring_balancer.hpp"
 #include "model/effects/thermal_drift.hpp"
 #include "model/effects/transmission_error.hpp"
@@ -35,6 +36,7 @@ EffectRegistry makeBuiltin() {
   registry.addEffectType(ThermalDriftEffect::kType, &ThermalDriftEffect::fromJson);
   registry.addEffectType(HysteresisEffect::kType, &HysteresisEffect::fromJson);
   registry.addEffectType(PayloadEffect::kType, &PayloadEffect::fromJson);
+  registry.addEffectType(PeriodicTableEffect::kType, &PeriodicTableEffect::fromJson);
   // Discovery: the calibration's own parameters first, then the effects in the order they join a model.
   registry.addDiscoveryFamily(std::make_shared<JointOffsetDiscovery>());
   registry.addDiscoveryFamily(std::make_shared<ComplianceDiscovery>());
@@ -45,6 +47,7 @@ EffectRegistry makeBuiltin() {
   registry.addDiscoveryFamily(std::make_shared<NonlinearComplianceDiscovery>());
   registry.addDiscoveryFamily(std::make_shared<ThermalDriftDiscovery>());
   registry.addDiscoveryFamily(std::make_shared<HarmonicDiscovery>());
+  registry.addDiscoveryFamily(std::make_shared<PeriodicTableDiscovery>());
   return registry;
 }
 
