@@ -29,7 +29,8 @@ std::string partOf(const GearTrain& gears, int joint, int stage) {
 std::vector<int> fittedKnots(const DiscoveryData& data, int joint, int stage, int knots) {
   std::vector<double> support(static_cast<std::size_t>(knots), 0.0);
   for (int i = 0; i < data.rows(); ++i) {
-    const PeriodicSplineWeights w = periodicSplineWeights(knots, data.gears->stageInputAngle(joint, stage, data.motor[i]));
+    const PeriodicSplineWeights w =
+        periodicSplineWeights(knots, data.gears->stageInputAngle(joint, stage, data.motor[i]));
     for (int k = 0; k < 4; ++k) support[static_cast<std::size_t>((w.first + k) % knots)] += w.weight[k];
   }
   std::vector<int> kept;
@@ -120,8 +121,7 @@ PeriodicTableEffect::PeriodicTableEffect(const Robot& robot, GearTrain gears, st
     const int knots = static_cast<int>(t.coefficients_rad.size());
     if (knots < kMinKnots || knots > kMaxKnots) {
       throw ParameterError("periodic_table: the table of " + joint_names_[t.joint] + " has " + std::to_string(knots) +
-                           " coefficients; it needs " + std::to_string(kMinKnots) + " to " +
-                           std::to_string(kMaxKnots));
+                           " coefficients; it needs " + std::to_string(kMinKnots) + " to " + std::to_string(kMaxKnots));
     }
   }
   setParameters(parameters());
@@ -200,7 +200,8 @@ std::vector<std::string> PeriodicTableEffect::parameterNames() const {
 
 std::vector<double> PeriodicTableEffect::parameters() const {
   std::vector<double> values;
-  for (const PeriodicTable& t : tables_) values.insert(values.end(), t.coefficients_rad.begin(), t.coefficients_rad.end());
+  for (const PeriodicTable& t : tables_)
+    values.insert(values.end(), t.coefficients_rad.begin(), t.coefficients_rad.end());
   return values;
 }
 
@@ -288,8 +289,9 @@ std::unique_ptr<Effect> PeriodicTableDiscovery::makeEffect(const DiscoveryData& 
     const int knots = static_cast<int>(c.cycles);
     const std::vector<int> kept = fittedKnots(data, c.joint, c.stage, knots);
     if (static_cast<Eigen::Index>(kept.size()) != a.theta.size()) {
-      throw SolverError("periodic table of joint " + std::to_string(c.joint + 1) + ": " + std::to_string(a.theta.size()) +
-                        " coefficients for " + std::to_string(kept.size()) + " fitted knots");
+      throw SolverError("periodic table of joint " + std::to_string(c.joint + 1) + ": " +
+                        std::to_string(a.theta.size()) + " coefficients for " + std::to_string(kept.size()) +
+                        " fitted knots");
     }
     PeriodicTable table;
     table.joint = c.joint;

@@ -128,8 +128,8 @@ TEST(PeriodicTable, RoundTripsThroughTheParameterFileAndRefusesBadTables) {
   nlohmann::json json = rx170Json();
   std::vector<double> c(12);
   for (int k = 0; k < 12; ++k) c[static_cast<std::size_t>(k)] = 1e-5 * (k * k % 7) - 2e-5;
-  json["effects"].push_back({{"type", "periodic_table"},
-                             {"tables", {{{"joint", "joint_2"}, {"of", "output"}, {"coefficients_rad", c}}}}});
+  json["effects"].push_back(
+      {{"type", "periodic_table"}, {"tables", {{{"joint", "joint_2"}, {"of", "output"}, {"coefficients_rad", c}}}}});
   const JointErrorModel model = parseParameters(json.dump(), "with a table", rx170());
   const int index = model.findEffect(PeriodicTableEffect::kType);
   ASSERT_GE(index, 0);
