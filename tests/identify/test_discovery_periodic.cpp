@@ -1,6 +1,7 @@
-// A joint error of a shape no few harmonics describe (a narrow bump once per motor revolution of joint 2) is found by the "periodic" family: discovery names a table of joint 2's motor,
-// brings the held-out error to the noise floor, writes the table and reports its spectrum and the
-// angle ranges it covers. The harmonics alone leave more on the held-out campaign.
+// A joint error of a shape no few harmonics describe (a narrow bump once per motor revolution of joint 2) is found by
+// the "periodic" family: discovery names a table of joint 2's motor, brings the held-out error to the noise floor,
+// writes the table and reports its spectrum and the angle ranges it covers. The harmonics alone leave more on the
+// held-out campaign.
 #include <algorithm>
 #include <cmath>
 #include <string>
@@ -26,7 +27,8 @@ JointErrorModel withBump(JointErrorModel model) {
   table.joint = 1;
   table.stage = 1;
   table.coefficients_rad = c;
-  model.addEffect(std::make_unique<PeriodicTableEffect>(model.robot(), model.gears(), std::vector<PeriodicTable>{table}));
+  model.addEffect(
+      std::make_unique<PeriodicTableEffect>(model.robot(), model.gears(), std::vector<PeriodicTable>{table}));
   return model;
 }
 
