@@ -120,4 +120,49 @@ double GearTrain::stageInputAngle(int joint, int stage, const JointVector& motor
   return motor[joint] / ratio_before_[joint][stage - 1];
 }
 
+std::string GearTrain::partName(int joint, int stage) const {
+  if (stage == 1) return "motor";
+  if (stage == stageCount(joint) + 1) return "output";
+  return "stage_" + std::to_string(stage);
+}
+
+int GearTrain::stageOfPart(int joint, const std::string& part) const {
+  for (int stage = 1; stage <= stageCount(joint) + 1; ++stage) {
+    // "stage_1", the input of stage 1, is the motor by another name.
+    if (partName(joint, stage) == part || (stage <= stageCount(joint) && part == "stage_" + std::to_string(stage)))
+      return stage;
+  }
+  return 0;
+}
+
+std::vector<int> GearTrain::distinctParts(int joint) const {
+  // The angle of a part per unit joint angle, from a unit joint move through G (coupling included).
+  const int n = dof();
+  JointVector unit = JointVector::Zero(n), motor(n);
+  unit[joint] = 1.0;
+  motorAngles(unit, motor);
+  std::vector<int> stages;
+  std::vector<double> ratios;
+  for (int stage = 1; stage <= stageCount(joint) + 1; ++stage) {
+    const double ratio = stageInputAngle(joint, stage, motor);
+    bool seen = false;
+    for (double r : ratios) seen = seen || std::abs(r - ratio) <= 1e-9 * std::max(1.0, std::abs(r));
+    if (seen) continue;
+    ratios.push_back(ratio);
+    stages.push_back(stage);
+  }
+  return stages;
+}
+
+int readPart(JsonFields& entry, const GearTrain& gears, int joint, const std::string& joint_name) {
+  const std::string part = entry.text("of");
+  const int stage = gears.stageOfPart(joint, part);
+  if (stage == 0) {
+    entry.fail("of", "expected \"motor\", \"stage_K\" (K = 1 .. " + std::to_string(gears.stageCount(joint)) +
+                         ", the input of stage K) or \"output\" for " + joint_name + ", found \"" + part.substr(0, 40) +
+                         "\"");
+  }
+  return stage;
+}
+
 }  // namespace jointcomp

@@ -11,6 +11,8 @@
 
 namespace jointcomp {
 
+class JsonFields;
+
 class GearTrain {
 public:
   // Every joint driven directly (ratio 1, one stage), no coupling.
@@ -33,6 +35,15 @@ public:
   // Angle of the input shaft of stage `stage` (1 = the motor, stageCount + 1 = the output) of a joint.
   double stageInputAngle(int joint, int stage, const JointVector& motor) const;
 
+  // The parts of a joint's train by name, as parameter files and reports write them: "motor" (stage 1),
+  // "stage_K" (the input of stage K) and "output" (stageCount + 1).
+  std::string partName(int joint, int stage) const;
+  // The stage of a part's name ("stage_1" is the motor too), 0 when the joint has no such part.
+  int stageOfPart(int joint, const std::string& part) const;
+  // The stages of a joint whose parts turn at different speeds (a stage of ratio 1 repeats the part
+  // before it): the parts a periodic error of the joint may be a function of, each once.
+  std::vector<int> distinctParts(int joint) const;
+
 private:
   std::vector<std::vector<double>> stage_ratios_;    // per joint, motor side first
   std::vector<std::vector<int>> stage_input_teeth_;  // per joint and stage; 0: not known
@@ -40,5 +51,9 @@ private:
   JointMatrix motor_from_joint_;
   void updateDerived();
 };
+
+// The stage of the part a parameter file's entry names in "of" ("motor", "stage_K", "output"); fails
+// naming the entry and the parts the joint has.
+int readPart(JsonFields& entry, const GearTrain& gears, int joint, const std::string& joint_name);
 
 }  // namespace jointcomp

@@ -17,12 +17,6 @@ constexpr double kTwoPi = 2.0 * 3.14159265358979323846;
 // A knot is fitted only where the rows give it this much weight (a row at its centre gives 2/3).
 constexpr double kMinimumSupport = 2.0;
 
-std::string partOf(const GearTrain& gears, int joint, int stage) {
-  if (stage == 1) return "motor";
-  if (stage == gears.stageCount(joint) + 1) return "output";
-  return "stage_" + std::to_string(stage);
-}
-
 // The knots of a table of `knots` for (joint, stage) that the rows support, but for the most supported
 // one: the B-splines sum to one, so all of them together would repeat the joint's offset; leaving one at
 // zero spans the same functions with the offset and keeps the fit regular.
@@ -142,16 +136,7 @@ std::unique_ptr<Effect> PeriodicTableEffect::fromJson(const nlohmann::json& json
       if (robot.joints[j].name == joint_name) table.joint = j;
     }
     if (table.joint < 0) entry.fail("joint", "robot '" + robot.name + "' has no joint named '" + joint_name + "'");
-    const std::string part = entry.text("of");
-    const int stages = gears.stageCount(table.joint);
-    table.stage = 0;
-    for (int s = 1; s <= stages + 1; ++s) {
-      if (partOf(gears, table.joint, s) == part) table.stage = s;
-    }
-    if (table.stage == 0) {
-      entry.fail("of", "expected \"motor\", \"stage_K\" (K = 2 .. " + std::to_string(stages) +
-                           ") or \"output\", found \"" + part.substr(0, 40) + "\"");
-    }
+    table.stage = readPart(entry, gears, table.joint, joint_name);
     const nlohmann::json& values = entry.array("coefficients_rad");
     if (values.size() < static_cast<std::size_t>(kMinKnots) || values.size() > static_cast<std::size_t>(kMaxKnots)) {
       entry.fail("coefficients_rad", "expected " + std::to_string(kMinKnots) + " to " + std::to_string(kMaxKnots) +
@@ -192,7 +177,7 @@ void PeriodicTableEffect::addJointError(const Robot&, const JointContext& ctx, J
 std::vector<std::string> PeriodicTableEffect::parameterNames() const {
   std::vector<std::string> names;
   for (const PeriodicTable& t : tables_) {
-    const std::string prefix = joint_names_[t.joint] + ".periodic_" + partOf(gears_, t.joint, t.stage) + ".c";
+    const std::string prefix = joint_names_[t.joint] + ".periodic_" + gears_.partName(t.joint, t.stage) + ".c";
     for (std::size_t k = 0; k < t.coefficients_rad.size(); ++k) names.push_back(prefix + std::to_string(k) + "_rad");
   }
   return names;
@@ -225,7 +210,7 @@ nlohmann::json PeriodicTableEffect::toJson() const {
   nlohmann::json list = nlohmann::json::array();
   for (const PeriodicTable& t : tables_) {
     list.push_back({{"joint", joint_names_[t.joint]},
-                    {"of", partOf(gears_, t.joint, t.stage)},
+                    {"of", gears_.partName(t.joint, t.stage)},
                     {"coefficients_rad", t.coefficients_rad}});
   }
   nlohmann::json json = {{"type", kType}, {"tables", list}};
@@ -237,19 +222,8 @@ void PeriodicTableDiscovery::offer(const DiscoveryData& data, int joint,
                                    std::vector<DiscoveryCandidate>& candidates) const {
   if (joint < 0) return;
   const GearTrain& gears = *data.gears;
-  const int n = data.robot->dof();
-  const int stages = gears.stageCount(joint);
-  std::vector<double> ratios;  // distinct parts only
-  for (int s = 1; s <= stages + 1; ++s) {
-    JointVector unit = JointVector::Zero(n), m(n);
-    unit[joint] = 1.0;
-    gears.motorAngles(unit, m);
-    const double ratio = gears.stageInputAngle(joint, s, m);
-    bool seen = false;
-    for (double r : ratios) seen = seen || std::abs(r - ratio) <= 1e-9 * std::max(1.0, std::abs(r));
-    if (seen) continue;
-    ratios.push_back(ratio);
-    const std::string part = partOf(gears, joint, s);
+  for (const int s : gears.distinctParts(joint)) {
+    const std::string part = gears.partName(joint, s);
     for (const int knots : kKnotChoices) {
       const std::vector<int> kept = fittedKnots(data, joint, s, knots);
       const int columns = static_cast<int>(kept.size());

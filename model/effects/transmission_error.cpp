@@ -27,11 +27,7 @@ TransmissionErrorEffect::TransmissionErrorEffect(const Robot& robot, GearTrain g
   setParameters(parameters());
 }
 
-std::string TransmissionErrorEffect::partName(int joint, int stage) const {
-  if (stage == 1) return "motor";
-  if (stage == gears_.stageCount(joint) + 1) return "output";
-  return "stage_" + std::to_string(stage);
-}
+std::string TransmissionErrorEffect::partName(int joint, int stage) const { return gears_.partName(joint, stage); }
 
 std::unique_ptr<Effect> TransmissionErrorEffect::fromJson(const nlohmann::json& json, const Robot& robot,
                                                           const GearTrain& gears, const std::string& path) {
@@ -48,21 +44,7 @@ std::unique_ptr<Effect> TransmissionErrorEffect::fromJson(const nlohmann::json& 
       if (robot.joints[j].name == joint_name) h.joint = j;
     }
     if (h.joint < 0) entry.fail("joint", "robot '" + robot.name + "' has no joint named '" + joint_name + "'");
-    const std::string part = entry.text("of");
-    const int stages = gears.stageCount(h.joint);
-    if (part == "motor") {
-      h.stage = 1;
-    } else if (part == "output") {
-      h.stage = stages + 1;
-    } else if (part.rfind("stage_", 0) == 0 && part.size() > 6 &&
-               part.find_first_not_of("0123456789", 6) == std::string::npos && part.size() < 9) {
-      h.stage = std::stoi(part.substr(6));
-      if (h.stage < 1 || h.stage > stages) {
-        entry.fail("of", "'" + part + "': " + joint_name + " has stages 1 to " + std::to_string(stages));
-      }
-    } else {
-      entry.fail("of", "expected \"motor\", \"stage_K\" (input of stage K) or \"output\", found \"" + part + "\"");
-    }
+    h.stage = readPart(entry, gears, h.joint, joint_name);
     h.cycles_per_revolution = entry.positiveNumber("cycles_per_revolution");
     // People write degrees; programs write radians, which round-trip exactly. One of the two.
     if (entry.has("amplitude_deg") == entry.has("amplitude_rad")) {
@@ -142,19 +124,13 @@ void HarmonicDiscovery::offer(const DiscoveryData& data, int joint, std::vector<
   const int n = data.robot->dof();
   const int rows = data.rows();
   std::vector<double> frequencies;  // cycles per joint revolution already offered
-  std::vector<double> ratios;       // distinct parts only: the angle of a part is motor_j / ratio
   const int stages = gears.stageCount(joint);
-  for (int s = 1; s <= stages + 1; ++s) {
-    // Ratio of the part's angle to the joint angle, from a unit joint move.
-    JointVector unit = JointVector::Zero(n), m(n);
-    unit[joint] = 1.0;
-    gears.motorAngles(unit, m);
-    const double ratio = gears.stageInputAngle(joint, s, m);
-    bool seen = false;
-    for (double r : ratios) seen = seen || std::abs(r - ratio) <= 1e-9 * std::max(1.0, std::abs(r));
-    if (seen) continue;
-    ratios.push_back(ratio);
-    const std::string part = s == 1 ? "motor" : s == stages + 1 ? "output" : "stage_" + std::to_string(s);
+  JointVector unit = JointVector::Zero(n), unit_motor(n);
+  unit[joint] = 1.0;
+  gears.motorAngles(unit, unit_motor);
+  for (const int s : gears.distinctParts(joint)) {
+    const double ratio = gears.stageInputAngle(joint, s, unit_motor);  // part angle per joint angle
+    const std::string part = gears.partName(joint, s);
     // `why` says how an order beyond the default range came to be offered.
     auto offerOrder = [&](int order, const std::string& why) {
       const double frequency = std::abs(ratio) * order;

@@ -6,6 +6,9 @@
 #include <initializer_list>
 #include <memory>
 #include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
 
 #include "model/effects/joint_error_model.hpp"
 #include "model/effects/spring_balancer.hpp"
@@ -59,6 +62,22 @@ inline JointVector staticLoad(const JointErrorModel& model, const JointVector& q
     }
   }
   return load;
+}
+
+// Runs `call`, expecting an exception of type E whose message contains every one of `words`.
+template <class E, class F>
+void expectThrowMentioning(F call, const std::vector<std::string>& words, const std::string& what) {
+  try {
+    call();
+    ADD_FAILURE() << what << ": no exception";
+  } catch (const E& e) {
+    const std::string message = e.what();
+    for (const std::string& word : words) {
+      EXPECT_NE(message.find(word), std::string::npos) << what << ": '" << word << "' not in: " << message;
+    }
+  } catch (const std::exception& e) {
+    ADD_FAILURE() << what << ": wrong exception type: " << e.what();
+  }
 }
 
 }  // namespace jointcomp::plant_testing

@@ -33,22 +33,6 @@ JointVector home() {
   return q * kDegree;
 }
 
-// Runs `call`, expecting an exception of type E whose message contains every one of `words`.
-template <class E, class F>
-void expectThrowMentioning(F call, const std::vector<std::string>& words, const std::string& what) {
-  try {
-    call();
-    ADD_FAILURE() << what << ": no exception";
-  } catch (const E& e) {
-    const std::string message = e.what();
-    for (const std::string& word : words) {
-      EXPECT_NE(message.find(word), std::string::npos) << what << ": '" << word << "' not in: " << message;
-    }
-  } catch (const std::exception& e) {
-    ADD_FAILURE() << what << ": wrong exception type: " << e.what();
-  }
-}
-
 TEST(PlantMisuse, AdvanceMustGoForward) {
   FlexibleJointPlant plant(rx170Model(), rx170Drives());
   plant.reset(home(), 1.0);
