@@ -37,7 +37,7 @@ void printUsage() {
       "                             residual discovery: adds the candidate effects the data ask for, one at a\n"
       "                             time (time-blocked CV + BIC), and writes the extended parameter file;\n"
       "                             types: offset, compliance, nonlinear_compliance, harmonic, backlash,\n"
-      "                             hysteresis, thermal, geometric, payload, periodic\n"
+      "                             hysteresis, thermal, geometric, payload, periodic, instrument_scale\n"
       "  help                       this text\n"
       "With no command, jointcomp runs `paper` on the built-in Staubli RX170.\n");
 }

@@ -31,6 +31,16 @@ void CalibrationParameterDiscovery::offer(const DiscoveryData& data, int joint,
   candidates.push_back(std::move(candidate));
 }
 
+void InstrumentScaleDiscovery::offer(const DiscoveryData&, int joint,
+                                     std::vector<DiscoveryCandidate>& candidates) const {
+  if (joint >= 0) return;
+  DiscoveryCandidate candidate;
+  candidate.type = name();
+  candidate.detail = " of the fitted campaigns' set-up";
+  candidate.releases = {CalibrationParameter::InstrumentScale};
+  candidates.push_back(std::move(candidate));
+}
+
 void PerJointFeatureDiscovery::offer(const DiscoveryData& data, int joint,
                                      std::vector<DiscoveryCandidate>& candidates) const {
   if (joint < 0 || (needs_torque_ && !data.torque_known)) return;

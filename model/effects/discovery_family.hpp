@@ -115,6 +115,14 @@ private:
   bool needs_torque_;  // offered only when the load torque is known
 };
 
+// "instrument_scale": one robot-wide candidate that frees the instrument's relative scale error, so that a
+// tracker that measures 1.0002 m for a metre is named as such rather than spread over joint placements.
+class InstrumentScaleDiscovery : public DiscoveryFamily {
+public:
+  std::string name() const override { return "instrument_scale"; }
+  void offer(const DiscoveryData& data, int joint, std::vector<DiscoveryCandidate>& candidates) const override;
+};
+
 // A family of one feature column per joint whose coefficients are the effect's one per-joint vector
 // (named "<joint>.<parameter>"): the derived type gives the column and makes the effect.
 class PerJointFeatureDiscovery : public DiscoveryFamily {

@@ -42,9 +42,10 @@ struct JointContext {
 
 // Parameters of one joint that the kinematic calibration (model/identify) fits itself.
 enum class CalibrationParameter {
-  Offset,      // the joint's zero (rad)
-  Compliance,  // the joint's linear compliance under its load torque (rad/(N m))
-  Placement,   // the six corrections of the joint's placement
+  Offset,           // the joint's zero (rad)
+  Compliance,       // the joint's linear compliance under its load torque (rad/(N m))
+  Placement,        // the six corrections of the joint's placement
+  InstrumentScale,  // the instrument's relative scale error (of the fitted campaigns' set-up; no joint)
 };
 
 enum class EffectRole {

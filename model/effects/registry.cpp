@@ -41,6 +41,7 @@ EffectRegistry makeBuiltin() {
   registry.addDiscoveryFamily(std::make_shared<JointOffsetDiscovery>());
   registry.addDiscoveryFamily(std::make_shared<ComplianceDiscovery>());
   registry.addDiscoveryFamily(std::make_shared<JointPlacementDiscovery>());
+  registry.addDiscoveryFamily(std::make_shared<InstrumentScaleDiscovery>());
   registry.addDiscoveryFamily(std::make_shared<BacklashDiscovery>());
   registry.addDiscoveryFamily(std::make_shared<HysteresisDiscovery>());
   registry.addDiscoveryFamily(std::make_shared<PayloadDiscovery>());

@@ -23,8 +23,9 @@ std::string tableRow(const std::string& name, int rows, const ErrorStatistics& b
 std::string parameterLine(const ParameterEstimate& p) {
   const bool angle = p.unit == "rad";
   const bool length = p.unit == "m";
-  const double scale = length ? 1e3 : angle ? 180.0 / 3.14159265358979323846 : 1.0;
-  const char* unit = length ? "mm" : angle ? "deg" : "rad/(N m)";
+  const bool ratio = p.unit == "1";  // the instrument's scale, in parts per million
+  const double scale = length ? 1e3 : angle ? 180.0 / 3.14159265358979323846 : ratio ? 1e6 : 1.0;
+  const char* unit = length ? "mm" : angle ? "deg" : ratio ? "ppm" : "rad/(N m)";
   char line[320];
   if (p.identified) {
     std::snprintf(line, sizeof(line), "  %-34s %14.6g +- %-10.3g %s (nominal %.6g)\n", p.name.c_str(), p.value * scale,

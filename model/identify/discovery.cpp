@@ -80,6 +80,7 @@ std::vector<int> layoutIndices(const DiscoveryCandidate& candidate, const Geomet
   for (CalibrationParameter parameter : candidate.releases) {
     if (parameter == CalibrationParameter::Offset) indices.push_back(layout.offset(candidate.joint));
     if (parameter == CalibrationParameter::Compliance) indices.push_back(layout.compliance(candidate.joint));
+    if (parameter == CalibrationParameter::InstrumentScale) indices.push_back(layout.instrumentScale());
     if (parameter == CalibrationParameter::Placement) {
       for (int k = 0; k < 6; ++k) indices.push_back(layout.placement(candidate.joint, k));
     }
@@ -407,7 +408,7 @@ std::vector<std::string> fixedNames(const std::vector<std::string>& names, const
   std::vector<std::string> fixed = options.calibration.fixed;
   if (options.base_geometry) return fixed;
   GeometricParameterLayout layout(dof);
-  for (int idx = 9; idx < layout.size(); ++idx) {
+  for (int idx = 9; idx < layout.instrumentScale(); ++idx) {  // the scale: fit_instrument_scale
     if (!released.count(idx)) fixed.push_back(names[static_cast<std::size_t>(idx)]);
   }
   return fixed;
@@ -591,10 +592,18 @@ private:
     return std::sqrt(3.0) * sigma;  // 3-D RMS of the instrument noise
   }
 
-  GeometricCalibrationResult calibrate(const JointErrorModel& model) {
+  // The calibration options of a refit: the user's, with what discovery has not released fixed (and the
+  // instrument's scale fitted only once its candidate is accepted).
+  GeometricCalibrationOptions calibrationOptions() const {
     GeometricCalibrationOptions cal_options = options_.calibration;
-    cal_options.fixed = fixedNames(names_, released_, options_, prior_.robot().dof());
-    return calibrateGeometry(model, campaign_, cal_options);
+    const int dof = prior_.robot().dof();
+    cal_options.fixed = fixedNames(names_, released_, options_, dof);
+    cal_options.fit_instrument_scale = released_.count(GeometricParameterLayout(dof).instrumentScale()) > 0;
+    return cal_options;
+  }
+
+  GeometricCalibrationResult calibrate(const JointErrorModel& model) {
+    return calibrateGeometry(model, campaign_, calibrationOptions());
   }
 
   // Errors on the fitted rows, on every held-out campaign (frame re-fitted) and the paths' Ra and Rz.
@@ -614,8 +623,7 @@ private:
         state.paths.push_back(roughness(part, false, static_cast<int>(c)));
       }
     }
-    GeometricCalibrationOptions cal_options = options_.calibration;
-    cal_options.fixed = fixedNames(names_, released_, options_, prior_.robot().dof());
+    const GeometricCalibrationOptions cal_options = calibrationOptions();
     for (std::size_t k = 0; k < heldout_.size(); ++k) {
       const HoldoutEvaluation e = evaluateOnCampaign(model_, cal_.estimate, heldout_[k], true, cal_options);
       state.heldout.push_back(e.statistics);

@@ -242,6 +242,7 @@ Eigen::VectorXd GeometricParameters::toVector() const {
     v.segment<6>(layout.placement(j, 0)) = placement[static_cast<std::size_t>(j)];
     v[layout.compliance(j)] = compliance[j];
   }
+  v[layout.instrumentScale()] = instrument_scale;
   return v;
 }
 
@@ -260,6 +261,7 @@ GeometricParameters GeometricParameters::fromVector(const Eigen::VectorXd& v, in
     p.placement[static_cast<std::size_t>(j)] = v.segment<6>(layout.placement(j, 0));
     p.compliance[j] = v[layout.compliance(j)];
   }
+  p.instrument_scale = v[layout.instrumentScale()];
   return p;
 }
 
@@ -273,6 +275,7 @@ std::vector<std::string> geometricParameterNames(const Robot& robot) {
     }
   }
   for (const Joint& joint : robot.joints) names.push_back(joint.name + ".compliance_rad_per_nm");
+  names.push_back("instrument.scale");
   return names;
 }
 
@@ -282,6 +285,7 @@ std::string geometricParameterUnit(const std::string& name) {
     return name.size() >= s.size() && name.compare(name.size() - s.size(), s.size(), s) == 0;
   };
   if (ends("_rad_per_nm")) return "rad/(N m)";
+  if (name == "instrument.scale") return "1";
   if (ends("_rad")) return "rad";
   return "m";
 }
@@ -407,8 +411,9 @@ Eigen::Vector3d predictMeasurement(const Robot& robot, const GeometricParameters
   const Eigen::Matrix3d tool_rotation = rotation * robot.tool.linear();
   const Eigen::Vector3d point = position + rotation * robot.tool.translation() + tool_rotation * p.target;
   const Eigen::Matrix3d frame_rotation = expRotation(p.frame_rotation);
-  Eigen::Vector3d measured = frame_rotation * point + p.frame_translation;
-  if (!jacobian) return measured;
+  const Eigen::Vector3d true_position = frame_rotation * point + p.frame_translation;
+  const double scale = 1.0 + p.instrument_scale;
+  if (!jacobian) return scale * true_position;
 
   Eigen::MatrixXd& jac = *jacobian;
   jac.resize(3, layout.size());
@@ -424,7 +429,9 @@ Eigen::Vector3d predictMeasurement(const Robot& robot, const GeometricParameters
     jac.block<3, 3>(0, layout.placement(j, 3)) = -frame_rotation * skew(lever) * rotation_corrected[j] *
                                                  rightJacobian(p.placement[static_cast<std::size_t>(j)].tail<3>());
   }
-  return measured;
+  jac *= scale;  // every column above is of the true position
+  jac.col(layout.instrumentScale()) = true_position;
+  return scale * true_position;
 }
 
 ErrorStatistics errorStatistics(const std::vector<double>& errors) {
@@ -591,6 +598,9 @@ ParameterChoice candidateParameters(const Robot& robot, const CalibrationData& d
     } else if (i < layout.compliance(0)) {
       const int k = (i - layout.placement(0, 0)) % 6;
       group = k < 3 ? 3 : 4, enabled = options.fit_placements, change = 1e-3;
+    } else if (i == layout.instrumentScale()) {
+      group = 1, enabled = options.fit_instrument_scale, change = 1e-5;  // with the frame and target
+      if (!enabled) reason[static_cast<std::size_t>(i)] = "an instrument property: fitted only when asked";
     } else {
       group = 5, enabled = options.fit_compliance && data.torque_known, change = 1e-6;
       if (!data.torque_known) {
@@ -867,6 +877,7 @@ HoldoutEvaluation evaluateOnCampaign(const JointErrorModel& prior, const Geometr
   evaluation.row = data.row;
   evaluation.skipped_rows = data.skipped_rows;
   GeometricParameters used = parameters;
+  used.instrument_scale = 0.0;  // another set-up: the fitted campaign's instrument scale is not its own
   const bool fit = refit_frame && campaign.frame == MeasurementFrame::Instrument;
   if (campaign.frame == MeasurementFrame::Base) {
     used.frame_translation.setZero();

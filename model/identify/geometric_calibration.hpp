@@ -50,6 +50,10 @@ struct GeometricParameters {
   JointVector offset;                                           // rad
   std::vector<Vector6> placement;                               // per joint: d (m), r (rad)
   JointVector compliance;                                       // rad / (N m)
+  // Relative scale error of the instrument (a tracker's distance scale, the set-up's temperature): it
+  // measures (1 + instrument_scale) times the true coordinates. Fitted only on request (discovery's
+  // instrument_scale candidate); a held-out campaign, another set-up, is evaluated without it.
+  double instrument_scale = 0.0;
 
   // Everything zero for a robot of `dof` joints.
   static GeometricParameters zero(int dof);
@@ -71,7 +75,8 @@ struct GeometricParameterLayout {
   int offset(int joint) const { return 9 + joint; }
   int placement(int joint, int k) const { return 9 + dof + 6 * joint + k; }  // k: dx dy dz rx ry rz
   int compliance(int joint) const { return 9 + 7 * dof + joint; }
-  int size() const { return 9 + 8 * dof; }
+  int instrumentScale() const { return 9 + 8 * dof; }
+  int size() const { return 10 + 8 * dof; }
 };
 
 std::vector<std::string> geometricParameterNames(const Robot& robot);
@@ -134,7 +139,8 @@ struct GeometricCalibrationOptions {
   bool fit_offsets = true;
   bool fit_placements = true;
   bool fit_compliance = true;
-  std::vector<std::string> fixed;  // parameter names held at nominal whatever the data say
+  bool fit_instrument_scale = false;  // a property of the set-up, not the robot: only when asked
+  std::vector<std::string> fixed;     // parameter names held at nominal whatever the data say
   IdentifiabilityOptions identifiability;
   RobustLoss loss = RobustLoss::Huber;
   // Scale k of the robust loss (m); 0: loss_scale_sigmas times the robust per-axis sigma of the
