@@ -13,6 +13,8 @@ void Effect::addLoadTorque(const Robot&, const RobotWorkspace&, JointContext&) c
 
 void Effect::addJointError(const Robot&, const JointContext&, JointVector&) const {}
 
+bool Effect::addMotorSlope(const Robot&, const JointContext&, JointVector&) const { return false; }
+
 double Effect::calibrationValue(int) const { return 0.0; }
 
 }  // namespace jointcomp

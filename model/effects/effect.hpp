@@ -66,6 +66,10 @@ public:
   virtual void addJointError(const Robot& robot, const JointContext& ctx, JointVector& dq) const;
   // True when the error depends on ctx.command or ctx.motor (so compensation must iterate on it).
   virtual bool dependsOnCommand() const { return false; }
+  // For such an effect: adds d(joint error)/d(motor angle) of each joint to `slope` (n values, the error
+  // of joint j depends on motor j only) and returns true; false when the effect does not know its slope
+  // (the plant then differentiates it numerically). The plant needs it at every right-hand side.
+  virtual bool addMotorSlope(const Robot& robot, const JointContext& ctx, JointVector& slope) const;
 
   // An effect whose per-joint values are one of the calibration's own parameters says which, and gives
   // them in the calibration's units, so that calibration starts from them and writes them back.

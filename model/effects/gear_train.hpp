@@ -34,6 +34,8 @@ public:
   void motorAngles(const JointVector& joint_angles, JointVector& motor) const;
   // Angle of the input shaft of stage `stage` (1 = the motor, stageCount + 1 = the output) of a joint.
   double stageInputAngle(int joint, int stage, const JointVector& motor) const;
+  // d(stage input angle)/d(motor angle) of a joint: 1 over the ratios of the stages before it.
+  double stageInputPerMotor(int joint, int stage) const { return 1.0 / ratio_before_[joint][stage - 1]; }
 
   // The parts of a joint's train by name, as parameter files and reports write them: "motor" (stage 1),
   // "stage_K" (the input of stage K) and "output" (stageCount + 1).

@@ -174,6 +174,19 @@ void PeriodicTableEffect::addJointError(const Robot&, const JointContext& ctx, J
   }
 }
 
+bool PeriodicTableEffect::addMotorSlope(const Robot&, const JointContext& ctx, JointVector& slope) const {
+  for (const PeriodicTable& table : tables_) {
+    const std::vector<double>& c = table.coefficients_rad;
+    const int knots = static_cast<int>(c.size());
+    const PeriodicSplineWeights w =
+        periodicSplineWeights(knots, gears_.stageInputAngle(table.joint, table.stage, ctx.motor));
+    double per_angle = 0.0;
+    for (int k = 0; k < 4; ++k) per_angle += w.slope[k] * c[static_cast<std::size_t>((w.first + k) % knots)];
+    slope[table.joint] += per_angle * gears_.stageInputPerMotor(table.joint, table.stage);
+  }
+  return true;
+}
+
 std::vector<std::string> PeriodicTableEffect::parameterNames() const {
   std::vector<std::string> names;
   for (const PeriodicTable& t : tables_) {

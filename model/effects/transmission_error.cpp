@@ -70,6 +70,15 @@ void TransmissionErrorEffect::addJointError(const Robot&, const JointContext& ct
   }
 }
 
+bool TransmissionErrorEffect::addMotorSlope(const Robot&, const JointContext& ctx, JointVector& slope) const {
+  for (const Harmonic& h : harmonics_) {
+    const double angle = gears_.stageInputAngle(h.joint, h.stage, ctx.motor);
+    slope[h.joint] += h.amplitude_rad * h.cycles_per_revolution * gears_.stageInputPerMotor(h.joint, h.stage) *
+                      std::cos(h.cycles_per_revolution * angle + h.phase_rad);
+  }
+  return true;
+}
+
 std::vector<std::string> TransmissionErrorEffect::parameterNames() const {
   std::vector<std::string> names;
   for (const Harmonic& h : harmonics_) {

@@ -30,6 +30,7 @@ public:
   EffectRole role() const override { return EffectRole::JointError; }
   bool dependsOnCommand() const override { return true; }
   void addJointError(const Robot& robot, const JointContext& ctx, JointVector& dq) const override;
+  bool addMotorSlope(const Robot& robot, const JointContext& ctx, JointVector& slope) const override;
   std::vector<std::string> parameterNames() const override;
   std::vector<double> parameters() const override;
   void setParameters(const std::vector<double>& values) override;

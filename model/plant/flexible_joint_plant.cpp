@@ -135,9 +135,14 @@ FlexibleJointPlant::FlexibleJointPlant(const JointErrorModel& truth, std::vector
   }
   load_mask_ = 0;
   error_mask_ = 0;
+  JointVector probe = JointVector::Zero(n_);
   for (int i = 0; i < truth_.effectCount(); ++i) {
-    if (truth_.effect(i).role() == EffectRole::Load) load_mask_ |= EffectMask(1) << i;
-    if (truth_.effect(i).role() == EffectRole::JointError && i != compliance_index_) error_mask_ |= EffectMask(1) << i;
+    const Effect& effect = truth_.effect(i);
+    if (effect.role() == EffectRole::Load) load_mask_ |= EffectMask(1) << i;
+    if (effect.role() == EffectRole::JointError && i != compliance_index_) {
+      error_mask_ |= EffectMask(1) << i;
+      if (effect.dependsOnCommand() && !effect.addMotorSlope(robot, ctx_, probe)) analytic_slope_ = false;
+    }
   }
   if (!(options_.relative_tolerance > 0.0) || !(options_.absolute_tolerance > 0.0) ||
       !(options_.velocity_tolerance_factor > 0.0) || options_.max_step < 0.0 || options_.max_steps_per_advance < 1) {
@@ -318,11 +323,21 @@ void FlexibleJointPlant::transmissionTorques(const JointVector& p, const JointVe
                                              JointVector& motor_reaction) {
   // The gear output turns by p + e(p): the spring stretches by p + e - q and the damper by its rate
   // (I + E) pd - qd with E = de/dp. The motors feel (I + E)^T times the transmitted torque, which keeps
-  // the spring conservative and the damper dissipative. E by central differences of the effects.
+  // the spring conservative and the damper dissipative. E = diag(de_j/dm_j) G from the effects' own
+  // slopes (the error of joint j depends on its motor angle m = G p), or by central differences when an
+  // effect does not give its slope.
   JointVector error;
-  transmissionError(p, q, error);
+  transmissionError(p, q, error);  // leaves ctx_ at command p, its motor angles set
   JointMatrix slope = JointMatrix::Zero(n_, n_);
-  if (error_mask_ != 0) {
+  if (error_mask_ != 0 && analytic_slope_) {
+    JointVector motor_slope = JointVector::Zero(n_);
+    for (int i = 0; i < truth_.effectCount(); ++i) {
+      const Effect& effect = truth_.effect(i);
+      if ((error_mask_ >> i & 1) != 0 && effect.dependsOnCommand())
+        effect.addMotorSlope(truth_.robot(), ctx_, motor_slope);
+    }
+    slope = motor_slope.asDiagonal() * truth_.gears().motorFromJoint();
+  } else if (error_mask_ != 0) {
     JointVector shifted = p;
     JointVector ahead, behind;
     constexpr double kStep = 1e-6;  // rad of joint-side motor angle

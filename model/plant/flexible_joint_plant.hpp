@@ -140,7 +140,8 @@ private:
   int n_;
   int compliance_index_;
   EffectMask load_mask_;
-  EffectMask error_mask_;  // joint-error effects other than compliance: the transmission error
+  EffectMask error_mask_;       // joint-error effects other than compliance: the transmission error
+  bool analytic_slope_ = true;  // every command-dependent effect of error_mask_ gives its motor slope
   JointVector stiffness_;
   JointVector windup_gain_;  // per joint, 1 / (ki Tt): how fast a clamped excess pulls the integral back
   double time_ = 0.0;

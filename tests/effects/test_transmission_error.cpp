@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 
 #include "effects_test_support.hpp"
+#include "model/effects/periodic_table.hpp"
 #include "model/effects/transmission_error.hpp"
 
 namespace jointcomp {
@@ -220,6 +221,52 @@ TEST(TransmissionError, ParametersAreAmplitudesInRadiansAndPhases) {
   // Names are unique, or identification could not tell the parameters apart.
   for (std::size_t a = 0; a < names.size(); ++a) {
     for (std::size_t b = a + 1; b < names.size(); ++b) EXPECT_NE(names[a], names[b]);
+  }
+}
+
+}  // namespace
+}  // namespace jointcomp
+
+namespace jointcomp {
+namespace {
+
+// The slopes the plant uses (d error_j / d motor_j) against central differences of the error itself,
+// for the shipped harmonics and for a periodic table, at random motor angles.
+TEST(MotorSlope, MatchesCentralDifferencesOfTheJointError) {
+  JointErrorModel model = effects_test::rx170Model();
+  PeriodicTable table;
+  table.joint = 3;
+  table.stage = 1;
+  for (int k = 0; k < 12; ++k) table.coefficients_rad.push_back(2e-5 * std::sin(1.3 * k) + 1e-5 * (k % 3));
+  model.addEffect(
+      std::make_unique<PeriodicTableEffect>(model.robot(), model.gears(), std::vector<PeriodicTable>{table}));
+  const Robot& robot = model.robot();
+  std::mt19937 rng(23u);
+  std::uniform_real_distribution<double> motor_angle(-300.0, 300.0);
+  for (const char* type : {TransmissionErrorEffect::kType, PeriodicTableEffect::kType}) {
+    const Effect& effect = model.effect(model.findEffect(type));
+    for (int sample = 0; sample < 50; ++sample) {
+      JointContext ctx(robot.dof());
+      for (int j = 0; j < robot.dof(); ++j) ctx.motor[j] = motor_angle(rng);
+      JointVector slope = JointVector::Zero(robot.dof());
+      ASSERT_TRUE(effect.addMotorSlope(robot, ctx, slope));
+      for (int j = 0; j < robot.dof(); ++j) {
+        constexpr double kStep = 1e-5;  // rad of motor angle
+        JointContext ahead = ctx, behind = ctx;
+        ahead.motor[j] += kStep;
+        behind.motor[j] -= kStep;
+        JointVector up = JointVector::Zero(robot.dof()), down = JointVector::Zero(robot.dof());
+        effect.addJointError(robot, ahead, up);
+        effect.addJointError(robot, behind, down);
+        const double numeric = (up[j] - down[j]) / (2 * kStep);
+        EXPECT_NEAR(slope[j], numeric, 1e-7 * (1.0 + std::abs(numeric))) << type << " joint " << j;
+        for (int i = 0; i < robot.dof(); ++i) {
+          if (i != j) {
+            EXPECT_EQ(up[i], down[i]) << type << ": joint " << i << "'s error moved with motor " << j;
+          }
+        }
+      }
+    }
   }
 }
 
