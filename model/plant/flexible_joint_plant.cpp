@@ -375,7 +375,7 @@ void FlexibleJointPlant::derivative(double t, const double* y, double* ydot) {
   addNonGravityLoadsAtCurrentPose(truth_, load_mask_, ws_, ctx_);
   JointVector link_torque = spring_torque - ctx_.load_torque;
   JointVector qdd;
-  forwardDynamics(robot, ws_.robot, q, qd, link_torque, qdd);
+  forwardDynamicsAtCurrentPose(robot, ws_.robot, qd, link_torque, qdd);  // at the pose computed above
 
   // Motor side and controller.
   JointVector motor_torque, clamped_excess;

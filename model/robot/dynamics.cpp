@@ -129,6 +129,11 @@ void forwardDynamics(const Robot& robot, RobotWorkspace& ws, const JointVector& 
   checkJointVector(robot, qd, "qd");
   checkJointVector(robot, tau, "tau");
   forwardKinematics(robot, ws, q);
+  forwardDynamicsAtCurrentPose(robot, ws, qd, tau, qdd);
+}
+
+void forwardDynamicsAtCurrentPose(const Robot& robot, RobotWorkspace& ws, const JointVector& qd, const JointVector& tau,
+                                  JointVector& qdd) {
   const int n = robot.dof();
   qdd.setZero(n);
   ws.bias.resize(n);

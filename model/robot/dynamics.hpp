@@ -23,6 +23,10 @@ void massMatrix(const Robot& robot, RobotWorkspace& ws, const JointVector& q, Jo
 // definite (massless chain ends).
 void forwardDynamics(const Robot& robot, RobotWorkspace& ws, const JointVector& q, const JointVector& qd,
                      const JointVector& tau, JointVector& qdd);
+// The same at the pose of the last forwardKinematics(robot, ws, q) (the plant computes it once per
+// right-hand side for its loads and its dynamics); qd and tau are not checked here.
+void forwardDynamicsAtCurrentPose(const Robot& robot, RobotWorkspace& ws, const JointVector& qd, const JointVector& tau,
+                                  JointVector& qdd);
 
 // tau = J^T w for a wrench w (force, then moment about the tool point; base frame): the joint torques
 // with which the tool exerts w on its surroundings, or equally those that hold the robot against a

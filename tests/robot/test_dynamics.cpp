@@ -247,6 +247,11 @@ TEST(Dynamics, ForwardDynamicsInvertsInverseDynamics) {
       JointVector recovered;
       forwardDynamics(*robot, ws, q, qd, inverseDynamicsAt(*robot, q, qd, wanted), recovered);
       EXPECT_LT((recovered - wanted).cwiseAbs().maxCoeff(), 1e-7) << robot->name;
+      // At the pose of a forward kinematics already done (the plant's one FK per right-hand side): the same bits.
+      JointVector again;
+      forwardKinematics(*robot, ws, q);
+      forwardDynamicsAtCurrentPose(*robot, ws, qd, tau, again);
+      EXPECT_EQ(again, qdd) << robot->name;
     }
   }
 }
