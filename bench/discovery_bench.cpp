@@ -1,7 +1,8 @@
 // Time of residual discovery (discoverEffects) on Series A of the IPA UR10 laser-tracker data
 // (shared/data/ipa-ur10, about 12,000 rows), one core: the whole call with the textbook base, every
-// candidate family (offset, compliance, geometric, nonlinear compliance, harmonics of orders 1..4,
-// backlash, thermal and time drift) and Series B held out; and how the time grows with the rows (the
+// candidate family (offset, compliance, geometric, instrument scale, nonlinear compliance, harmonics of
+// orders 1..4 and those the spectrum scan proposes, periodic tables of 12 and 24 knots, backlash,
+// hysteresis, payload, thermal and time drift) and Series B held out; and how the time grows with the rows (the
 // first 1/4, 1/2 and all rows) and with the candidates (harmonic orders 1, 4 and 8).
 // Without the data the benchmarks are skipped with a message.
 #include <algorithm>
