@@ -34,6 +34,9 @@ def version():
     return _native.lib.jc_version().decode("ascii")
 
 
+__version__ = version()
+
+
 def abi_version():
     """The binary interface version of the library loaded (equal to ABI_VERSION)."""
     return _native.lib.jc_abi_version()
@@ -50,7 +53,7 @@ def last_error():
 
 
 __all__ = [
-    "ABI_VERSION", "FileError", "InternalError", "InvalidArgumentError", "JointcompError", "Metrics",
+    "ABI_VERSION", "__version__", "FileError", "InternalError", "InvalidArgumentError", "JointcompError", "Metrics",
     "OutOfMemoryError", "Plant", "PlantLimitError", "PlantStatistics", "RUN_NAMES", "Report", "Robot", "SolverError", "SpiralExperiment",
     "SpiralPlan", "TrajectoryCompensation", "UnreachableError", "WrongHandleError", "abi_version",
     "accuracy_metrics", "average_absolute_deviation", "calibrate", "discover", "identify_stiffness",

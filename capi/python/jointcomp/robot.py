@@ -7,6 +7,7 @@ import numpy as np
 
 from . import _native
 from ._handle import OwnedHandle, float_array as _array
+from .errors import InvalidArgumentError
 from .metrics import Metrics
 
 RUN_NAMES = ("without correction", "stiffness correction", "stiffness and kinematic correction")
@@ -39,6 +40,28 @@ def _effects(effects):
     if isinstance(effects, str):
         return effects.encode("utf-8")
     return ",".join(effects).encode("utf-8")
+
+
+def _rows(values, width, name):
+    """``values`` as (m, width) float64 rows and whether it was one row (width,): any other shape is an
+    error naming the argument, never reinterpreted (a flat (m * width,) array is not m rows)."""
+    array = np.ascontiguousarray(values, dtype=np.float64)
+    if array.ndim == 1 and array.shape[0] == width:
+        return array.reshape(1, width), True
+    if array.ndim == 2 and array.shape[1] == width:
+        return array, False
+    raise InvalidArgumentError(f"{name} has shape {array.shape}; expected ({width},) or (m, {width})")
+
+
+def _batch(values, width, name, one):
+    """Calls ``one(row)`` for every row of ``values`` ((width,) or (m, width)) and stacks the results."""
+    rows, single = _rows(values, width, name)
+    results = [one(row) for row in rows]
+    if single:
+        return results[0]
+    if results and isinstance(results[0], tuple):
+        return tuple(np.array(part) for part in zip(*results))
+    return np.array(results) if results else np.empty((0,))
 
 
 class Robot(OwnedHandle):
@@ -160,12 +183,14 @@ class Robot(OwnedHandle):
     # ---- kinematics and dynamics ----
 
     def forward_kinematics(self, q):
-        """Tool pose (4 x 4 homogeneous transform, base frame) at joint positions q (n)."""
-        q = _array(q)
-        pose = np.empty((4, 4))
-        _native.check(_native.lib.jc_forward_kinematics(self.handle, _native.pointer(q), q.size,
-                                                        _native.pointer(pose), pose.size))
-        return pose
+        """Tool pose (4 x 4 homogeneous transform, base frame) at joint positions q (n), or the poses
+        (m, 4, 4) of a batch q (m, n)."""
+        def one(row):
+            pose = np.empty((4, 4))
+            _native.check(_native.lib.jc_forward_kinematics(self.handle, _native.pointer(row), row.size,
+                                                            _native.pointer(pose), pose.size))
+            return pose
+        return _batch(q, self._dof, "q", one)
 
     def inverse_kinematics(self, pose, seed):
         """(q, singular): the joint positions reaching ``pose`` (4 x 4) closest to ``seed`` (n), and whether
@@ -190,47 +215,67 @@ class Robot(OwnedHandle):
         return solutions[:count.value].copy()
 
     def jacobian(self, q):
-        """Geometric Jacobian of the tool (6 x n): linear velocity rows first, then angular, base frame."""
-        q = _array(q)
-        jacobian = np.empty((6, self._dof))
-        _native.check(_native.lib.jc_jacobian(self.handle, _native.pointer(q), q.size, _native.pointer(jacobian),
-                                              jacobian.size))
-        return jacobian
+        """Geometric Jacobian of the tool (6 x n): linear velocity rows first, then angular, base frame; for
+        a batch q (m, n), (m, 6, n)."""
+        def one(row):
+            jacobian = np.empty((6, self._dof))
+            _native.check(_native.lib.jc_jacobian(self.handle, _native.pointer(row), row.size,
+                                                  _native.pointer(jacobian), jacobian.size))
+            return jacobian
+        return _batch(q, self._dof, "q", one)
 
     def gravity_torques(self, q):
-        """Joint torques (n, N m) holding the robot still against gravity at q."""
-        return self._joints_out(_native.lib.jc_gravity_torques, q)
+        """Joint torques (n, N m) holding the robot still against gravity at q; for a batch (m, n), (m, n)."""
+        return _batch(q, self._dof, "q", lambda row: self._joints_out(_native.lib.jc_gravity_torques, row))
 
     # ---- joint errors and compensation ----
 
     def predict_joint_errors(self, command, velocity=None, effects=None):
-        """Joint errors (n, rad, link minus command) of the quasi-static robot commanded to ``command``.
+        """Joint errors (n, rad, link minus command) of the quasi-static robot commanded to ``command``
+        (n), or (m, n) for a batch of commands (m, n) with optional velocities of the same shape.
 
         ``effects``: None for every effect of the parameters, or the error effect types taking part
         ("compliance", "transmission_error", as a comma-separated str or a sequence); load effects always do.
         """
-        command, velocity = _array(command), _optional_array(velocity)
-        errors = np.empty(self._dof)
-        _native.check(_native.lib.jc_predict_joint_errors(
-            self.handle, _effects(effects), _native.pointer(command), command.size, _native.pointer(velocity),
-            _length(velocity), _native.pointer(errors), errors.size))
-        return errors
+        rows, single = _rows(command, self._dof, "command")
+        velocities = None if velocity is None else _rows(velocity, self._dof, "velocity")[0]
+        if velocities is not None and velocities.shape != rows.shape:
+            raise InvalidArgumentError(f"velocity has shape {np.shape(velocity)}; command has {np.shape(command)}")
+        out = np.empty(rows.shape)
+        for k, row in enumerate(rows):
+            v = None if velocities is None else velocities[k]
+            _native.check(_native.lib.jc_predict_joint_errors(
+                self.handle, _effects(effects), _native.pointer(row), row.size, _native.pointer(v), _length(v),
+                _native.pointer(out[k]), self._dof))
+        return out[0] if single else out
 
     def compensate(self, planned, velocity=None, effects=None):
         """(reference, iterations): the joint reference that brings the links to ``planned`` (n), and the
-        fixed-point iterations it took. ``effects`` as for predict_joint_errors."""
-        planned, velocity = _array(planned), _optional_array(velocity)
-        reference = np.empty(self._dof)
+        fixed-point iterations it took; for a batch ``planned`` (m, n), references (m, n) and iterations
+        (m,). ``effects`` as for predict_joint_errors."""
+        rows, single = _rows(planned, self._dof, "planned")
+        velocities = None if velocity is None else _rows(velocity, self._dof, "velocity")[0]
+        if velocities is not None and velocities.shape != rows.shape:
+            raise InvalidArgumentError(f"velocity has shape {np.shape(velocity)}; planned has {np.shape(planned)}")
+        references = np.empty(rows.shape)
+        counts = np.empty(rows.shape[0], dtype=np.int32)
         iterations = ctypes.c_int32()
-        _native.check(_native.lib.jc_compensate_point(
-            self.handle, _effects(effects), _native.pointer(planned), planned.size, _native.pointer(velocity),
-            _length(velocity), _native.pointer(reference), reference.size, ctypes.byref(iterations)))
-        return reference, iterations.value
+        for k, row in enumerate(rows):
+            v = None if velocities is None else velocities[k]
+            _native.check(_native.lib.jc_compensate_point(
+                self.handle, _effects(effects), _native.pointer(row), row.size, _native.pointer(v), _length(v),
+                _native.pointer(references[k]), self._dof, ctypes.byref(iterations)))
+            counts[k] = iterations.value
+        return (references[0], int(counts[0])) if single else (references, counts)
 
     def compensate_trajectory(self, planned, velocities=None, effects=None):
         """Compensates a whole trajectory, ``planned`` (m, n) with optional ``velocities`` (m, n), in one
         call. Returns a TrajectoryCompensation."""
         planned = np.ascontiguousarray(planned, dtype=np.float64)
+        if planned.ndim != 2 or planned.shape[1] != self._dof:
+            raise InvalidArgumentError(f"planned has shape {planned.shape}; expected (m, {self._dof})")
+        if velocities is not None and np.shape(velocities) != planned.shape:
+            raise InvalidArgumentError(f"velocities has shape {np.shape(velocities)}; expected {planned.shape}")
         shape = planned.shape
         planned, velocities = planned.reshape(-1), _optional_array(velocities)
         references = np.empty(planned.size)
@@ -240,8 +285,6 @@ class Robot(OwnedHandle):
             self.handle, _effects(effects), _native.pointer(planned), planned.size, _native.pointer(velocities),
             _length(velocities), _native.pointer(references), references.size, ctypes.byref(max_iterations),
             ctypes.byref(max_correction)))
-        if len(shape) != 2:
-            shape = (-1, self._dof)
         return TrajectoryCompensation(references.reshape(shape), max_iterations.value, max_correction.value)
 
     # ---- the paper's spiral ----

@@ -69,7 +69,7 @@ def test_forward_and_inverse_kinematics(robot):
         robot.inverse_kinematics(skewed, POSTURE)
     with pytest.raises(jointcomp.InvalidArgumentError, match="pose_len is 12"):
         robot.inverse_kinematics(pose[:3], POSTURE)
-    with pytest.raises(jointcomp.InvalidArgumentError, match="q_len is 5"):
+    with pytest.raises(jointcomp.InvalidArgumentError, match=r"q has shape \(5,\)"):
         robot.forward_kinematics(POSTURE[:5])
     with pytest.raises(jointcomp.InvalidArgumentError, match=r"q\[1\] is NaN"):
         robot.forward_kinematics([0, np.nan, 0, 0, 0, 0])
@@ -97,7 +97,7 @@ def test_jacobian_is_the_derivative_of_the_tool_position(robot):
         minus[j] -= step
         derivative = (robot.forward_kinematics(plus)[:3, 3] - robot.forward_kinematics(minus)[:3, 3]) / (2 * step)
         np.testing.assert_allclose(jacobian[:3, j], derivative, atol=1e-6)
-    with pytest.raises(jointcomp.InvalidArgumentError, match="q_len is 7"):
+    with pytest.raises(jointcomp.InvalidArgumentError, match=r"q has shape \(7,\)"):
         robot.jacobian(np.zeros(7))
 
 
@@ -150,3 +150,53 @@ def test_closed_and_wrong_handles(robot, plant):
     with pytest.raises(jointcomp.InvalidArgumentError, match="closed"):
         other.forward_kinematics(POSTURE)
     assert repr(other) == "<jointcomp.Robot (closed)>"
+
+
+def test_batches_equal_the_rows_one_by_one(robot):
+    """FK, Jacobian, gravity, joint errors and compensation of an (m, n) batch: row k equals the call on
+    row k alone, and the shapes are (m, ...)."""
+    rng = np.random.default_rng(5)
+    lower, upper = robot.joint_limits()
+    batch = lower + (upper - lower) * (0.3 + 0.4 * rng.random((4, robot.dof)))
+    poses = robot.forward_kinematics(batch)
+    jacobians = robot.jacobian(batch)
+    gravity = robot.gravity_torques(batch)
+    errors = robot.predict_joint_errors(batch)
+    references, iterations = robot.compensate(batch)
+    assert poses.shape == (4, 4, 4) and jacobians.shape == (4, 6, robot.dof)
+    assert gravity.shape == errors.shape == references.shape == (4, robot.dof) and iterations.shape == (4,)
+    for k, q in enumerate(batch):
+        np.testing.assert_array_equal(poses[k], robot.forward_kinematics(q))
+        np.testing.assert_array_equal(jacobians[k], robot.jacobian(q))
+        np.testing.assert_array_equal(gravity[k], robot.gravity_torques(q))
+        np.testing.assert_array_equal(errors[k], robot.predict_joint_errors(q))
+        reference, count = robot.compensate(q)
+        np.testing.assert_array_equal(references[k], reference)
+        assert iterations[k] == count
+    # Velocities go row with row.
+    velocities = 0.1 * np.ones_like(batch)
+    np.testing.assert_array_equal(robot.predict_joint_errors(batch, velocities)[2],
+                                  robot.predict_joint_errors(batch[2], velocities[2]))
+
+
+def test_wrong_shapes_are_errors_not_reinterpreted(robot):
+    n = robot.dof
+    flat = np.zeros(3 * n)  # three rows' worth of numbers in one flat array
+    for call in (robot.forward_kinematics, robot.jacobian, robot.gravity_torques, robot.predict_joint_errors,
+                 robot.compensate):
+        with pytest.raises(jointcomp.InvalidArgumentError, match=r"has shape \(%d,\)" % (3 * n)):
+            call(flat)
+        with pytest.raises(jointcomp.InvalidArgumentError, match="expected"):
+            call(np.zeros((2, n + 1)))
+        with pytest.raises(jointcomp.InvalidArgumentError):
+            call(np.zeros((2, 2, n)))
+    with pytest.raises(jointcomp.InvalidArgumentError, match="expected \\(m, %d\\)" % n):
+        robot.compensate_trajectory(flat)
+    with pytest.raises(jointcomp.InvalidArgumentError, match="velocities has shape"):
+        robot.compensate_trajectory(np.zeros((3, n)), velocities=np.zeros((2, n)))
+    with pytest.raises(jointcomp.InvalidArgumentError, match="velocity has shape"):
+        robot.predict_joint_errors(np.zeros((3, n)), np.zeros((2, n)))
+
+
+def test_version_attribute():
+    assert jointcomp.__version__ == jointcomp.version()
