@@ -74,7 +74,7 @@ public:
     robot.root_link = options.root_link.empty() ? model_.getRoot()->name : options.root_link;
     urdf::LinkConstSharedPtr root = model_.getLink(robot.root_link);
     if (!root) fail("root link '" + robot.root_link + "' does not exist");
-    robot.tip_link = options.tip_link.empty() ? onlyLeafBelow(root) : options.tip_link;
+    robot.tip_link = options.tip_link.empty() ? longestChainTip(root) : options.tip_link;
     urdf::LinkConstSharedPtr tip = model_.getLink(robot.tip_link);
     if (!tip) fail("tip link '" + robot.tip_link + "' does not exist");
 
@@ -114,15 +114,53 @@ public:
 private:
   [[noreturn]] void fail(const std::string& what) const { throw UrdfError(source_ + ": " + what); }
 
-  std::string onlyLeafBelow(urdf::LinkConstSharedPtr link) const {
-    while (!link->child_joints.empty()) {
-      if (link->child_joints.size() > 1) {
-        fail("the tree branches at link '" + link->name + "' (" + std::to_string(link->child_joints.size()) +
-             " child joints); name the tip link of the chain");
+  // The leaf below `root` with the most moving joints on its way: ROS-Industrial URDFs hang fixed frames
+  // (base, flange, tool0, a camera) off the arm, and the arm is the longest moving chain. Of leaves with
+  // as many moving joints, those that are fixed frames below the same last moving joint are one arm with
+  // frames on its end: the deepest of them is the tool when it is the only one (a flange -> tool0
+  // chain); otherwise the tip is ambiguous and must be named.
+  std::string longestChainTip(const urdf::LinkConstSharedPtr& root) const {
+    struct Leaf {
+      std::string link;
+      int moving = 0;
+      int depth = 0;
+    };
+    std::vector<Leaf> leaves;
+    std::vector<std::pair<urdf::LinkConstSharedPtr, Leaf>> stack = {{root, Leaf{root->name, 0, 0}}};
+    while (!stack.empty()) {
+      auto [link, at] = stack.back();
+      stack.pop_back();
+      if (link->child_joints.empty()) leaves.push_back({link->name, at.moving, at.depth});
+      for (const auto& joint : link->child_joints) {
+        const bool moving = joint->type != urdf::Joint::FIXED;
+        stack.push_back(
+            {model_.getLink(joint->child_link_name), Leaf{joint->child_link_name, at.moving + moving, at.depth + 1}});
       }
-      link = model_.getLink(link->child_joints.front()->child_link_name);
     }
-    return link->name;
+    int most = 0;
+    for (const Leaf& leaf : leaves) most = std::max(most, leaf.moving);
+    std::vector<const Leaf*> longest;
+    for (const Leaf& leaf : leaves) {
+      if (leaf.moving == most) longest.push_back(&leaf);
+    }
+    std::sort(longest.begin(), longest.end(), [](const Leaf* a, const Leaf* b) { return a->depth > b->depth; });
+    if (longest.size() > 1 && longest[0]->depth == longest[1]->depth) {
+      std::string names;
+      for (const Leaf* leaf : longest) names += (names.empty() ? "'" : ", '") + leaf->link + "'";
+      fail("the tree branches at link '" + commonAncestor(longest[0]->link, longest[1]->link) + "' into " +
+           std::to_string(longest.size()) + " tips with " + std::to_string(most) + " moving joints (" + names +
+           "); name the tip link of the chain (--tip-link, tip_link)");
+    }
+    return longest.front()->link;
+  }
+
+  std::string commonAncestor(const std::string& a, const std::string& b) const {
+    std::vector<std::string> above_a;
+    for (auto link = model_.getLink(a); link; link = link->getParent()) above_a.push_back(link->name);
+    for (auto link = model_.getLink(b); link; link = link->getParent()) {
+      if (std::find(above_a.begin(), above_a.end(), link->name) != above_a.end()) return link->name;
+    }
+    return model_.getRoot()->name;
   }
 
   std::vector<urdf::JointConstSharedPtr> pathFromRoot(const urdf::LinkConstSharedPtr& root,

@@ -213,6 +213,40 @@ TEST(LoadUrdf, SubChainBetweenChosenLinksMatchesTheFullChain) {
   }
 }
 
+// URDFs in the ROS-Industrial layout (a "base" frame beside base_link, a camera fixed to link_3, tool0 on
+// the flange) load without naming a tip: the longest moving chain ends in tool0, the side frames change
+// nothing of the arm, and tool0's offset is the only difference from the plain file. Naming the tip picks
+// the flange (the plain file's robot, bit for bit) or the camera (the first three joints).
+TEST(LoadUrdf, RosIndustrialLayoutLoadsTheArmToTool0) {
+  for (const char* name : {"rx170", "ur10"}) {
+    const std::string file = std::string(JOINTCOMP_TEST_DATA_DIR) + "/urdf/" + name + "_ros_industrial.urdf";
+    const Robot plain = loadRobotFromUrdfFile(std::string(JOINTCOMP_DATA_DIR) + "/robots/" + name + ".urdf");
+    const Robot arm = loadRobotFromUrdfFile(file);
+    EXPECT_EQ(arm.tip_link, "tool0") << name;
+    ASSERT_EQ(arm.dof(), plain.dof()) << name;
+    for (int j = 0; j < arm.dof(); ++j) {
+      EXPECT_EQ(arm.joints[j].name, plain.joints[j].name);
+      EXPECT_TRUE(arm.joints[j].placement.matrix() == plain.joints[j].placement.matrix()) << name << " joint " << j;
+      EXPECT_EQ(arm.joints[j].body.mass, plain.joints[j].body.mass);
+      EXPECT_TRUE(arm.joints[j].body.inertia == plain.joints[j].body.inertia);
+    }
+    Eigen::Isometry3d tool0 = Eigen::Isometry3d::Identity();
+    tool0.translation() = Eigen::Vector3d(0, 0, 0.05);
+    tool0.linear() = Eigen::AngleAxisd(1.5707963267948966, Eigen::Vector3d::UnitY()).toRotationMatrix();
+    EXPECT_LT(isometryDistance(arm.tool, plain.tool * tool0), 1e-12) << name;
+
+    UrdfChainOptions flange;
+    flange.tip_link = "flange";
+    const Robot at_flange = loadRobotFromUrdfFile(file, flange);
+    EXPECT_TRUE(at_flange.tool.matrix() == plain.tool.matrix()) << name;
+    UrdfChainOptions camera;
+    camera.tip_link = "camera_link";
+    const Robot to_camera = loadRobotFromUrdfFile(file, camera);
+    ASSERT_EQ(to_camera.dof(), 3) << name;
+    EXPECT_EQ(to_camera.joints[2].name, "joint_3");
+  }
+}
+
 TEST(LoadUrdf, BranchingTreeNeedsATip) {
   // Two arms on one base.
   expectUrdfError("dual_arm.urdf", {"base_link", "tip"});
