@@ -40,9 +40,10 @@ int runCalibrate(int argc, char** argv) {
     }
     rest.push_back(argv[i]);
   }
-  const Options options(
-      static_cast<int>(rest.size()), rest.data(),
-      {"urdf", "campaign", "params", "out", "loss", "loss-scale-mm", "pivot-threshold", "fix", "no-plot"}, {"no-plot"});
+  const Options options(static_cast<int>(rest.size()), rest.data(),
+                        {"urdf", "base-link", "tip-link", "campaign", "params", "out", "loss", "loss-scale-mm",
+                         "pivot-threshold", "fix", "no-plot"},
+                        {"no-plot"});
   if (!options.has("campaign") || !options.has("out")) {
     throw std::invalid_argument(
         "calibrate needs --campaign CAMPAIGN.csv and --out DIR (and --urdf FILE, --params FILE, --holdout FILE)");

@@ -47,7 +47,8 @@ int runIdentify(int argc, char** argv) {
     throw std::invalid_argument("identify: unknown kind '" + kind + "' (stiffness or transmission)");
   }
   const Options options(argc - 1, argv + 1,
-                        {"campaign", "urdf", "params", "joint", "stage", "out", "truth", "use", "orders", "no-plot"},
+                        {"campaign", "urdf", "base-link", "tip-link", "params", "joint", "stage", "out", "truth", "use",
+                         "orders", "no-plot"},
                         {"no-plot"});
   if (!options.has("campaign") || !options.has("out")) {
     throw std::invalid_argument("identify " + kind + " needs --campaign FILE and --out DIR");

@@ -2,6 +2,7 @@
 
 #include "cli/commands.hpp"
 #include "cli/options.hpp"
+#include "cli/robot_setup.hpp"
 #include "model/robot/dynamics.hpp"
 #include "model/robot/kinematics.hpp"
 #include "model/robot/load_urdf.hpp"
@@ -9,9 +10,9 @@
 namespace jointcomp::cli {
 
 int runKinematics(int argc, char** argv) {
-  const Options options(argc, argv, {"urdf"});
+  const Options options(argc, argv, {"urdf", "base-link", "tip-link"});
   const std::string urdf = options.get("urdf", JOINTCOMP_DATA_DIR "/robots/rx170.urdf");
-  const Robot robot = loadRobotFromUrdfFile(urdf);
+  const Robot robot = loadRobotFromUrdfFile(urdf, chainOptions(options));
   RobotWorkspace ws(robot);
   std::printf("robot '%s' from %s: %d joints, tool link '%s'\n", robot.name.c_str(), urdf.c_str(), robot.dof(),
               robot.tip_link.c_str());

@@ -39,6 +39,8 @@ void printUsage() {
       "                             types: offset, compliance, nonlinear_compliance, harmonic, backlash,\n"
       "                             hysteresis, thermal, geometric, payload, periodic, instrument_scale\n"
       "  help                       this text\n"
+      "Every command that reads --urdf also takes --base-link LINK and --tip-link LINK (default: the URDF's\n"
+      "root, and the end of its longest moving chain, as ROS-Industrial's tool0 beside fixed side frames).\n"
       "With no command, jointcomp runs `paper` on the built-in Staubli RX170.\n");
 }
 

@@ -147,8 +147,10 @@ SpiralExperimentSpec specFromOptions(const Options& options, const ParameterSet&
 }  // namespace
 
 int runPaper(int argc, char** argv) {
-  const Options options(argc, argv, {"urdf", "params", "out", "seed", "compensate-joints", "no-plot", "quasi-static"},
-                        {"no-plot", "quasi-static"});
+  const Options options(
+      argc, argv,
+      {"urdf", "base-link", "tip-link", "params", "out", "seed", "compensate-joints", "no-plot", "quasi-static"},
+      {"no-plot", "quasi-static"});
   const std::string out = options.get("out", "out/paper");
   prepareOutputFolder(out);
   const auto started = std::chrono::steady_clock::now();

@@ -19,13 +19,22 @@ struct RobotSetup {
   ParameterSet parameters;  // without a file: no effects, a direct gear train, no drives
 };
 
+// The chain of the URDF that --base-link and --tip-link choose (default: the URDF's root, and the end of
+// its longest moving chain).
+inline UrdfChainOptions chainOptions(const Options& options) {
+  UrdfChainOptions chain;
+  chain.root_link = options.get("base-link", "");
+  chain.tip_link = options.get("tip-link", "");
+  return chain;
+}
+
 // `params_option` is the option naming the file ("params", or "truth" for simulate). With an empty
 // `default_params` the file is optional.
 inline RobotSetup loadRobotSetup(const Options& options, const std::string& default_urdf,
                                  const std::string& params_option = "params", const std::string& default_params = "") {
   const std::string urdf = options.get("urdf", default_urdf);
   const std::string params = options.get(params_option, default_params);
-  auto robot = std::make_shared<const Robot>(loadRobotFromUrdfFile(urdf));
+  auto robot = std::make_shared<const Robot>(loadRobotFromUrdfFile(urdf, chainOptions(options)));
   ParameterSet parameters = params.empty()
                                 ? ParameterSet{JointErrorModel(robot, GearTrain::direct(robot->dof()), {}), {}}
                                 : loadParameterSet(params, robot);

@@ -31,8 +31,9 @@ double numberOption(const Options& options, const std::string& name, double fall
 
 int runSimulate(int argc, char** argv) {
   const Options options(argc, argv,
-                        {"protocol", "truth", "urdf", "seed", "out", "perturb", "plant", "target", "joint", "from",
-                         "to", "step", "settle", "cycles", "count", "pose", "no-noise", "global-poses", "warm-up"},
+                        {"protocol", "truth",  "urdf",   "base-link", "tip-link", "seed",         "out",
+                         "perturb",  "plant",  "target", "joint",     "from",     "to",           "step",
+                         "settle",   "cycles", "count",  "pose",      "no-noise", "global-poses", "warm-up"},
                         {"plant", "no-noise"});
   if (!options.has("protocol") || !options.has("truth")) {
     throw std::invalid_argument(

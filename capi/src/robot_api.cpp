@@ -19,8 +19,25 @@ jc_robot* robotFromParameters(const std::shared_ptr<const Robot>& robot, const s
   return new jc_robot(robot, std::move(parameters.model), std::move(parameters.drives));
 }
 
-std::shared_ptr<const Robot> loadUrdf(const char* urdf_path) {
-  return std::make_shared<const Robot>(loadRobotFromUrdfFile(requireText(urdf_path, "urdf_path")));
+// The chain of the URDF between the links named (NULL or "": the URDF's root, the end of its longest moving
+// chain), with the parameters of a file or JSON text (neither: kinematics and dynamics only).
+jc_robot* loadRobot(const char* urdf_path, const char* base_link, const char* tip_link, const char* parameter_path,
+                    const char* parameters_json) {
+  UrdfChainOptions chain;
+  if (base_link) chain.root_link = base_link;
+  if (tip_link) chain.tip_link = tip_link;
+  const auto loaded = std::make_shared<const Robot>(loadRobotFromUrdfFile(requireText(urdf_path, "urdf_path"), chain));
+  if (parameters_json) return robotFromParameters(loaded, parameters_json, "parameters_json");
+  if (!parameter_path) return new jc_robot(loaded, JointErrorModel(loaded, GearTrain::direct(loaded->dof()), {}), {});
+  std::string text;
+  try {
+    text = readTextFile(parameter_path, "parameter file", kMaxJsonFileBytes);
+  } catch (const ParameterError&) {
+    throw;
+  } catch (const Error& error) {
+    throw ParameterError(error.what());  // as loadParameterFile reports it
+  }
+  return robotFromParameters(loaded, text, parameter_path);
 }
 
 }  // namespace
@@ -30,20 +47,7 @@ extern "C" {
 jc_status jc_robot_load(const char* urdf_path, const char* parameter_path, jc_robot** robot) {
   return CAPI_ENTRY({
     requirePointer(robot, "robot");
-    const std::shared_ptr<const Robot> loaded = loadUrdf(urdf_path);
-    if (!parameter_path) {
-      *robot = new jc_robot(loaded, JointErrorModel(loaded, GearTrain::direct(loaded->dof()), {}), {});
-      return;
-    }
-    std::string text;
-    try {
-      text = readTextFile(parameter_path, "parameter file", kMaxJsonFileBytes);
-    } catch (const ParameterError&) {
-      throw;
-    } catch (const Error& error) {
-      throw ParameterError(error.what());  // as loadParameterFile reports it
-    }
-    *robot = robotFromParameters(loaded, text, parameter_path);
+    *robot = loadRobot(urdf_path, nullptr, nullptr, parameter_path, nullptr);
   });
 }
 
@@ -51,8 +55,16 @@ jc_status jc_robot_load_json(const char* urdf_path, const char* parameters_json,
   return CAPI_ENTRY({
     requirePointer(robot, "robot");
     requireText(parameters_json, "parameters_json");
-    const std::shared_ptr<const Robot> loaded = loadUrdf(urdf_path);
-    *robot = robotFromParameters(loaded, parameters_json, "parameters_json");
+    *robot = loadRobot(urdf_path, nullptr, nullptr, nullptr, parameters_json);
+  });
+}
+
+jc_status jc_robot_load_chain(const char* urdf_path, const char* base_link, const char* tip_link,
+                              const char* parameter_path, const char* parameters_json, jc_robot** robot) {
+  return CAPI_ENTRY({
+    requirePointer(robot, "robot");
+    if (parameter_path && parameters_json) invalid("give parameter_path or parameters_json, not both");
+    *robot = loadRobot(urdf_path, base_link, tip_link, parameter_path, parameters_json);
   });
 }
 

@@ -133,6 +133,43 @@ static void test_library(void) {
   CHECK(jc_last_error()[0] == '\0');
 }
 
+/* Choosing the chain: the tip of a URDF with a fixed branch (a camera beside the tool), a sub-chain, and
+   the errors of an unknown link, an ambiguous tree and both kinds of parameters at once. */
+static void test_loading_chains(void) {
+  jc_robot* robot = NULL;
+  int32_t dof = 0;
+  char name[64];
+  int32_t length = 0;
+  const char* two_tools = temporary_file(
+      "<robot name='two'><link name='base'/>"
+      "<joint name='j1' type='revolute'><parent link='base'/><child link='l1'/><axis xyz='0 0 1'/>"
+      "<limit lower='-1' upper='1' effort='1' velocity='1'/></joint><link name='l1'/>"
+      "<joint name='j2' type='revolute'><parent link='l1'/><child link='l2'/><origin xyz='0 0 0.5'/>"
+      "<axis xyz='0 1 0'/><limit lower='-1' upper='1' effort='1' velocity='1'/></joint><link name='l2'/>"
+      "<joint name='t' type='fixed'><parent link='l2'/><child link='tool'/><origin xyz='0 0 0.3'/></joint>"
+      "<link name='tool'/>"
+      "<joint name='c' type='fixed'><parent link='l2'/><child link='camera'/><origin xyz='0.1 0 0'/></joint>"
+      "<link name='camera'/></robot>");
+  EXPECT_STATUS(JC_ERROR_FILE, "branches at link 'l2'", jc_robot_load_chain(two_tools, NULL, NULL, NULL, NULL, &robot));
+  EXPECT_STATUS(JC_ERROR_FILE, "tip link 'gripper' does not exist",
+                jc_robot_load_chain(two_tools, NULL, "gripper", NULL, NULL, &robot));
+  EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "not both",
+                jc_robot_load_chain(two_tools, NULL, "tool", "/tmp/p.json", kMinimalParameters, &robot));
+  CHECK(robot == NULL);
+  EXPECT_OK(jc_robot_load_chain(two_tools, "", "camera", NULL, NULL, &robot));
+  EXPECT_OK(jc_robot_dof(robot, &dof));
+  CHECK(dof == 2);
+  EXPECT_OK(jc_robot_free(robot));
+  robot = NULL;
+  EXPECT_OK(jc_robot_load_chain(two_tools, "l1", "tool", NULL, NULL, &robot));
+  EXPECT_OK(jc_robot_dof(robot, &dof));
+  CHECK(dof == 1);
+  EXPECT_OK(jc_robot_name(robot, name, (int32_t)sizeof name, &length));
+  CHECK(strcmp(name, "two") == 0);
+  EXPECT_OK(jc_robot_free(robot));
+  unlink(two_tools);
+}
+
 static void test_loading(void) {
   jc_robot* robot = NULL;
   const char* path;
@@ -167,6 +204,7 @@ static void test_loading(void) {
   EXPECT_OK(jc_robot_load_json(JOINTCOMP_TEST_URDF, kMinimalParameters, &robot));
   CHECK(robot != NULL);
   EXPECT_OK(jc_robot_free(robot));
+  test_loading_chains();
 }
 
 static void test_queries(jc_robot* robot, jc_robot* bare) {

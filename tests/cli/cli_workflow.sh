@@ -133,5 +133,12 @@ done
 expect_error "kp_nm_per_rad" identify stiffness --params "$work/bad_plant.json" --campaign "$work/fit.csv" --out "$work/x"
 expect_error "kp_nm_per_rad" paper --quasi-static --params "$work/bad_plant.json" --out "$work/x"
 expect_error "identify: unknown kind 'speed'" identify speed --campaign "$work/fit.csv" --out "$work/x"
+# The chain of a URDF in the ROS-Industrial layout: tool0 by default, another tip on request; a tree
+# with two tools of the same chain is refused naming where it branches.
+ros_urdf="$(dirname "$0")/../data/urdf/ur10_ros_industrial.urdf"
+"$jointcomp" kinematics --urdf "$ros_urdf" | grep -q "tool link 'tool0'" || fail "the ROS-Industrial tip is not tool0"
+"$jointcomp" kinematics --urdf "$ros_urdf" --tip-link flange | grep -q "tool link 'flange'" ||
+  fail "--tip-link flange was not taken"
+expect_error "branches at link 'link_3'" kinematics --urdf "$(dirname "$0")/../data/urdf/two_tools.urdf"
 test ! -e "$work/x.csv" || fail "a refused simulate wrote its output"
 echo "cli_workflow: every step gave what the truth says"

@@ -80,6 +80,12 @@ JOINTCOMP_API const char* jc_status_name(jc_status status);
 JOINTCOMP_API jc_status jc_robot_load(const char* urdf_path, const char* parameter_path, jc_robot** robot);
 /* The same with the parameters given as JSON text instead of a file. */
 JOINTCOMP_API jc_status jc_robot_load_json(const char* urdf_path, const char* parameters_json, jc_robot** robot);
+/* The chain of the URDF from base_link to tip_link (NULL or "": the URDF's root link, and the end of its
+   longest moving chain, as ROS-Industrial's tool0 beside fixed side frames), with the parameters of a
+   file or JSON text (at most one of them; neither: kinematics and dynamics only). An ambiguous tree or
+   an unknown link is JC_ERROR_FILE naming it. */
+JOINTCOMP_API jc_status jc_robot_load_chain(const char* urdf_path, const char* base_link, const char* tip_link,
+                                            const char* parameter_path, const char* parameters_json, jc_robot** robot);
 JOINTCOMP_API jc_status jc_robot_free(jc_robot* robot);
 
 /* Number of joints n. */

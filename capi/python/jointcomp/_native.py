@@ -38,6 +38,7 @@ PROTOTYPES = {
     "jc_status_name": (ctypes.c_char_p, [_i32]),
     "jc_robot_load": (_i32, [_text, _text, _handle_p]),
     "jc_robot_load_json": (_i32, [_text, _text, _handle_p]),
+    "jc_robot_load_chain": (_i32, [_text, _text, _text, _text, _text, _handle_p]),
     "jc_robot_free": (_i32, [_handle]),
     "jc_robot_dof": (_i32, [_handle, _int32_p]),
     "jc_robot_name": (_i32, [_handle, ctypes.c_char_p, _i32, _int32_p]),

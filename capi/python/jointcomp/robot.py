@@ -67,6 +67,8 @@ def _batch(values, width, name, one):
 class Robot(OwnedHandle):
     """A robot loaded from a URDF file with its joint-error parameters.
 
+    ``base_link`` and ``tip_link`` choose the chain (default: the URDF's root, and the end of its longest
+    moving chain, as ROS-Industrial's tool0 beside fixed side frames).
     ``Robot(urdf_path, parameters_path)`` reads the parameters from a file (see model/io/parameter_file.hpp),
     ``Robot(urdf_path, parameters_json=text)`` from JSON text, and ``Robot(urdf_path)`` loads the robot
     without joint errors (kinematics and dynamics only). Units are SI: rad, m, N m, s. Every method raises
@@ -76,19 +78,23 @@ class Robot(OwnedHandle):
     used from several threads; its calls are serialised.
     """
 
-    def __init__(self, urdf_path, parameters_path=None, *, parameters_json=None):
+    def __init__(self, urdf_path, parameters_path=None, *, parameters_json=None, base_link=None, tip_link=None):
         self._handle = None
         handle = ctypes.c_void_p()
-        if parameters_json is not None:
-            if parameters_path is not None:
-                raise ValueError("give parameters_path or parameters_json, not both")
-            _native.check(_native.lib.jc_robot_load_json(
-                _native.text(urdf_path, "urdf_path"), _native.text(parameters_json, "parameters_json"),
+        if parameters_json is not None and parameters_path is not None:
+            raise ValueError("give parameters_path or parameters_json, not both")
+        urdf = _native.text(urdf_path, "urdf_path")
+        if base_link is not None or tip_link is not None:
+            _native.check(_native.lib.jc_robot_load_chain(
+                urdf, _native.text(base_link, "base_link"), _native.text(tip_link, "tip_link"),
+                _native.text(parameters_path, "parameters_path"), _native.text(parameters_json, "parameters_json"),
                 ctypes.byref(handle)))
+        elif parameters_json is not None:
+            _native.check(_native.lib.jc_robot_load_json(
+                urdf, _native.text(parameters_json, "parameters_json"), ctypes.byref(handle)))
         else:
             _native.check(_native.lib.jc_robot_load(
-                _native.text(urdf_path, "urdf_path"), _native.text(parameters_path, "parameters_path"),
-                ctypes.byref(handle)))
+                urdf, _native.text(parameters_path, "parameters_path"), ctypes.byref(handle)))
         self._handle = handle
         self._dof = self._int32(_native.lib.jc_robot_dof)
 

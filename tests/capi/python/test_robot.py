@@ -200,3 +200,21 @@ def test_wrong_shapes_are_errors_not_reinterpreted(robot):
 
 def test_version_attribute():
     assert jointcomp.__version__ == jointcomp.version()
+
+
+def test_chain_choice_on_a_ros_industrial_urdf():
+    """A ROS-Industrial layout (base, flange, tool0, a camera on link_3) loads to tool0 by default; tip_link
+    and base_link choose another chain; an unknown link is a FileError naming it."""
+    from conftest import CHECKOUT
+    urdf = CHECKOUT / "tests" / "data" / "urdf" / "ur10_ros_industrial.urdf"
+    with jointcomp.Robot(urdf) as arm, jointcomp.Robot(UR10_URDF) as plain, \
+            jointcomp.Robot(urdf, tip_link="flange") as at_flange, \
+            jointcomp.Robot(urdf, base_link="link_1", tip_link="camera_link") as part:
+        q = np.array(POSTURE)
+        np.testing.assert_array_equal(at_flange.forward_kinematics(q), plain.forward_kinematics(q))
+        tool0 = arm.forward_kinematics(q)
+        flange = plain.forward_kinematics(q)
+        np.testing.assert_allclose(tool0[:3, 3], flange[:3, 3] + 0.05 * flange[:3, 2], atol=1e-12)
+        assert arm.dof == 6 and part.dof == 2
+    with pytest.raises(jointcomp.FileError, match="tip link 'gripper' does not exist"):
+        jointcomp.Robot(urdf, tip_link="gripper")
