@@ -2,6 +2,8 @@
 // binary needs no URDF parser) and lists the named parameters of the shipped parameter file with their
 // values, from which modelDescription/generate.py takes the start values of the FMU's parameters.
 //   jointcomp_fmu_resources <robot.urdf> <parameters.json> <out robot.json> <out parameter-values.json>
+//                           [--base-link=LINK] [--tip-link=LINK]
+// The links choose the URDF's chain (empty or absent: its root, and the end of its longest moving chain).
 // Fails (exit 1, with the reason) when the robot does not survive the round trip through JSON bit for
 // bit, when the parameter file does not fit the robot, or when a plant cannot be built from them.
 #include <cmath>
@@ -22,9 +24,9 @@
 namespace {
 
 int run(const std::string& urdf, const std::string& parameters, const std::string& robot_out,
-        const std::string& values_out) {
+        const std::string& values_out, const jointcomp::UrdfChainOptions& chain) {
   using namespace jointcomp;
-  const Robot loaded = loadRobotFromUrdfFile(urdf);
+  const Robot loaded = loadRobotFromUrdfFile(urdf, chain);
   const std::string text = robotToJson(loaded);
   auto robot = std::make_shared<const Robot>(robotFromJson(text, "robot.json"));
   if (!sameRobot(loaded, *robot)) {
@@ -80,13 +82,27 @@ int run(const std::string& urdf, const std::string& parameters, const std::strin
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (argc != 5) {
-    std::fprintf(stderr, "usage: %s <robot.urdf> <parameters.json> <out robot.json> <out parameter-values.json>\n",
+  jointcomp::UrdfChainOptions chain;
+  bool usage = argc < 5;
+  for (int i = 5; i < argc && !usage; ++i) {
+    const std::string option = argv[i];
+    if (option.rfind("--base-link=", 0) == 0) {
+      chain.root_link = option.substr(12);
+    } else if (option.rfind("--tip-link=", 0) == 0) {
+      chain.tip_link = option.substr(11);
+    } else {
+      usage = true;
+    }
+  }
+  if (usage) {
+    std::fprintf(stderr,
+                 "usage: %s <robot.urdf> <parameters.json> <out robot.json> <out parameter-values.json> "
+                 "[--base-link=LINK] [--tip-link=LINK]\n",
                  argc > 0 ? argv[0] : "jointcomp_fmu_resources");
     return 2;
   }
   try {
-    return run(argv[1], argv[2], argv[3], argv[4]);
+    return run(argv[1], argv[2], argv[3], argv[4], chain);
   } catch (const std::exception& error) {
     std::fprintf(stderr, "jointcomp_fmu_resources: %s\n", error.what());
     return 1;
