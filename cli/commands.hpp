@@ -6,6 +6,7 @@ namespace jointcomp::cli {
 int runKinematics(int argc, char** argv);
 int runPaper(int argc, char** argv);
 int runImportIpa(int argc, char** argv);
+int runImportCsv(int argc, char** argv);
 int runCalibrate(int argc, char** argv);
 int runSimulate(int argc, char** argv);
 int runIdentify(int argc, char** argv);

@@ -18,6 +18,11 @@ void printUsage() {
       "  kinematics [--urdf FILE]   forward kinematics and gravity torques at a few poses\n"
       "  import-ipa --in FILE --out FILE [--trafo FILE]\n"
       "                             convert IPA UR10 laser-tracker files into a measurement campaign\n"
+      "  import-csv --in EXPORT.csv --out CAMPAIGN.csv [--columns t=NAME,q1=NAME,..,x=NAME,y=NAME,z=NAME]\n"
+      "        [--angles deg|rad] [--lengths mm|m] [--separator ,|;|tab] [--decimal .|,] [--robot NAME]\n"
+      "        [--frame base|instrument]\n"
+      "                             your own tracker export as a campaign (docs/measurement-campaign.md):\n"
+      "                             separator and decimal mark detected, metadata lines before the header skipped\n"
       "  simulate --protocol stiffness|joint2-sweep|spiral|random|back-and-forth --truth PARAMS.json\n"
       "        [--urdf FILE] [--seed N] [--out FILE] [--perturb SEED] [--plant] [--no-noise] [--target x,y,z]\n"
       "        [--pose q1,..] [--joint N] [--from DEG] [--to DEG] [--step DEG] [--settle S] [--cycles N] [--count N]\n"
@@ -55,6 +60,7 @@ int main(int argc, char** argv) {
     }
     if (command == "paper") return jointcomp::cli::runPaper(argc > 1 ? argc - 1 : 0, argv + 1);
     if (command == "import-ipa") return jointcomp::cli::runImportIpa(argc - 1, argv + 1);
+    if (command == "import-csv") return jointcomp::cli::runImportCsv(argc - 1, argv + 1);
     if (command == "calibrate") return jointcomp::cli::runCalibrate(argc - 1, argv + 1);
     if (command == "kinematics") return jointcomp::cli::runKinematics(argc - 1, argv + 1);
     if (command == "simulate") return jointcomp::cli::runSimulate(argc - 1, argv + 1);

@@ -140,8 +140,8 @@ private:
     if (!separator) return;
     fail(line_number, std::string("the header's columns are separated by ") + separator +
                           "; the campaign format separates cells with ',' and writes numbers with '.' as the "
-                          "decimal mark (0.365, not 0,365): convert the file, e.g. by exporting it as CSV with "
-                          "',' separators");
+                          "decimal mark (0.365, not 0,365): convert it with jointcomp import-csv "
+                          "(docs/measurement-campaign.md)");
   }
 
   void interpretHeader(MeasurementCampaign& campaign, const std::map<std::string, int>& column_of, int line) {

@@ -133,6 +133,16 @@ done
 expect_error "kp_nm_per_rad" identify stiffness --params "$work/bad_plant.json" --campaign "$work/fit.csv" --out "$work/x"
 expect_error "kp_nm_per_rad" paper --quasi-static --params "$work/bad_plant.json" --out "$work/x"
 expect_error "identify: unknown kind 'speed'" identify speed --campaign "$work/fit.csv" --out "$work/x"
+# A user's own export (';', decimal commas, a title line, its own names, radians and metres) imported, and the
+# campaign it gives read by calibrate's reader (a mapping to a missing column is refused naming the header).
+printf 'Export of 2026-11-25\nTime;A1;A2;A3;A4;A5;A6;X;Y;Z\n0;0,1;0,2;0,3;0;0,5;0;1,2;0,1;0,9\n1;0,2;0,3;0,4;0;0,5;0;1,1;0,2;0,8\n' \
+  >"$work/export.csv"
+"$jointcomp" import-csv --in "$work/export.csv" --out "$work/imported.csv" --angles rad --lengths m \
+  --columns t=Time,q1=A1,q2=A2,q3=A3,q4=A4,q5=A5,q6=A6 >/dev/null || fail "import-csv failed"
+head -n 1 "$work/imported.csv" | grep -q "^# format: jointcomp-measurements/1" || fail "import-csv wrote no campaign"
+grep -q "^1,11.459155902616" "$work/imported.csv" || fail "import-csv did not convert radians to degrees"
+expect_error "column 'Zeit' (mapped to t) is not in the header" import-csv --in "$work/export.csv" \
+  --out "$work/x.csv" --columns t=Zeit
 # The chain of a URDF in the ROS-Industrial layout: tool0 by default, another tip on request; a tree
 # with two tools of the same chain is refused naming where it branches.
 ros_urdf="$(dirname "$0")/../data/urdf/ur10_ros_industrial.urdf"
