@@ -41,8 +41,8 @@ int runCalibrate(int argc, char** argv) {
     rest.push_back(argv[i]);
   }
   const Options options(static_cast<int>(rest.size()), rest.data(),
-                        {"urdf", "base-link", "tip-link", "campaign", "params", "out", "loss", "loss-scale-mm",
-                         "pivot-threshold", "fix", "no-plot"},
+                        {"urdf", "base-link", "tip-link", "campaign", "holdout", "params", "out", "loss",
+                         "loss-scale-mm", "pivot-threshold", "fix", "no-plot"},
                         {"no-plot"});
   if (!options.has("campaign") || !options.has("out")) {
     throw std::invalid_argument(

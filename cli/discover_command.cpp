@@ -44,8 +44,8 @@ int runDiscover(int argc, char** argv) {
     rest.push_back(argv[i]);
   }
   const Options options(static_cast<int>(rest.size()), rest.data(),
-                        {"urdf", "base-link", "tip-link", "params", "out", "base", "max-steps", "orders", "folds",
-                         "types", "noise-floor-mm", "loss", "min-cv-gain", "no-plot"},
+                        {"urdf", "base-link", "tip-link", "campaign", "holdout", "params", "out", "base", "max-steps",
+                         "orders", "folds", "types", "noise-floor-mm", "loss", "min-cv-gain", "no-plot"},
                         {"no-plot"});
   if (campaigns.empty() || !options.has("out")) {
     throw std::invalid_argument(

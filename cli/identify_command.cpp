@@ -38,6 +38,12 @@ int integerOption(const Options& options, const std::string& name, int fallback)
 }  // namespace
 
 int runIdentify(int argc, char** argv) {
+  if (argc >= 2 && (std::string(argv[1]) == "--help" || std::string(argv[1]) == "-h")) {
+    std::printf(
+        "jointcomp identify stiffness|transmission --campaign FILE --out DIR [OPTIONS]\n"
+        "  jointcomp identify stiffness --help (or transmission --help) lists the options\n");
+    throw HelpShown();
+  }
   if (argc < 2 || std::string(argv[1]).rfind("--", 0) == 0) {
     throw std::invalid_argument(
         "identify needs a kind: jointcomp identify stiffness|transmission --campaign FILE --out DIR");
@@ -49,7 +55,7 @@ int runIdentify(int argc, char** argv) {
   const Options options(argc - 1, argv + 1,
                         {"campaign", "urdf", "base-link", "tip-link", "params", "joint", "stage", "out", "truth", "use",
                          "orders", "no-plot"},
-                        {"no-plot"});
+                        {"no-plot"}, "identify " + kind);
   if (!options.has("campaign") || !options.has("out")) {
     throw std::invalid_argument("identify " + kind + " needs --campaign FILE and --out DIR");
   }

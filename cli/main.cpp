@@ -5,6 +5,7 @@
 #include <string>
 
 #include "cli/commands.hpp"
+#include "cli/options.hpp"
 
 namespace {
 
@@ -43,7 +44,8 @@ void printUsage() {
       "                             time (time-blocked CV + BIC), and writes the extended parameter file;\n"
       "                             types: offset, compliance, nonlinear_compliance, harmonic, backlash,\n"
       "                             hysteresis, thermal, geometric, payload, periodic, instrument_scale\n"
-      "  help                       this text\n"
+      "  help                       this text; jointcomp <command> --help lists a command's options\n"
+      "  --version                  the version\n"
       "Every command that reads --urdf also takes --base-link LINK and --tip-link LINK (default: the URDF's\n"
       "root, and the end of its longest moving chain, as ROS-Industrial's tool0 beside fixed side frames).\n"
       "With no command, jointcomp runs `paper` on the built-in Staubli RX170.\n");
@@ -58,6 +60,10 @@ int main(int argc, char** argv) {
       printUsage();
       return 0;
     }
+    if (command == "--version" || command == "version") {
+      std::printf("jointcomp %s\n", JOINTCOMP_VERSION);
+      return 0;
+    }
     if (command == "paper") return jointcomp::cli::runPaper(argc > 1 ? argc - 1 : 0, argv + 1);
     if (command == "import-ipa") return jointcomp::cli::runImportIpa(argc - 1, argv + 1);
     if (command == "import-csv") return jointcomp::cli::runImportCsv(argc - 1, argv + 1);
@@ -68,6 +74,11 @@ int main(int argc, char** argv) {
     if (command == "discover") return jointcomp::cli::runDiscover(argc - 1, argv + 1);
     std::fprintf(stderr, "jointcomp: unknown command '%s'\n", command.c_str());
     printUsage();
+    return 2;
+  } catch (const jointcomp::cli::HelpShown&) {
+    return 0;
+  } catch (const jointcomp::cli::UsageError& error) {
+    std::fprintf(stderr, "jointcomp %s: %s\n", command.c_str(), error.what());
     return 2;
   } catch (const std::exception& error) {
     std::fprintf(stderr, "jointcomp %s: %s\n", command.c_str(), error.what());

@@ -39,24 +39,26 @@ inline std::vector<double> numberList(const std::string& text, const std::string
   return values;
 }
 
+// `jointcomp <command> --help` was shown: the command ends there, successfully.
+struct HelpShown {};
+
+// A command line that does not parse (an unknown option, a missing value): main prints it with the
+// command's usage and exits 2.
+class UsageError : public std::invalid_argument {
+public:
+  using std::invalid_argument::invalid_argument;
+};
+
+// What each option means, for --help (one table: the options mean the same in every command).
+const char* optionHelp(const std::string& name);
+
+// The options of one command, parsed by CLI11: --name value pairs (or bare --flag when `flags` holds the
+// name), --help for the command's usage. `command` names it in the usage ("identify stiffness"; default:
+// argv[0], the command name main passes).
 class Options {
 public:
-  // Reads argv[1..argc) as --name value pairs (or bare --flag when `flags` holds the name).
-  Options(int argc, char** argv, const std::set<std::string>& known, const std::set<std::string>& flags = {}) {
-    for (int i = 1; i < argc; ++i) {
-      std::string name = argv[i];
-      if (name.rfind("--", 0) != 0 || known.count(name.substr(2)) == 0) {
-        throw std::invalid_argument("unknown option '" + name + "' (see jointcomp help)");
-      }
-      name = name.substr(2);
-      if (flags.count(name)) {
-        values_[name] = "1";
-        continue;
-      }
-      if (i + 1 >= argc) throw std::invalid_argument("option --" + name + " needs a value");
-      values_[name] = argv[++i];
-    }
-  }
+  Options(int argc, char** argv, const std::set<std::string>& known, const std::set<std::string>& flags = {},
+          const std::string& command = "");
   bool has(const std::string& name) const { return values_.count(name) != 0; }
   std::string get(const std::string& name, const std::string& fallback) const {
     auto it = values_.find(name);

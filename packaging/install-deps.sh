@@ -9,6 +9,7 @@ packages=(
   libsundials-dev          # CVODE integrates the flexible-joint plant (static libs ship with it: FMU)
   liburdfdom-dev           # the robot description is URDF
   nlohmann-json3-dev       # parameter files and reports: header-only, well kept, in Debian
+  libcli11-dev             # the command line: --help for every command, usage on errors
   libgtest-dev libgmock-dev googletest  # unit tests
   libbenchmark-dev         # Google Benchmark: speed targets live in benchmarks, not tests
   liborocos-kdl-dev libkdl-parser-dev   # KDL: the peer our kinematics and dynamics are measured against

@@ -49,9 +49,7 @@ bool isCampaignColumn(const std::string& name) {
          name.find_first_not_of("0123456789", digits) == std::string::npos;
 }
 
-std::string separatorName(char separator) {
-  return separator == '\t' ? "tab" : std::string("'") + separator + "'";
-}
+std::string separatorName(char separator) { return separator == '\t' ? "tab" : std::string("'") + separator + "'"; }
 
 class CsvImporter {
 public:

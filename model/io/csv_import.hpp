@@ -26,8 +26,7 @@ struct CsvImportOptions {
 // Throws MeasurementError naming the file, line and column (and, for a column not found, the header's
 // names) for anything it cannot read; never drops a row.
 MeasurementCampaign importCsvFile(const std::string& path, const CsvImportOptions& options);
-MeasurementCampaign importCsv(const std::string& text, const std::string& source_name,
-                              const CsvImportOptions& options);
+MeasurementCampaign importCsv(const std::string& text, const std::string& source_name, const CsvImportOptions& options);
 
 // "t=Time,q1=A1" -> {{"t", "Time"}, {"q1", "A1"}}; throws MeasurementError for an item without '='.
 std::map<std::string, std::string> parseColumnMapping(const std::string& text);

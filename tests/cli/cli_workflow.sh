@@ -143,6 +143,21 @@ head -n 1 "$work/imported.csv" | grep -q "^# format: jointcomp-measurements/1" |
 grep -q "^1,11.459155902616" "$work/imported.csv" || fail "import-csv did not convert radians to degrees"
 expect_error "column 'Zeit' (mapped to t) is not in the header" import-csv --in "$work/export.csv" \
   --out "$work/x.csv" --columns t=Zeit
+# A command line that explains itself: every command's --help lists its options (exit 0), an unknown option
+# is a usage error (exit 2) that shows the command's usage, --version says the version.
+for command in paper kinematics import-ipa import-csv simulate "identify stiffness" calibrate discover; do
+  # shellcheck disable=SC2086  # "identify stiffness" is two words
+  help="$("$jointcomp" $command --help)" || fail "jointcomp $command --help failed"
+  grep -q "^Usage: jointcomp $command \[OPTIONS\]" <<<"$help" || fail "jointcomp $command --help shows no usage"
+  grep -q -- "--out" <<<"$help" || [ "$command" = kinematics ] || fail "jointcomp $command --help lists no --out"
+  status=0
+  # shellcheck disable=SC2086
+  output="$("$jointcomp" $command --bogus 2>&1)" || status=$?
+  [ "$status" -eq 2 ] || fail "jointcomp $command --bogus exited $status, not 2"
+  grep -q "Usage: jointcomp $command" <<<"$output" || fail "jointcomp $command --bogus shows no usage"
+done
+"$jointcomp" --version | grep -q "^jointcomp [0-9]*\.[0-9]*\.[0-9]*$" || fail "jointcomp --version"
+
 # The chain of a URDF in the ROS-Industrial layout: tool0 by default, another tip on request; a tree
 # with two tools of the same chain is refused naming where it branches.
 ros_urdf="$(dirname "$0")/../data/urdf/ur10_ros_industrial.urdf"

@@ -31,8 +31,7 @@ const char* kSpreadsheetExport =
 
 CsvImportOptions spreadsheetOptions() {
   CsvImportOptions options;
-  options.columns = parseColumnMapping(
-      "t=Zeit [s],q1=A1 [rad],q2=A2 [rad],x=X [m],y=Y [m],z=Z [m],temp=Temperatur");
+  options.columns = parseColumnMapping("t=Zeit [s],q1=A1 [rad],q2=A2 [rad],x=X [m],y=Y [m],z=Z [m],temp=Temperatur");
   options.angles_in_radians = true;
   options.lengths_in_metres = true;
   options.robot = "two_link";
