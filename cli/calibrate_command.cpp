@@ -42,8 +42,8 @@ int runCalibrate(int argc, char** argv) {
   }
   const Options options(static_cast<int>(rest.size()), rest.data(),
                         {"urdf", "base-link", "tip-link", "campaign", "holdout", "params", "out", "loss",
-                         "loss-scale-mm", "pivot-threshold", "fix", "no-plot"},
-                        {"no-plot"});
+                         "loss-scale-mm", "pivot-threshold", "fix", "no-plot", "quiet"},
+                        {"no-plot", "quiet"});
   if (!options.has("campaign") || !options.has("out")) {
     throw std::invalid_argument(
         "calibrate needs --campaign CAMPAIGN.csv and --out DIR (and --urdf FILE, --params FILE, --holdout FILE)");
@@ -64,6 +64,7 @@ int runCalibrate(int argc, char** argv) {
     calibration.identifiability.relative_pivot_threshold = std::stod(options.get("pivot-threshold", "1e-4"));
   }
   calibration.fixed = splitCommaList(options.get("fix", ""));
+  calibration.progress = consoleProgress(options);
 
   std::printf("jointcomp calibrate: robot %s (%s), campaign %s\n", robot->name.c_str(), urdf.c_str(),
               campaign_path.c_str());

@@ -45,8 +45,8 @@ int runDiscover(int argc, char** argv) {
   }
   const Options options(static_cast<int>(rest.size()), rest.data(),
                         {"urdf", "base-link", "tip-link", "campaign", "holdout", "params", "out", "base", "max-steps",
-                         "orders", "folds", "types", "noise-floor-mm", "loss", "min-cv-gain", "no-plot"},
-                        {"no-plot"});
+                         "orders", "folds", "types", "noise-floor-mm", "loss", "min-cv-gain", "no-plot", "quiet"},
+                        {"no-plot", "quiet"});
   if (campaigns.empty() || !options.has("out")) {
     throw std::invalid_argument(
         "discover needs --campaign FILE[,FILE..] and --out DIR (and --urdf, --params, --holdout)");
@@ -60,6 +60,7 @@ int runDiscover(int argc, char** argv) {
   const JointErrorModel& prior = setup.parameters.model;
   DiscoveryOptions discovery;
   discovery.calibration.loss = parseRobustLoss(options.get("loss", "huber"));
+  discovery.calibration.progress = consoleProgress(options);
   const std::string base = options.get("base", "frame");
   if (base != "frame" && base != "textbook")
     throw std::invalid_argument("--base must be frame or textbook, not '" + base + "'");

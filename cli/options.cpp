@@ -20,6 +20,7 @@ const char* optionHelp(const std::string& name) {
       {"seed", "random seed"},
       {"compensate-joints", "joints whose references are compensated, e.g. 2,3 (default: all)"},
       {"no-plot", "write no plot"},
+      {"quiet", "print no progress lines"},
       {"quasi-static", "simulate the quasi-static robot instead of the flexible-joint plant"},
       {"loss", "robust loss of the fit: huber, cauchy or none"},
       {"loss-scale-mm", "scale of the robust loss in mm (default: from the least-squares residuals)"},
@@ -70,7 +71,8 @@ Options::Options(int argc, char** argv, const std::set<std::string>& known, cons
   app.set_help_flag("-h,--help", "this help");
   for (const std::string& option : known) {
     if (flags.count(option)) {
-      app.add_flag_callback("--" + option, [this, option] { values_[option] = "1"; }, optionHelp(option));
+      app.add_flag_callback(
+          "--" + option, [this, option] { values_[option] = "1"; }, optionHelp(option));
     } else {
       app.add_option_function<std::string>(
              "--" + option, [this, option](const std::string& value) { values_[option] = value; }, optionHelp(option))

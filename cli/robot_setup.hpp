@@ -3,10 +3,13 @@
 // every command, whether it simulates or only carries the drives over into the file it writes.
 #pragma once
 
+#include <chrono>
+#include <cstdio>
 #include <memory>
 #include <string>
 
 #include "cli/options.hpp"
+#include "model/common/progress.hpp"
 #include "model/io/parameter_file.hpp"
 #include "model/robot/load_urdf.hpp"
 
@@ -26,6 +29,17 @@ inline UrdfChainOptions chainOptions(const Options& options) {
   chain.root_link = options.get("base-link", "");
   chain.tip_link = options.get("tip-link", "");
   return chain;
+}
+
+// The console's progress lines of a long command, "[  12.3 s] what", unless --quiet.
+inline Progress consoleProgress(const Options& options) {
+  if (options.has("quiet")) return {};
+  const auto started = std::chrono::steady_clock::now();
+  return [started](const std::string& what) {
+    const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+    std::printf("  [%7.2f s] %s\n", elapsed, what.c_str());
+    std::fflush(stdout);
+  };
 }
 
 // `params_option` is the option naming the file ("params", or "truth" for simulate). With an empty

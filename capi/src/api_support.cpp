@@ -18,6 +18,8 @@ namespace {
 
 // One message per thread, so that threads never read each other's errors.
 thread_local std::string last_error;
+thread_local jc_progress_callback progress_callback = nullptr;
+thread_local void* progress_user_data = nullptr;
 
 std::string describe(double value) {
   if (std::isnan(value)) return "NaN";
@@ -46,6 +48,13 @@ std::uint64_t magicOf(const void* handle) {
 void invalid(const std::string& message) { throw ApiError(JC_ERROR_INVALID_ARGUMENT, message); }
 
 void clearLastError() noexcept { last_error.clear(); }
+
+Progress threadProgress() {
+  if (!progress_callback) return {};
+  const jc_progress_callback callback = progress_callback;
+  void* user_data = progress_user_data;
+  return [callback, user_data](const std::string& what) { callback(what.c_str(), user_data); };
+}
 
 jc_status fail(const char* function, jc_status status, const char* message) noexcept {
   try {
@@ -236,6 +245,13 @@ const char* jc_version(void) { return JOINTCOMP_VERSION_STRING; }
 int32_t jc_abi_version(void) { return JC_ABI_VERSION; }
 
 const char* jc_last_error(void) { return jointcomp::capi::last_error.c_str(); }
+
+jc_status jc_set_progress_callback(jc_progress_callback callback, void* user_data) {
+  jointcomp::capi::clearLastError();
+  jointcomp::capi::progress_callback = callback;
+  jointcomp::capi::progress_user_data = user_data;
+  return JC_OK;
+}
 
 const char* jc_status_name(jc_status status) {
   switch (status) {

@@ -11,6 +11,7 @@
 
 #include "jointcomp/jointcomp.h"
 #include "model/common/errors.hpp"
+#include "model/common/progress.hpp"
 #include "model/effects/joint_error_model.hpp"
 #include "model/plant/drive_parameters.hpp"
 #include "model/plant/flexible_joint_plant.hpp"
@@ -73,6 +74,8 @@ private:
 [[noreturn]] void invalid(const std::string& message);
 
 void clearLastError() noexcept;
+// The progress callback this thread set with jc_set_progress_callback, as a Progress (empty: none).
+Progress threadProgress();
 jc_status fail(const char* function, jc_status status, const char* message) noexcept;
 
 // Runs `body`, turning every exception into a status and the thread's last-error message, which names

@@ -265,6 +265,7 @@ jc_status jc_calibrate(jc_robot* nominal, const char* campaign_path, const char*
     const MeasurementCampaign campaign = readCampaignFile(path);
     std::vector<std::pair<std::string, MeasurementCampaign>> held;
     for (const std::string& name : holdouts) held.emplace_back(name, readCampaignFile(name));
+    options.progress = threadProgress();
     CalibrationRun run = runCalibration(handle.model, campaign, held, options);
     CalibrationSources sources;
     sources.urdf = robotSource(handle);
@@ -312,6 +313,7 @@ jc_status jc_discover(jc_robot* nominal, const char* campaign_paths, const char*
     for (const std::string& name : campaigns) fitted.push_back(readCampaignFile(name));
     for (const std::string& name : holdouts) held.push_back(readCampaignFile(name));
     const auto started = std::chrono::steady_clock::now();
+    options.calibration.progress = threadProgress();
     DiscoveryResult result = discoverEffects(handle.model, fitted, held, options);
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
     DiscoverySources sources;

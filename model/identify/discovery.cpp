@@ -535,10 +535,18 @@ public:
     base_fit_ = fitColumns(lin_, current_, false);
     result_.initial = evaluate(base_fit_.cv);
     state_ = result_.initial;
+    report(options_.calibration.progress, "discovery: base fit RMS " +
+                                              std::to_string(result_.initial.fitted.rms * 1e3) + " mm, " +
+                                              std::to_string(features_.candidates.size()) + " candidates");
     result_.stop_reason = "max_steps reached";
     for (int step = 0; step < options_.max_steps; ++step) {
       if (!takeStep()) break;
+      const DiscoveryStep& s = result_.steps.back();
+      report(options_.calibration.progress, "discovery step " + std::to_string(step + 1) + ": " + s.type +
+                                                (s.joint_name.empty() ? "" : " " + s.joint_name) + s.detail +
+                                                ", fitted RMS " + std::to_string(s.after.fitted.rms * 1e3) + " mm");
     }
+    report(options_.calibration.progress, "discovery stopped: " + result_.stop_reason);
     finish();
     return std::move(result_);
   }

@@ -40,7 +40,9 @@
 namespace jointcomp {
 
 struct DiscoveryOptions {
-  GeometricCalibrationOptions calibration;  // fit_* flags are set by discovery; loss and solver are used
+  // fit_* flags are set by discovery; loss and solver are used, and progress hears the calibrations' phases
+  // and iterations and discovery's own steps.
+  GeometricCalibrationOptions calibration;
   // false: the base model frees only the frame and the target; offsets, compliance and joint placements are
   // candidates ("offset", "compliance", "geometric"). true: the textbook base frees them all from the start.
   bool base_geometry = false;

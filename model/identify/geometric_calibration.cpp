@@ -142,7 +142,16 @@ FitOutcome fitSubset(const Robot& robot, const CalibrationData& data, const Eige
   solver.block_size = 3;
   solver.loss = RobustLoss::None;
   CalibrationProblem problem(robot, data, start, free);
-  auto run = [&](const CalibrationProblem& p, const LevenbergMarquardtOptions& o) {
+  auto run = [&](const CalibrationProblem& p, LevenbergMarquardtOptions o) {
+    if (options.progress) {
+      const double residuals = static_cast<double>(p.residualCount());
+      const bool robust = o.loss != RobustLoss::None;
+      o.on_accepted_step = [&options, &data, &what, residuals, robust](int iterations, double cost) {
+        report(options.progress, data.source + ": " + what + (robust ? " (robust)" : "") + ": iteration " +
+                                     std::to_string(iterations) + ", RMS " +
+                                     fmt("%.4f", std::sqrt(2.0 * cost / residuals) * 1e3) + " mm per axis");
+      };
+    }
     LevenbergMarquardtResult result = solveLevenbergMarquardt(std::cref(p), p.start(), p.residualCount(), o);
     if (!result.converged) {
       throw SolverError(data.source + ": " + what + ": Levenberg-Marquardt did not converge (" + result.stop_reason +
@@ -818,6 +827,8 @@ GeometricCalibrationResult calibrateGeometry(const JointErrorModel& prior, const
   const GeometricParameters start = startingPoint(prior, campaign, data, options, fit_frame, result);
   ParameterChoice choice = candidateParameters(robot, data, options, fit_frame, result, source);
   chooseIdentifiable(robot, data, start, options, fit_frame, result, choice, source);
+  report(options.progress, source + ": " + std::to_string(rows) + " rows, " + std::to_string(choice.free.size()) +
+                               " of " + std::to_string(choice.candidates.size()) + " parameters identifiable");
   const Eigen::VectorXd nominal_values = start.toVector();
   const FitOutcome fit = fitKeepingCompliancePositive(robot, data, nominal_values, options, choice);
   result.estimate = GeometricParameters::fromVector(fit.values, n);

@@ -36,6 +36,7 @@
 #include <string>
 #include <vector>
 
+#include "model/common/progress.hpp"
 #include "model/effects/joint_error_model.hpp"
 #include "model/identify/identifiability.hpp"
 #include "model/identify/levenberg_marquardt.hpp"
@@ -149,6 +150,7 @@ struct GeometricCalibrationOptions {
   double loss_scale_sigmas = 3.0;
   int minimum_rows = 10;
   LevenbergMarquardtOptions solver;  // loss and block size are set by the calibration
+  Progress progress;                 // told the phases and each accepted step (may be empty)
 };
 
 struct ParameterEstimate {

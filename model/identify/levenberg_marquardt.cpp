@@ -201,6 +201,7 @@ LevenbergMarquardtResult solveLevenbergMarquardt(const ResidualFunction& functio
         current = trial;
         normalEquations(result.jacobian, result.residual, current.block_weight, options.block_size, a, g);
         accepted = true;
+        if (options.on_accepted_step) options.on_accepted_step(result.iterations, current.cost);
         if (actual <= options.function_tolerance * previous_cost) return finish(true, "cost change below tolerance");
       } else {
         lambda *= nu;

@@ -42,6 +42,8 @@ struct LevenbergMarquardtOptions {
   RobustLoss loss = RobustLoss::None;
   double loss_scale = 1.0;  // k, in the units of the residuals
   int block_size = 1;
+  // Told after each accepted step: the iterations so far and the cost (1/2 sum rho); may be empty.
+  std::function<void(int iterations, double cost)> on_accepted_step;
 };
 
 // Fills `residual` (size residual_count) at x and, when `jacobian` is not null, d residual / dx into it

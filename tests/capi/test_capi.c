@@ -703,6 +703,12 @@ static void temporary_path(char* path, const char* stem) {
   if (fd >= 0) close(fd);
 }
 
+/* Counts the progress messages of the calling thread's long calls (user_data: an int). */
+static int progress_messages = 0;
+static void count_progress(const char* message, void* user_data) {
+  if (message && message[0] != '\0') ++*(int*)user_data;
+}
+
 static void test_identification(jc_robot* robot, jc_robot* bare) {
   char sweep[64], stiffness[64], poses[64], held[64], urdf[64], params[64], missing[80];
   char lists[200];
@@ -805,7 +811,11 @@ static void test_identification(jc_robot* robot, jc_robot* bare) {
 
   /* Calibration with a held-out campaign, then saving and reloading the calibrated robot. */
   sprintf(lists, "%s\n", held);
+  progress_messages = 0;
+  EXPECT_OK(jc_set_progress_callback(count_progress, &progress_messages));
   EXPECT_OK(jc_calibrate(robot, poses, lists, "{\"loss\": \"huber\", \"fixed\": []}", &calibrated, &report));
+  EXPECT_OK(jc_set_progress_callback(NULL, NULL));
+  CHECK(progress_messages >= 3); /* rows and parameters, then each accepted step of the fits */
   text = report_text(report, 0);
   CHECK(text != NULL && strstr(text, "jointcomp-calibration-report/1") != NULL && strstr(text, "holdout") != NULL);
   free(text);

@@ -68,6 +68,12 @@ JOINTCOMP_API int32_t jc_abi_version(void);
 /* Message of the last failed call on this thread ("" after a successful call). Valid until the next
    jc_ call on this thread. */
 JOINTCOMP_API const char* jc_last_error(void);
+/* Progress of long calls (jc_calibrate, jc_discover): `callback` is told, on the calling thread, what they
+   are doing ("calibrating: iteration 4, RMS 0.2431 mm per axis"), with `user_data`; NULL: silent (the
+   default). Per thread, like jc_last_error. */
+typedef void (*jc_progress_callback)(const char* message, void* user_data);
+JOINTCOMP_API jc_status jc_set_progress_callback(jc_progress_callback callback, void* user_data);
+
 /* The name of a status code, e.g. "JC_ERROR_SOLVER" ("JC_UNKNOWN_STATUS" for other values). */
 JOINTCOMP_API const char* jc_status_name(jc_status status);
 

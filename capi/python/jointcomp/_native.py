@@ -28,6 +28,8 @@ _i32 = ctypes.c_int32
 _f64 = ctypes.c_double
 _text = ctypes.c_char_p
 _handle = ctypes.c_void_p
+# void (*jc_progress_callback)(const char* message, void* user_data)
+PROGRESS_CALLBACK = ctypes.CFUNCTYPE(None, ctypes.c_char_p, ctypes.c_void_p)
 
 # Every function of jointcomp.h: name -> (result type, argument types). test_bindings.py checks this table
 # against the header.
@@ -36,6 +38,7 @@ PROTOTYPES = {
     "jc_abi_version": (_i32, []),
     "jc_last_error": (ctypes.c_char_p, []),
     "jc_status_name": (ctypes.c_char_p, [_i32]),
+    "jc_set_progress_callback": (_i32, [PROGRESS_CALLBACK, ctypes.c_void_p]),
     "jc_robot_load": (_i32, [_text, _text, _handle_p]),
     "jc_robot_load_json": (_i32, [_text, _text, _handle_p]),
     "jc_robot_load_chain": (_i32, [_text, _text, _text, _text, _text, _handle_p]),

@@ -27,6 +27,8 @@ C_TO_CTYPES = {
     "jc_plant**": ctypes.POINTER(ctypes.c_void_p),
     "jc_report*": ctypes.c_void_p,
     "jc_report**": ctypes.POINTER(ctypes.c_void_p),
+    "jc_progress_callback": _native.PROGRESS_CALLBACK,
+    "void*": ctypes.c_void_p,
 }
 
 

@@ -89,7 +89,20 @@ def test_calibration_finds_joint_offsets_and_generalises(tmp_path):
             jointcomp.Robot(RX170_URDF, RX170_PARAMETERS) as nominal:
         fit = jointcomp.simulate_campaign(truth, tmp_path / "fit.csv", protocol="random", seed=21, count=120)
         held = jointcomp.simulate_campaign(truth, tmp_path / "held.csv", protocol="random", seed=22, count=60)
-        calibrated, report = jointcomp.calibrate(nominal, fit, [held])
+        heard = []
+        jointcomp.set_progress(heard.append)
+        try:
+            calibrated, report = jointcomp.calibrate(nominal, fit, [held])
+        finally:
+            jointcomp.set_progress(None)
+        # The calibration said what it was doing: its rows and parameters, then each accepted step.
+        assert any("120 rows" in m and "parameters identifiable" in m for m in heard), heard
+        assert any("calibrating: iteration 1, RMS" in m for m in heard), heard
+        told = len(heard)
+        jointcomp.calibrate(nominal, fit, [held])[0].close()  # silenced: nothing more is heard
+        assert len(heard) == told
+        with pytest.raises(TypeError):
+            jointcomp.set_progress(42)
         with calibrated:
             holdout = next(c for c in report["campaigns"] if c["file"] == str(held))
             assert holdout["after"]["rms_mm"] < 0.3 * holdout["before"]["rms_mm"]
