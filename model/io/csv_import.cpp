@@ -11,6 +11,7 @@
 #include "model/common/errors.hpp"
 #include "model/common/strict_json.hpp"
 #include "model/io/atomic_file.hpp"
+#include "model/io/text_cells.hpp"
 
 namespace jointcomp {
 namespace {
@@ -18,21 +19,14 @@ namespace {
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
-std::string trim(const std::string& text) {
-  const auto first = text.find_first_not_of(" \t\r\n\"");
-  if (first == std::string::npos) return "";
-  const auto last = text.find_last_not_of(" \t\r\n\"");
-  return text.substr(first, last - first + 1);
-}
+// Cells of an export: blanks and the quotes spreadsheets put around text are not part of a cell.
+constexpr const char* kBlanksAndQuotes = " \t\r\n\"";
 
 std::vector<std::string> split(const std::string& line, char separator) {
-  std::vector<std::string> cells;
-  std::string cell;
-  std::istringstream stream(line);
-  while (std::getline(stream, cell, separator)) cells.push_back(trim(cell));
-  if (!line.empty() && line.back() == separator) cells.emplace_back();
-  return cells;
+  return splitCells(line, separator, kBlanksAndQuotes);
 }
+
+std::string trim(const std::string& text) { return trimmed(text, kBlanksAndQuotes); }
 
 std::string lower(std::string text) {
   std::transform(text.begin(), text.end(), text.begin(), [](unsigned char c) { return std::tolower(c); });

@@ -8,24 +8,10 @@
 
 #include "model/common/errors.hpp"
 #include "model/io/atomic_file.hpp"
+#include "model/io/text_cells.hpp"
 
 namespace jointcomp {
 namespace {
-
-std::string trim(const std::string& text) {
-  const auto first = text.find_first_not_of(" \t\r\n");
-  if (first == std::string::npos) return "";
-  return text.substr(first, text.find_last_not_of(" \t\r\n") - first + 1);
-}
-
-std::vector<std::string> split(const std::string& line, char separator) {
-  std::vector<std::string> cells;
-  std::string cell;
-  std::istringstream stream(line);
-  while (std::getline(stream, cell, separator)) cells.push_back(trim(cell));
-  if (!line.empty() && line.back() == separator) cells.emplace_back();
-  return cells;
-}
 
 // A number with a decimal comma ("0,365141", "2,02011E+13").
 bool parseDecimalComma(std::string text, double& value) {
@@ -115,7 +101,7 @@ MeasurementCampaign parseIpaUr10(const std::string& text, const std::string& mea
   std::istringstream stream(text);
   std::string raw;
   if (!std::getline(stream, raw)) fail(1, "the file is empty");
-  const std::vector<std::string> header = split(trim(raw), ';');
+  const std::vector<std::string> header = splitCells(trimmed(raw), ';');
   std::map<std::string, int> column_of;
   for (std::size_t c = 0; c < header.size(); ++c) column_of[header[c]] = static_cast<int>(c);
   const char* joints[6] = {"shoulder_pan_joint", "shoulder_lift_joint", "elbow_joint",
@@ -140,9 +126,9 @@ MeasurementCampaign parseIpaUr10(const std::string& text, const std::string& mea
   int line_number = 1;
   while (std::getline(stream, raw)) {
     ++line_number;
-    const std::string line = trim(raw);
+    const std::string line = trimmed(raw);
     if (line.empty()) continue;
-    const std::vector<std::string> cells = split(line, ';');
+    const std::vector<std::string> cells = splitCells(line, ';');
     if (cells.size() != header.size()) {
       fail(line_number,
            "row has " + std::to_string(cells.size()) + " cells, the header has " + std::to_string(header.size()));

@@ -9,6 +9,7 @@
 #include "model/common/errors.hpp"
 #include "model/common/strict_json.hpp"
 #include "model/io/atomic_file.hpp"
+#include "model/io/text_cells.hpp"
 
 namespace jointcomp {
 namespace {
@@ -17,22 +18,6 @@ constexpr const char* kFormatLine = "jointcomp-measurements/1";
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kDegree = kPi / 180.0;
 constexpr double kNotMeasured = std::numeric_limits<double>::quiet_NaN();
-
-std::string trim(const std::string& text) {
-  const auto first = text.find_first_not_of(" \t\r\n");
-  if (first == std::string::npos) return "";
-  const auto last = text.find_last_not_of(" \t\r\n");
-  return text.substr(first, last - first + 1);
-}
-
-std::vector<std::string> splitCells(const std::string& line) {
-  std::vector<std::string> cells;
-  std::string cell;
-  std::istringstream stream(line);
-  while (std::getline(stream, cell, ',')) cells.push_back(trim(cell));
-  if (!line.empty() && line.back() == ',') cells.emplace_back();
-  return cells;
-}
 
 class CampaignParser {
 public:
@@ -84,22 +69,22 @@ public:
     while (std::getline(stream, raw)) {
       ++line_number;
       if (line_number == 1 && raw.rfind("\xEF\xBB\xBF", 0) == 0) raw = raw.substr(3);  // UTF-8 byte-order mark
-      const std::string line = trim(raw);
+      const std::string line = trimmed(raw);
       if (!header_seen) {
         if (line_number == 1) {
-          if (line.rfind('#', 0) != 0 || trim(line.substr(1)) != std::string("format: ") + kFormatLine) {
+          if (line.rfind('#', 0) != 0 || trimmed(line.substr(1)) != std::string("format: ") + kFormatLine) {
             fail(1, std::string("the first line must be '# format: ") + kFormatLine + "'");
           }
         }
         if (line.rfind('#', 0) == 0) {
-          const std::string entry = trim(line.substr(1));
+          const std::string entry = trimmed(line.substr(1));
           const auto colon = entry.find(':');
           if (colon == std::string::npos) fail(line_number, "metadata line is not '# key: value'");
-          campaign.metadata[trim(entry.substr(0, colon))] = trim(entry.substr(colon + 1));
+          campaign.metadata[trimmed(entry.substr(0, colon))] = trimmed(entry.substr(colon + 1));
           continue;
         }
         if (line.empty()) continue;
-        header = splitCells(line);
+        header = splitCells(line, ',');
         requireCommaSeparated(header, line, line_number);
         for (std::size_t c = 0; c < header.size(); ++c) {
           if (header[c].empty()) fail(line_number, "column " + std::to_string(c + 1) + " of the header has no name");
@@ -111,7 +96,7 @@ public:
         continue;
       }
       if (line.empty()) continue;
-      const std::vector<std::string> cells = splitCells(line);
+      const std::vector<std::string> cells = splitCells(line, ',');
       if (cells.size() != header.size()) {
         // More cells than columns, in a file of numbers: most likely decimal commas ("0,365").
         const bool decimal_commas = cells.size() > header.size() && line.find_first_of(";\t") == std::string::npos;
@@ -232,7 +217,7 @@ private:
   void interpretMetadata(MeasurementCampaign& campaign) const {
     const auto& meta = campaign.metadata;
     auto metaNumber = [&](const std::string& key, const std::string& text) {
-      const double value = number(trim(text), 1, "# " + key, true, 0.0);
+      const double value = number(trimmed(text), 1, "# " + key, true, 0.0);
       return value;
     };
     if (meta.count("robot")) campaign.robot = meta.at("robot");
