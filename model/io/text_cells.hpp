@@ -15,8 +15,7 @@ inline std::string trimmed(const std::string& text, const char* blanks = " \t\r\
   return text.substr(first, text.find_last_not_of(blanks) - first + 1);
 }
 
-inline std::vector<std::string> splitCells(const std::string& line, char separator,
-                                           const char* blanks = " \t\r\n") {
+inline std::vector<std::string> splitCells(const std::string& line, char separator, const char* blanks = " \t\r\n") {
   std::vector<std::string> cells;
   std::string cell;
   std::istringstream stream(line);
