@@ -1,5 +1,7 @@
 #include "model/effects/effect.hpp"
 
+#include "model/common/json_fields.hpp"
+
 namespace jointcomp {
 
 JointContext::JointContext(int dof)
@@ -16,5 +18,13 @@ void Effect::addJointError(const Robot&, const JointContext&, JointVector&) cons
 bool Effect::addMotorSlope(const Robot&, const JointContext&, JointVector&) const { return false; }
 
 double Effect::calibrationValue(int) const { return 0.0; }
+
+int readJoint(JsonFields& entry, const Robot& robot) {
+  const std::string name = entry.text("joint");
+  for (int j = 0; j < robot.dof(); ++j) {
+    if (robot.joints[j].name == name) return j;
+  }
+  entry.fail("joint", "robot '" + robot.name + "' has no joint named '" + name + "'");
+}
 
 }  // namespace jointcomp

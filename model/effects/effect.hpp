@@ -53,6 +53,12 @@ enum class EffectRole {
   JointError,  // predicts a joint-angle error
 };
 
+class JsonFields;
+
+// The index of the joint a parameter file's entry names in "joint"; fails naming the entry when the robot
+// has no such joint.
+int readJoint(JsonFields& entry, const Robot& robot);
+
 class Effect {
 public:
   virtual ~Effect() = default;

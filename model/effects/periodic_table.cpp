@@ -130,13 +130,8 @@ std::unique_ptr<Effect> PeriodicTableEffect::fromJson(const nlohmann::json& json
   for (std::size_t i = 0; i < list.size(); ++i) {
     JsonFields entry(list[i], fields.pathOf("tables[" + std::to_string(i) + "]"));
     PeriodicTable table;
-    const std::string joint_name = entry.text("joint");
-    table.joint = -1;
-    for (int j = 0; j < robot.dof(); ++j) {
-      if (robot.joints[j].name == joint_name) table.joint = j;
-    }
-    if (table.joint < 0) entry.fail("joint", "robot '" + robot.name + "' has no joint named '" + joint_name + "'");
-    table.stage = readPart(entry, gears, table.joint, joint_name);
+    table.joint = readJoint(entry, robot);
+    table.stage = readPart(entry, gears, table.joint, robot.joints[table.joint].name);
     const nlohmann::json& values = entry.array("coefficients_rad");
     if (values.size() < static_cast<std::size_t>(kMinKnots) || values.size() > static_cast<std::size_t>(kMaxKnots)) {
       entry.fail("coefficients_rad", "expected " + std::to_string(kMinKnots) + " to " + std::to_string(kMaxKnots) +

@@ -21,12 +21,7 @@ std::unique_ptr<Effect> SpringBalancerEffect::fromJson(const nlohmann::json& jso
                                                        const std::string& path) {
   JsonFields fields(json, path);
   fields.text("type");
-  const std::string joint_name = fields.text("joint");
-  int joint = -1;
-  for (int j = 0; j < robot.dof(); ++j) {
-    if (robot.joints[j].name == joint_name) joint = j;
-  }
-  if (joint < 0) fields.fail("joint", "robot '" + robot.name + "' has no joint named '" + joint_name + "'");
+  const int joint = readJoint(fields, robot);
   SpringBalancerGeometry geometry;
   geometry.anchor_distance_before_m = fields.positiveNumber("anchor_distance_before_m");
   geometry.anchor_distance_after_m = fields.positiveNumber("anchor_distance_after_m");

@@ -38,13 +38,8 @@ std::unique_ptr<Effect> TransmissionErrorEffect::fromJson(const nlohmann::json& 
   for (std::size_t i = 0; i < list.size(); ++i) {
     JsonFields entry(list[i], fields.pathOf("harmonics[" + std::to_string(i) + "]"));
     Harmonic h;
-    const std::string joint_name = entry.text("joint");
-    h.joint = -1;
-    for (int j = 0; j < robot.dof(); ++j) {
-      if (robot.joints[j].name == joint_name) h.joint = j;
-    }
-    if (h.joint < 0) entry.fail("joint", "robot '" + robot.name + "' has no joint named '" + joint_name + "'");
-    h.stage = readPart(entry, gears, h.joint, joint_name);
+    h.joint = readJoint(entry, robot);
+    h.stage = readPart(entry, gears, h.joint, robot.joints[h.joint].name);
     h.cycles_per_revolution = entry.positiveNumber("cycles_per_revolution");
     // People write degrees; programs write radians, which round-trip exactly. One of the two.
     if (entry.has("amplitude_deg") == entry.has("amplitude_rad")) {
