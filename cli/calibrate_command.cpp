@@ -48,7 +48,7 @@ int runCalibrate(int argc, char** argv) {
     throw std::invalid_argument(
         "calibrate needs --campaign CAMPAIGN.csv and --out DIR (and --urdf FILE, --params FILE, --holdout FILE)");
   }
-  const RobotSetup setup = loadRobotSetup(options, JOINTCOMP_DATA_DIR "/robots/ur10.urdf");
+  const RobotSetup setup = loadRobotSetup(options, robotFile("ur10"));
   const std::string& urdf = setup.urdf;
   const std::string campaign_path = options.get("campaign", "");
   const std::string out = options.get("out", "");

@@ -51,7 +51,7 @@ int runDiscover(int argc, char** argv) {
     throw std::invalid_argument(
         "discover needs --campaign FILE[,FILE..] and --out DIR (and --urdf, --params, --holdout)");
   }
-  const RobotSetup setup = loadRobotSetup(options, JOINTCOMP_DATA_DIR "/robots/ur10.urdf");
+  const RobotSetup setup = loadRobotSetup(options, robotFile("ur10"));
   const std::string& urdf = setup.urdf;
   const std::string out = options.get("out", "");
   prepareOutputFolder(out);

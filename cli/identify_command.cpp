@@ -60,8 +60,8 @@ int runIdentify(int argc, char** argv) {
     throw std::invalid_argument("identify " + kind + " needs --campaign FILE and --out DIR");
   }
   const std::string campaign_path = options.get("campaign", "");
-  const RobotSetup setup = loadRobotSetup(options, JOINTCOMP_DATA_DIR "/robots/rx170.urdf", "params",
-                                          JOINTCOMP_DATA_DIR "/params/rx170.json");
+  const RobotSetup setup = loadRobotSetup(options, robotFile("rx170"), "params",
+                                          parameterFile("rx170"));
   const std::string& urdf = setup.urdf;
   const std::string& params = setup.params;
   const std::string out = options.get("out", "");

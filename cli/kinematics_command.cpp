@@ -11,7 +11,7 @@ namespace jointcomp::cli {
 
 int runKinematics(int argc, char** argv) {
   const Options options(argc, argv, {"urdf", "base-link", "tip-link"});
-  const std::string urdf = options.get("urdf", JOINTCOMP_DATA_DIR "/robots/rx170.urdf");
+  const std::string urdf = options.get("urdf", robotFile("rx170"));
   const Robot robot = loadRobotFromUrdfFile(urdf, chainOptions(options));
   RobotWorkspace ws(robot);
   std::printf("robot '%s' from %s: %d joints, tool link '%s'\n", robot.name.c_str(), urdf.c_str(), robot.dof(),

@@ -5,6 +5,7 @@
 #include <string>
 
 #include "cli/commands.hpp"
+#include "cli/file_locations.hpp"
 #include "cli/options.hpp"
 
 namespace {
@@ -45,7 +46,7 @@ void printUsage() {
       "                             types: offset, compliance, nonlinear_compliance, harmonic, backlash,\n"
       "                             hysteresis, thermal, geometric, payload, periodic, instrument_scale\n"
       "  help                       this text; jointcomp <command> --help lists a command's options\n"
-      "  --version                  the version\n"
+      "  --version                  the version, and where the robots, parameter files and plot scripts are\n"
       "Every command that reads --urdf also takes --base-link LINK and --tip-link LINK (default: the URDF's\n"
       "root, and the end of its longest moving chain, as ROS-Industrial's tool0 beside fixed side frames).\n"
       "With no command, jointcomp runs `paper` on the built-in Staubli RX170.\n");
@@ -61,7 +62,9 @@ int main(int argc, char** argv) {
       return 0;
     }
     if (command == "--version" || command == "version") {
-      std::printf("jointcomp %s\n", JOINTCOMP_VERSION);
+      const jointcomp::cli::FileLocations& files = jointcomp::cli::fileLocations();
+      std::printf("jointcomp %s\nfiles: %s (%s)\n", JOINTCOMP_VERSION, files.data.c_str(),
+                  files.installed ? "installed" : "the source tree it was built from");
       return 0;
     }
     if (command == "paper") return jointcomp::cli::runPaper(argc > 1 ? argc - 1 : 0, argv + 1);

@@ -108,7 +108,7 @@ void printTable(const SpiralExperimentResult& result) {
 void handOutFmus(const std::string& folder) {
   prepareOutputFolder(folder, "--out (its fmu folder)");
   for (const char* name : {"jointcomp_fmi2.fmu", "jointcomp_fmi3.fmu"}) {
-    const std::string built = std::string(JOINTCOMP_FMU_DIR) + "/" + name;
+    const std::string built = fileLocations().fmus + "/" + name;
     std::ifstream source(built, std::ios::binary);
     if (!source) {
       std::printf("no FMU at %s (build the jointcomp_fmus target)\n", built.c_str());
@@ -156,8 +156,8 @@ int runPaper(int argc, char** argv) {
   const auto started = std::chrono::steady_clock::now();
 
   std::printf("jointcomp paper: the spiral test of Olabi et al. (IEEE ICIT 2012), simulated\n");
-  const RobotSetup setup = loadRobotSetup(options, JOINTCOMP_DATA_DIR "/robots/rx170.urdf", "params",
-                                          JOINTCOMP_DATA_DIR "/params/rx170.json");
+  const RobotSetup setup = loadRobotSetup(options, robotFile("rx170"), "params",
+                                          parameterFile("rx170"));
   std::printf("  robot %s\n  parameters %s\n", setup.urdf.c_str(), setup.params.c_str());
   const JointErrorModel& nominal = setup.parameters.model;
   const SpiralExperimentSpec spec = specFromOptions(options, setup.parameters, setup.params);

@@ -1,5 +1,7 @@
 #include "cli/plot.hpp"
 
+#include "cli/file_locations.hpp"
+
 #include <cerrno>
 #include <csignal>
 #include <cstdio>
@@ -55,7 +57,7 @@ bool runChild(const std::vector<std::string>& arguments, std::string& why) {
 
 bool drawPlot(const std::string& script, const std::string& input, const std::string& output, const std::string& note) {
   std::fflush(stdout);  // the child's output follows ours
-  const std::string path = std::string(JOINTCOMP_SOURCE_DIR) + "/cli/plots/" + script;
+  const std::string path = fileLocations().plots + "/" + script;
   std::string why;
   struct stat written {};
   if (!runChild({kPython, path, input, output}, why)) {

@@ -8,6 +8,7 @@
 #include <memory>
 #include <string>
 
+#include "cli/file_locations.hpp"
 #include "cli/options.hpp"
 #include "model/common/progress.hpp"
 #include "model/io/parameter_file.hpp"

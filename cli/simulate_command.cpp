@@ -40,7 +40,7 @@ int runSimulate(int argc, char** argv) {
         "simulate needs --protocol stiffness|joint2-sweep|spiral|random|back-and-forth and --truth PARAMS.json");
   }
   const std::string protocol_name = options.get("protocol", "");
-  const RobotSetup setup = loadRobotSetup(options, JOINTCOMP_DATA_DIR "/robots/rx170.urdf", "truth");
+  const RobotSetup setup = loadRobotSetup(options, robotFile("rx170"), "truth");
   const std::string& truth_path = setup.params;
   CampaignSimulationSpec spec = defaultCampaignSpec(protocolFromName(protocol_name));
   const std::string out = options.get("out", "out/" + protocolName(spec.protocol) + ".csv");

@@ -10,7 +10,7 @@ cc="$4"
 rm -rf "$work"
 mkdir -p "$work"
 prefix="$work/prefix"
-cmake --install "$build" --prefix "$prefix" --component capi >"$work/install.log"
+cmake --install "$build" --prefix "$prefix" >"$work/install.log"
 
 echo "== find_package(jointcomp)"
 cmake -S "$source/examples/c" -B "$work/find_package" -DCMAKE_PREFIX_PATH="$prefix" -DCMAKE_C_COMPILER="$cc" \
@@ -29,10 +29,16 @@ datadir=$(pkg-config --variable=datadir jointcomp)
 "$work/spiral_pkg_config" "$datadir/robots/rx170.urdf" "$datadir/params/rx170.json"
 
 echo "== the installed Python package finds the installed library"
-found=$(env -u JOINTCOMP_LIBRARY PYTHONPATH="$prefix/share/jointcomp/python" PYTHONDONTWRITEBYTECODE=1 \
+found=$(env -u JOINTCOMP_LIBRARY PYTHONPATH="$prefix/lib/python3/dist-packages" PYTHONDONTWRITEBYTECODE=1 \
   /usr/bin/python3 -c 'import jointcomp; print(jointcomp.library_path)')
 echo "$found"
 case "$found" in
   "$prefix"/lib/*) ;;
   *) echo "expected the library under $prefix/lib"; exit 1 ;;
 esac
+
+echo "== the installed tool runs from the prefix, with no source tree"
+(cd "$work" && "$prefix/bin/jointcomp" --version) | tee "$work/version.txt"
+grep -qF "files: $(realpath "$prefix")/share/jointcomp (installed)" "$work/version.txt"
+(cd "$work" && "$prefix/bin/jointcomp" kinematics) >"$work/kinematics.txt"
+grep -q "rx170" "$work/kinematics.txt" || { cat "$work/kinematics.txt"; exit 1; }

@@ -3,8 +3,8 @@
 The library is looked for, in this order:
 
 1. the path in the environment variable ``JOINTCOMP_LIBRARY``;
-2. an installed tree: ``<prefix>/lib[/<multiarch>]/libjointcomp.so.<ABI>`` when this package lives in
-   ``<prefix>/share/jointcomp/python``;
+2. an installed tree: ``<prefix>/lib[/<multiarch>]/libjointcomp.so.<ABI>`` when this package lives under
+   ``<prefix>/lib`` (``cmake --install``, the .deb: ``<prefix>/lib/python3/dist-packages``);
 3. the system's loader (``LD_LIBRARY_PATH``, ``ldconfig``) by its soname ``libjointcomp.so.<ABI>``;
 4. the build trees of a source checkout, ``<checkout>/build/*/capi/libjointcomp.so.<ABI>``, newest first.
 """
@@ -104,9 +104,11 @@ def _candidates():
         return [(explicit, "JOINTCOMP_LIBRARY")]
     found = []
     here = pathlib.Path(__file__).resolve().parent
-    if len(here.parents) > 3 and here.parents[1].name == "jointcomp" and here.parents[2].name == "share":
-        prefix = here.parents[3]
-        for path in sorted(glob.glob(str(prefix / "lib" / SONAME)) + glob.glob(str(prefix / "lib" / "*" / SONAME))):
+    # <prefix>/lib/python3/dist-packages/jointcomp, or a virtual environment's lib/python3.X/site-packages.
+    libs = [parent for parent in here.parents if parent.name == "lib"]
+    if libs:
+        lib = libs[0]
+        for path in sorted(glob.glob(str(lib / SONAME)) + glob.glob(str(lib / "*" / SONAME))):
             found.append((path, "the installed tree"))
     found.append((SONAME, "the system's library path"))
     checkout = here.parents[2] if len(here.parents) > 2 else here
