@@ -60,8 +60,7 @@ int runIdentify(int argc, char** argv) {
     throw std::invalid_argument("identify " + kind + " needs --campaign FILE and --out DIR");
   }
   const std::string campaign_path = options.get("campaign", "");
-  const RobotSetup setup = loadRobotSetup(options, robotFile("rx170"), "params",
-                                          parameterFile("rx170"));
+  const RobotSetup setup = loadRobotSetup(options, robotFile("rx170"), "params", parameterFile("rx170"));
   const std::string& urdf = setup.urdf;
   const std::string& params = setup.params;
   const std::string out = options.get("out", "");

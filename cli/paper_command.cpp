@@ -156,8 +156,7 @@ int runPaper(int argc, char** argv) {
   const auto started = std::chrono::steady_clock::now();
 
   std::printf("jointcomp paper: the spiral test of Olabi et al. (IEEE ICIT 2012), simulated\n");
-  const RobotSetup setup = loadRobotSetup(options, robotFile("rx170"), "params",
-                                          parameterFile("rx170"));
+  const RobotSetup setup = loadRobotSetup(options, robotFile("rx170"), "params", parameterFile("rx170"));
   std::printf("  robot %s\n  parameters %s\n", setup.urdf.c_str(), setup.params.c_str());
   const JointErrorModel& nominal = setup.parameters.model;
   const SpiralExperimentSpec spec = specFromOptions(options, setup.parameters, setup.params);
