@@ -54,9 +54,11 @@ std::string runsCsv(const SpiralExperimentResult& result) {
 }
 
 // What `jointcomp paper` writes beside the CSV: the runs' metrics against the paper's.
-std::string summaryJson(const SpiralExperimentResult& result, const SpiralExperimentSpec& spec) {
+std::string summaryJson(const SpiralExperimentResult& result, const SpiralExperimentSpec& spec,
+                        const std::string& robot_name) {
   nlohmann::ordered_json summary;
-  summary["experiment"] = "Olabi et al. 2012 spiral, simulated quasi-static RX170";
+  summary["experiment"] = "Olabi et al. 2012 spiral, simulated " + robot_name;
+  summary["robot"] = robot_name;
   summary["samples"] = result.planned.size();
   summary["duration_s"] = result.planned.time.back();
   summary["truth_seed"] = spec.truth.seed;
@@ -175,7 +177,7 @@ int runPaper(int argc, char** argv) {
   });
 
   writeFileAtomically(out + "/spiral_runs.csv", runsCsv(result));
-  writeFileAtomically(out + "/summary.json", summaryJson(result, spec));
+  writeFileAtomically(out + "/summary.json", summaryJson(result, spec, setup.robot->name));
   printTable(result);
   std::printf("wrote %s/spiral_runs.csv and %s/summary.json\n", out.c_str(), out.c_str());
   handOutFmus(out + "/fmu");

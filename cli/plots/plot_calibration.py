@@ -23,7 +23,8 @@ def main(csv_path, png_path):
     for name, role in zip(data["campaign"], data["role"]):
         if (name, role) not in campaigns:
             campaigns.append((name, role))
-    figure, axes = plt.subplots(len(campaigns), 2, figsize=(13, 3.6 * len(campaigns)), squeeze=False)
+    figure, axes = plt.subplots(len(campaigns), 2, figsize=(13, 0.6 + 3.8 * len(campaigns)), squeeze=False,
+                             layout="constrained")
     for (name, role), (along, histogram) in zip(campaigns, axes):
         rows = data[(data["campaign"] == name) & (data["role"] == role)]
         before, after = rows["before_mm"], rows["after_mm"]
@@ -38,7 +39,7 @@ def main(csv_path, png_path):
         along.set_yscale("log")
         along.set_xlabel("row (in file order)")
         along.set_ylabel("3-D error [mm]")
-        along.set_title(f"{name} ({role}): error per row")
+        along.set_title(f"{name} ({role}):\nerror per row", fontsize=10)
         along.legend(fontsize=8, markerscale=4)
         top = max(np.percentile(before, 99.5), after.max())
         bins = np.linspace(0.0, top, 80)
@@ -46,12 +47,12 @@ def main(csv_path, png_path):
         histogram.hist(after, bins=bins, alpha=0.6, color="tab:blue", label="after")
         histogram.set_xlabel("3-D error [mm]")
         histogram.set_ylabel("rows")
-        histogram.set_title(f"{name}: histogram (mean {np.mean(before):.3f} -> {np.mean(after):.3f} mm, "
-                            f"max {before.max():.3f} -> {after.max():.3f} mm)")
+        # Two lines: on one, long campaign names ran off the figure.
+        histogram.set_title(f"{name}: histogram\nmean {np.mean(before):.3f} -> {np.mean(after):.3f} mm, "
+                            f"max {before.max():.3f} -> {after.max():.3f} mm", fontsize=10)
         histogram.legend(fontsize=8)
-    figure.suptitle("Kinematic calibration: before = nominal robot with the instrument frame fitted; "
+    figure.suptitle("Kinematic calibration: before = nominal robot with the instrument frame fitted;\n"
                     "after = calibrated robot (held-out campaigns: frame re-fitted)", fontsize=10)
-    figure.tight_layout()
     save_figure(figure, png_path, dpi=110)
 
 

@@ -16,7 +16,7 @@ NAMES = ["without correction", "stiffness correction", "stiffness and kinematic 
 
 def main(csv_path, png_path):
     data = np.genfromtxt(csv_path, delimiter=",", names=True)
-    figure, (along, plan) = plt.subplots(1, 2, figsize=(13, 4.8))
+    figure, (along, plan) = plt.subplots(1, 2, figsize=(13, 5.6), layout="constrained")
     for run, name in enumerate(NAMES):
         rows = data[data["run"] == run]
         z = rows["error_z_mm"]
@@ -24,7 +24,8 @@ def main(csv_path, png_path):
     along.set_xlabel("time along the spiral [s]")
     along.set_ylabel("Z deviation [mm]")
     along.axhline(0.0, color="black", lw=0.5)
-    along.legend(fontsize=8)
+    # Below the axes: inside, it hid the deepest dips of the uncorrected run.
+    along.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.13), frameon=False)
     along.set_title("Z deviation measured along the spiral")
     rows = data[data["run"] == 0]
     points = plan.scatter(rows["planned_x_mm"], rows["planned_y_mm"], c=rows["error_z_mm"], s=2, cmap="coolwarm")
@@ -33,7 +34,6 @@ def main(csv_path, png_path):
     plan.set_xlabel("X [mm]")
     plan.set_ylabel("Y [mm]")
     plan.set_title("spiral in the XY plane")
-    figure.tight_layout()
     save_figure(figure, png_path, dpi=110)
 
 

@@ -21,17 +21,29 @@ std::string tableRow(const std::string& name, int rows, const ErrorStatistics& b
 }
 
 std::string parameterLine(const ParameterEstimate& p) {
+  // The value in the unit its name says (target.x_m in m: the names of --fix and report.json), then in the
+  // unit people read (mm, deg, ppm).
   const bool angle = p.unit == "rad";
   const bool length = p.unit == "m";
-  const bool ratio = p.unit == "1";  // the instrument's scale, in parts per million
+  const bool ratio = p.unit == "1";  // the instrument's scale
   const double scale = length ? 1e3 : angle ? 180.0 / 3.14159265358979323846 : ratio ? 1e6 : 1.0;
-  const char* unit = length ? "mm" : angle ? "deg" : ratio ? "ppm" : "rad/(N m)";
-  char line[320];
+  const char* unit = length ? "mm" : angle ? "deg" : ratio ? "ppm" : "";
+  const std::string si_unit = p.unit == "1" ? "" : p.unit;
+  char line[400];
   if (p.identified) {
-    std::snprintf(line, sizeof(line), "  %-34s %14.6g +- %-10.3g %s (nominal %.6g)\n", p.name.c_str(), p.value * scale,
-                  p.sigma * scale, unit, p.nominal * scale);
+    if (*unit) {
+      std::snprintf(line, sizeof(line), "  %-34s %13.6g +- %-9.3g %-4s = %.6g +- %.3g %s (nominal %.6g %s)\n",
+                    p.name.c_str(), p.value, p.sigma, si_unit.c_str(), p.value * scale, p.sigma * scale, unit,
+                    p.nominal * scale, unit);
+    } else {
+      std::snprintf(line, sizeof(line), "  %-34s %13.6g +- %-9.3g %s (nominal %.6g)\n", p.name.c_str(), p.value,
+                    p.sigma, si_unit.c_str(), p.nominal);
+    }
+  } else if (*unit) {
+    std::snprintf(line, sizeof(line), "  %-34s fixed at %.6g %s = %.6g %s: %s\n", p.name.c_str(), p.value,
+                  si_unit.c_str(), p.value * scale, unit, p.fixed_because.c_str());
   } else {
-    std::snprintf(line, sizeof(line), "  %-34s fixed at %.6g %s: %s\n", p.name.c_str(), p.value * scale, unit,
+    std::snprintf(line, sizeof(line), "  %-34s fixed at %.6g %s: %s\n", p.name.c_str(), p.value, si_unit.c_str(),
                   p.fixed_because.c_str());
   }
   return line;

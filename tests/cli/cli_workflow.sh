@@ -89,6 +89,27 @@ for r in rows:
     assert abs(norm - float(r["after_mm"])) < 1e-6 * max(1.0, norm), r
 PY
 test -s "$work/calibrate/rx170_calibrated.urdf" || fail "calibrate wrote no URDF"
+# Each identified parameter's value is printed in the unit its name says, then in the unit people read:
+# target.z_m 0.15 m = 150 mm, not "target.z_m 150 mm".
+"$python" - "$work/calibrate/summary.txt" "$work/calibrate/report.json" <<'PY'
+import json
+import re
+import sys
+
+summary = open(sys.argv[1]).read()
+report = json.load(open(sys.argv[2]))
+checked = 0
+for line in summary.splitlines():
+    match = re.match(r"\s+(\S+_(m|rad))\s+(\S+) \+- \S+\s+(m|rad)\s+= (\S+) \+- \S+ (mm|deg)", line)
+    if not match:
+        continue
+    name, unit, value, shown_unit, converted, readable = match.groups()
+    assert unit == shown_unit, line
+    factor = 1e3 if unit == "m" else 180.0 / 3.141592653589793
+    assert abs(float(converted) - float(value) * factor) <= 1e-5 * max(1.0, abs(float(converted))), line
+    checked += 1
+assert checked >= 3, "no parameter lines in the summary:\n" + summary
+PY
 
 # What the calibration leaves is the tracker's noise here: its neighbours in joint space must not predict
 # it (examples/python/residual_neighbours.py, the analysis quoted in the README for the UR10).

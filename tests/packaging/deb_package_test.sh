@@ -44,6 +44,16 @@ grep -q "^stiffness and kinematic correction" "$work/paper.txt"
 for output in spiral_runs.csv summary.json fmu/jointcomp_fmi2.fmu fmu/jointcomp_fmi3.fmu; do
   [ -s "$work/run/paper/$output" ] || { echo "paper did not write $output"; exit 1; }
 done
+# summary.json names the robot and the simulated robot that ran (the plant here, not "quasi-static")
+/usr/bin/python3 - "$work/run/paper/summary.json" <<'PY'
+import json
+import sys
+
+summary = json.load(open(sys.argv[1]))
+assert summary["robot"] == "rx170", summary
+assert "quasi-static" not in summary["experiment"], summary["experiment"]
+assert summary["simulated_robot"].startswith("flexible-joint plant"), summary["simulated_robot"]
+PY
 if /usr/bin/python3 -c 'import matplotlib' 2>/dev/null; then
   [ -s "$work/run/paper/spiral_z_error.png" ] || { echo "no plot from the installed plot scripts"; exit 1; }
 fi
