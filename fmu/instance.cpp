@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <cstring>
 
+#include "fmu/demo_move.hpp"
 #include "fmu/integrator_options.hpp"
 #include "fmu/variable_binding.hpp"
 #include "model/common/bits.hpp"
@@ -84,11 +85,24 @@ struct GroupTable {
       }
       group[role::dq_predicted[j]] = 4u;  // kPredictedOutputs
       group[role::q_ref[j]] = 8u;         // kReferenceOutputs
+      group[role::q_planned[j]] = 8u;
     }
     for (int index : role::tool_position) group[index] = 2u;  // kToolOutputs
   }
 };
 const GroupTable kGroups;
+
+// The reference parameter's items (modelDescription/enumerations.csv, ReferenceSource).
+constexpr double kReferenceAuto = 0.0;
+constexpr double kReferenceDemo = 2.0;
+
+// q_desired or qd_desired: the inputs the robot follows unless it follows the demo move.
+bool isDesiredInput(int index) {
+  for (int j = 0; j < table::kDof; ++j) {
+    if (index == role::q_desired[j] || index == role::qd_desired[j]) return true;
+  }
+  return false;
+}
 
 bool isFixedParameter(int index) {
   return kVariables[index].causality == table::Causality::Parameter &&
@@ -272,13 +286,16 @@ void Instance::ensureCompensator() {
 Status Instance::ensureReference(const char* function) {
   if (reference_valid_) return Status::OK;
   Models& m = *models_;
-  const JointVector q = gather(state_.values, role::q_desired);
+  JointVector q = gather(state_.values, role::q_desired);
   JointVector velocity = JointVector::Zero(table::kDof);
-  if (state_.values[role::use_velocity_inputs] != 0.0) {
+  if (state_.demo) {
+    demoMove(*m.robot, state_.time - state_.start_time, q, velocity);
+  } else if (state_.values[role::use_velocity_inputs] != 0.0) {
     velocity = gather(state_.values, role::qd_desired);
   } else if (state_.has_last_step && state_.time > state_.last_step_time) {
     velocity = (q - state_.last_q_desired) / (state_.time - state_.last_step_time);
   }
+  planned_ = q;
   if (m.compensator_mode == 0) {
     reference_ = q;
   } else {
@@ -313,6 +330,8 @@ void Instance::ensureInitialized() {
   if (state_.initialized) return;
   state_.time = state_.start_time;
   state_.has_last_step = false;
+  const double source = state_.values[role::reference];
+  state_.demo = source == kReferenceDemo || (source == kReferenceAuto && !state_.desired_inputs_set);
   reference_valid_ = false;
   if (ensureReference("initialization") != Status::OK) {
     throw SolverError("the compensation of the initial inputs did not converge");
@@ -332,7 +351,10 @@ Status Instance::updateOutputs(const char* function, unsigned groups) {
   if (missing & kReferenceOutputs) {
     const Status status = ensureReference(function);
     if (status != Status::OK) return status;
-    for (int j = 0; j < table::kDof; ++j) state_.values[role::q_ref[j]] = reference_[j];
+    for (int j = 0; j < table::kDof; ++j) {
+      state_.values[role::q_ref[j]] = reference_[j];
+      state_.values[role::q_planned[j]] = planned_[j];
+    }
   }
   const FlexibleJointPlant& plant = *m.plant;
   if (missing & (kStateOutputs | kToolOutputs | kPredictedOutputs)) {
@@ -625,7 +647,17 @@ Status Instance::set(const char* function, unsigned types, const std::uint32_t v
               describeVariable(index) + " is a fixed parameter; it can be set only before exitInitializationMode");
         }
         break;
-      case table::Causality::Input: break;
+      case table::Causality::Input:
+        if (isDesiredInput(index) && !before_step && state_.demo) {
+          return fail(Status::Error, function,
+                      describeVariable(index) + ": the robot follows the built-in demo move (reference = " +
+                          (state_.values[role::reference] == kReferenceDemo
+                               ? std::string("demo")
+                               : std::string("auto, and no q_desired or qd_desired input was set before the end "
+                                             "of initialisation")) +
+                          "); set reference = inputs, or the inputs during initialisation");
+        }
+        break;
     }
     const double x = v.type == table::Type::Boolean ? (values[i] != T(0) ? 1.0 : 0.0) : static_cast<double>(values[i]);
     const Status status = checkValue(function, index, x);
@@ -635,6 +667,11 @@ Status Instance::set(const char* function, unsigned types, const std::uint32_t v
     const int index = indexOf(vrs[i]);
     const table::Variable& v = kVariables[index];
     const double x = v.type == table::Type::Boolean ? (values[i] != T(0) ? 1.0 : 0.0) : static_cast<double>(values[i]);
+    if (isDesiredInput(index) && !state_.desired_inputs_set) {
+      // Setting a desired input, even to its start value, makes reference = auto follow the inputs.
+      state_.desired_inputs_set = true;
+      if (state_.phase == kInitializationMode) state_.initialized = false;
+    }
     if (sameBits(state_.values[index], x)) continue;
     state_.values[index] = x;
     if (state_.phase == kInitializationMode) state_.initialized = false;

@@ -149,6 +149,7 @@ private:
   unsigned outputs_valid_ = 0;      // OutputGroup bits
   JointVector reference_;           // Q_ref for the current inputs
   JointVector reference_velocity_;  // v for the current inputs
+  JointVector planned_;             // Q_theo: the q_desired inputs, or the demo move
 
   std::vector<std::unique_ptr<Snapshot>> states_;
 };

@@ -37,7 +37,7 @@ namespace {
 // ---- serialisation -----------------------------------------------------------------------------
 
 constexpr char kMagic[8] = {'J', 'C', 'F', 'M', 'U', 'S', 'T', 'A'};
-constexpr std::uint32_t kStateFormat = 1;
+constexpr std::uint32_t kStateFormat = 2;  // 2: with the reference source (demo move)
 
 std::uint64_t fnv1a(const unsigned char* bytes, std::size_t size) {
   std::uint64_t hash = 1469598103934665603ULL;
@@ -139,6 +139,8 @@ void writeState(const InstanceState& s, Writer& w) {
   w.put(s.last_q_desired);
   w.put(s.last_step_time);
   for (int k = 0; k < 6; ++k) w.put(s.applied_wrench[k]);
+  w.put(static_cast<std::uint8_t>(s.desired_inputs_set));
+  w.put(static_cast<std::uint8_t>(s.demo));
   const std::uint64_t total = w.bytes.size() + sizeof(std::uint64_t);  // with the checksum
   std::memcpy(w.bytes.data() + sizeof kMagic + sizeof kStateFormat, &total, sizeof total);
   w.put(fnv1a(w.bytes.data(), w.bytes.size()));
@@ -214,6 +216,8 @@ InstanceState deserializeState(const unsigned char bytes[], std::size_t size) {
   r.vector(s->last_q_desired, table::kDof, "the last desired positions");
   s->last_step_time = r.finite("the last step time");
   for (int k = 0; k < 6; ++k) s->applied_wrench[k] = r.finite("the applied wrench");
+  s->desired_inputs_set = r.flag("the desired-inputs flag");
+  s->demo = r.flag("the demo flag");
   if (r.offset() + sizeof(std::uint64_t) != size) throw Error("the state has bytes after its end");
   for (int i = 0; i < table::kCount; ++i) {
     const table::Causality c = kVariables[i].causality;

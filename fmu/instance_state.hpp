@@ -37,6 +37,8 @@ struct InstanceState {
   JointVector last_q_desired;  // q_desired and time of that step
   double last_step_time = 0.0;
   Vector6 applied_wrench = Vector6::Zero();  // what the plant was last given
+  bool desired_inputs_set = false;           // the master set a q_desired or qd_desired input since instantiation
+  bool demo = false;                         // the robot follows the built-in demo move (decided at initialisation)
 
   // An instance as instantiated: the table's start values, time 0.
   static InstanceState atStart();

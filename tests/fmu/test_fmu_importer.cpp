@@ -737,8 +737,8 @@ TEST_P(FmuTest, DescribesItselfAndExportsTheStandardVersion) {
     EXPECT_STREQ(fmi3().fmi3GetVersion(), "3.0");
   }
   const ModelDescription md = readModelDescription(GetParam());
-  EXPECT_EQ(md.outputs.size(), 45u);
-  EXPECT_EQ(md.vr.size(), 133u);
+  EXPECT_EQ(md.outputs.size(), 51u);
+  EXPECT_EQ(md.vr.size(), 140u);
   EXPECT_FALSE(md.token.empty());
 }
 
@@ -1171,10 +1171,72 @@ TEST_P(FmuTest, AFailingIntegrationIsDiscardedWithCvodesReason) {
 // drive's tracking envelope: the step is discarded, naming the joint and the envelope, and stepping on
 // is refused until the master goes back to an earlier state. With the envelope widened, the same step
 // is followed and settles (the controller's anti-windup), inside the joint limits.
+// A plain run (no input set) follows the built-in demo move, and the compensation shows in it: the links
+// follow the planned move more closely with the correction than without.
+TEST_P(FmuTest, APlainRunMovesTheRobotAndShowsTheCompensation) {
+  double worst_error[3] = {0.0, 0.0, 0.0};  // max |q_link - q_planned| of joints 2 and 3, per mode
+  for (int mode : {0, 2}) {
+    auto m = makeMaster(GetParam());
+    ASSERT_TRUE(m->instantiate());
+    ASSERT_EQ(m->enterInitialization(), kOK);
+    ASSERT_EQ(m->setEnumeration(m->vr("compensation"), mode), kOK);
+    ASSERT_EQ(m->exitInitialization(), kOK) << m->log();
+    const std::vector<std::uint32_t> vrs = {m->vr("q_planned_2"), m->vr("q_planned_3"), m->vr("q_link_2"),
+                                            m->vr("q_link_3"), m->vr("q_desired_2")};
+    std::vector<double> values;
+    double lowest = 1e9, highest = -1e9, t = 0.0;
+    for (int k = 0; k < 600; ++k, t += 0.01) {
+      ASSERT_EQ(m->doStep(t, 0.01), kOK) << "t = " << t << m->log();
+      ASSERT_EQ(m->getReals(vrs, values), kOK);
+      lowest = std::min(lowest, values[0]);
+      highest = std::max(highest, values[0]);
+      EXPECT_EQ(values[4], 0.0);  // the inputs keep their start values; the robot follows the demo
+      if (t > 1.0) {
+        worst_error[mode] =
+            std::max({worst_error[mode], std::abs(values[2] - values[0]), std::abs(values[3] - values[1])});
+      }
+    }
+    EXPECT_GT(highest - lowest, 0.3) << "the demo move swings joint 2 by 0.35 rad in 5 s";
+    // After initialisation, a desired input is refused with the way out, not silently ignored.
+    EXPECT_EQ(m->setReals({m->vr("q_desired_1")}, {0.1}), kError);
+    EXPECT_TRUE(m->logged("reference = inputs")) << m->log();
+    EXPECT_EQ(m->terminate(), kOK);
+  }
+  EXPECT_LT(worst_error[0], 0.01) << "the links follow the demo move";
+  EXPECT_LT(worst_error[2], 0.5 * worst_error[0])
+      << "with correction " << worst_error[2] << " rad, without " << worst_error[0] << " rad";
+}
+
+// Inputs set during initialisation (even to their start values) make reference = auto follow the inputs;
+// reference = demo follows the demo move whatever the inputs say.
+TEST_P(FmuTest, TheReferenceFollowsTheInputsOnceOneIsSetOrTheDemoWhenAsked) {
+  for (long source : {0L, 2L}) {
+    auto m = makeMaster(GetParam());
+    ASSERT_TRUE(m->instantiate());
+    ASSERT_EQ(m->enterInitialization(), kOK);
+    ASSERT_EQ(m->setEnumeration(m->vr("reference"), source), kOK);
+    ASSERT_EQ(m->setReals({m->vr("q_desired_2")}, {0.2}), kOK);
+    ASSERT_EQ(m->exitInitialization(), kOK) << m->log();
+    std::vector<double> planned;
+    for (double t = 0.0; t < 2.0 - 1e-9; t += 0.01) ASSERT_EQ(m->doStep(t, 0.01), kOK) << m->log();
+    ASSERT_EQ(m->getReals({m->vr("q_planned_2")}, planned), kOK);
+    if (source == 0) {
+      EXPECT_EQ(planned[0], 0.2);
+      EXPECT_EQ(m->setReals({m->vr("q_desired_2")}, {0.25}), kOK);
+    } else {
+      EXPECT_NE(planned[0], 0.2);  // the demo at t = 2 s
+      EXPECT_EQ(m->setReals({m->vr("q_desired_2")}, {0.25}), kError);
+      EXPECT_TRUE(m->logged("reference = demo")) << m->log();
+    }
+    EXPECT_EQ(m->terminate(), kOK);
+  }
+}
+
 TEST_P(FmuTest, ARunawayIsDiscardedAndASaturatingStepSettles) {
   auto m = makeMaster(GetParam());
   ASSERT_TRUE(m->instantiate());
   ASSERT_EQ(m->enterInitialization(), kOK);
+  ASSERT_EQ(m->setEnumeration(m->vr("reference"), 1), kOK);  // the inputs, first set after initialisation
   ASSERT_EQ(m->exitInitialization(), kOK) << m->log();
   void* before = nullptr;
   ASSERT_EQ(m->getState(&before), kOK);
@@ -1193,6 +1255,7 @@ TEST_P(FmuTest, ARunawayIsDiscardedAndASaturatingStepSettles) {
   ASSERT_TRUE(wide->instantiate());
   ASSERT_EQ(wide->enterInitialization(), kOK);
   ASSERT_EQ(wide->setReals({wide->vr("watchdog.tracking_envelope")}, {1.0}), kOK);
+  ASSERT_EQ(wide->setReals({wide->vr("q_desired_1")}, {0.0}), kOK);  // reference = auto: the inputs
   ASSERT_EQ(wide->exitInitialization(), kOK) << wide->log();
   ASSERT_EQ(wide->setReals({wide->vr("q_desired_1")}, {-0.5}), kOK);
   std::vector<double> link;
