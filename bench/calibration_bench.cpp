@@ -2,7 +2,7 @@
 // (shared/data/ipa-ur10, 11,911 rows): the whole calibrateGeometry call (frame fit of the nominal robot,
 // identifiability analysis of 57 candidate parameters, least-squares and robust Levenberg-Marquardt fits,
 // covariance), the importer of the raw file, and the frame-only re-fit of held-out Series B.
-// The data are read from JOINTCOMP_SHARED_DIR; without them the benchmarks are skipped with a message.
+// The data are read from $JOINTCOMP_SHARED/data/ipa-ur10; without them the benchmarks are skipped with a message.
 #include <cstdio>
 #include <fstream>
 #include <memory>
@@ -24,7 +24,7 @@ using namespace bench_ipa;
 
 void BM_CalibrateSeriesA(benchmark::State& state) {
   if (!haveData()) {
-    state.SkipWithError("IPA UR10 data not found under JOINTCOMP_SHARED_DIR");
+    state.SkipWithError(("skipped: the IPA UR10 data not found at " + ipa("Series_A/measurements_grid.csv")).c_str());
     return;
   }
   const MeasurementCampaign& a = seriesA();
@@ -43,7 +43,7 @@ BENCHMARK(BM_CalibrateSeriesA)->Unit(benchmark::kMillisecond)->MinTime(2.0);
 
 void BM_ImportSeriesA(benchmark::State& state) {
   if (!haveData()) {
-    state.SkipWithError("IPA UR10 data not found under JOINTCOMP_SHARED_DIR");
+    state.SkipWithError(("skipped: the IPA UR10 data not found at " + ipa("Series_A/measurements_grid.csv")).c_str());
     return;
   }
   for (auto _ : state) {
@@ -56,7 +56,7 @@ BENCHMARK(BM_ImportSeriesA)->Unit(benchmark::kMillisecond);
 
 void BM_HoldoutFrameFitSeriesB(benchmark::State& state) {
   if (!haveData()) {
-    state.SkipWithError("IPA UR10 data not found under JOINTCOMP_SHARED_DIR");
+    state.SkipWithError(("skipped: the IPA UR10 data not found at " + ipa("Series_A/measurements_grid.csv")).c_str());
     return;
   }
   const GeometricCalibrationResult calibration = calibrateGeometry(prior(), seriesA());

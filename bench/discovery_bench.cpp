@@ -40,7 +40,7 @@ MeasurementCampaign firstRows(const MeasurementCampaign& c, std::size_t rows) {
 // range(0): rows in quarters of Series A (4 = all); range(1): maximum harmonic order.
 void BM_DiscoverSeriesA(benchmark::State& state) {
   if (!haveData()) {
-    state.SkipWithError("IPA UR10 data not found under JOINTCOMP_SHARED_DIR");
+    state.SkipWithError(("skipped: the IPA UR10 data not found at " + ipa("Series_A/measurements_grid.csv")).c_str());
     return;
   }
   const MeasurementCampaign a = firstRows(seriesA(), seriesA().size() * static_cast<std::size_t>(state.range(0)) / 4);

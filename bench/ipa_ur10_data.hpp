@@ -1,7 +1,9 @@
-// The IPA UR10 laser-tracker data (../shared/data/ipa-ur10) and the nominal UR10, as the calibration and
-// discovery benchmarks read them.
+// The IPA UR10 laser-tracker data and the nominal UR10, as the calibration and discovery benchmarks read
+// them. The data is not in the repository: it is found under $JOINTCOMP_SHARED/data/ipa-ur10 (the one
+// setting for such data; README, Tests).
 #pragma once
 
+#include <cstdlib>
 #include <fstream>
 #include <memory>
 #include <string>
@@ -12,7 +14,10 @@
 
 namespace bench_ipa {
 
-inline std::string ipa(const std::string& file) { return std::string(JOINTCOMP_SHARED_DIR) + "/data/ipa-ur10/" + file; }
+inline std::string ipa(const std::string& file) {
+  const char* root = std::getenv("JOINTCOMP_SHARED");
+  return std::string(root ? root : "(JOINTCOMP_SHARED not set)") + "/data/ipa-ur10/" + file;
+}
 
 inline bool haveData() { return std::ifstream(ipa("Series_A/measurements_grid.csv")).good(); }
 

@@ -49,7 +49,5 @@ inline Eigen::Isometry3d trackerFrame(DeterministicRandom& random) {
   return frame;
 }
 
-inline std::string sharedDir() { return JOINTCOMP_SHARED_DIR; }
-
 }  // namespace calibration_test
 }  // namespace jointcomp

@@ -11,11 +11,12 @@
 #include "calibration_test_support.hpp"
 #include "model/identify/discovery.hpp"
 #include "model/io/ipa_ur10_import.hpp"
+#include "tests/support/shared_data.hpp"
 
 namespace jointcomp {
 namespace {
 
-std::string ipa(const std::string& file) { return calibration_test::sharedDir() + "/data/ipa-ur10/" + file; }
+std::string ipa(const std::string& file) { return test::sharedFile("data/ipa-ur10/" + file); }
 
 MeasurementCampaign everyNth(const MeasurementCampaign& c, std::size_t step) {
   MeasurementCampaign out = c;
@@ -39,7 +40,7 @@ MeasurementCampaign everyNth(const MeasurementCampaign& c, std::size_t step) {
 }
 
 TEST(DiscoveryIpaUr10, NeverMakesTheHeldOutSeriesWorse) {
-  if (!std::ifstream(ipa("Series_A/measurements_grid.csv")).good()) GTEST_SKIP() << "IPA UR10 data not found";
+  JOINTCOMP_REQUIRE_SHARED_FILE("the IPA UR10 data", "data/ipa-ur10/Series_A/measurements_grid.csv");
   const MeasurementCampaign a =
       everyNth(importIpaUr10(ipa("Series_A/measurements_grid.csv"), ipa("Series_A/Trafo_TM_F_init.txt")), 3);
   const MeasurementCampaign b =

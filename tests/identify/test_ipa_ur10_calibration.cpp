@@ -10,13 +10,12 @@
 
 #include "calibration_test_support.hpp"
 #include "model/io/ipa_ur10_import.hpp"
+#include "tests/support/shared_data.hpp"
 
 namespace jointcomp {
 namespace {
 
-std::string ipa(const std::string& file) { return calibration_test::sharedDir() + "/data/ipa-ur10/" + file; }
-
-bool haveData() { return std::ifstream(ipa("Series_A/measurements_grid.csv")).good(); }
+std::string ipa(const std::string& file) { return test::sharedFile("data/ipa-ur10/" + file); }
 
 const ParameterEstimate& find(const GeometricCalibrationResult& result, const std::string& name) {
   for (const ParameterEstimate& p : result.parameters) {
@@ -26,7 +25,7 @@ const ParameterEstimate& find(const GeometricCalibrationResult& result, const st
 }
 
 TEST(IpaUr10Calibration, SeriesACalibrationCarriesOverToSeriesB) {
-  if (!haveData()) GTEST_SKIP() << "IPA UR10 data not found under " << calibration_test::sharedDir();
+  JOINTCOMP_REQUIRE_SHARED_FILE("the IPA UR10 data", "data/ipa-ur10/Series_A/measurements_grid.csv");
   const MeasurementCampaign a =
       importIpaUr10(ipa("Series_A/measurements_grid.csv"), ipa("Series_A/Trafo_TM_F_init.txt"));
   const MeasurementCampaign b =

@@ -10,16 +10,18 @@
 
 #include "model/common/errors.hpp"
 #include "model/io/ipa_ur10_import.hpp"
+#include "tests/support/shared_data.hpp"
 
 namespace jointcomp {
 namespace {
 
 using ::testing::HasSubstr;
 
-std::string ipaFile(const std::string& name) { return std::string(JOINTCOMP_SHARED_DIR) + "/data/ipa-ur10/" + name; }
+std::string ipaFile(const std::string& name) { return test::sharedFile("data/ipa-ur10/" + name); }
 std::string brokenFile(const std::string& name) { return std::string(JOINTCOMP_TEST_DATA_DIR) + "/campaigns/" + name; }
 
 TEST(IpaImport, SeriesA) {
+  JOINTCOMP_REQUIRE_SHARED_FILE("the IPA UR10 data", "data/ipa-ur10/Series_A/measurements_grid.csv");
   const MeasurementCampaign c =
       importIpaUr10(ipaFile("Series_A/measurements_grid.csv"), ipaFile("Series_A/Trafo_TM_F_init.txt"));
   // Every data row of the file (its README says 11,910; the file holds 11,911 rows after the header).
@@ -57,6 +59,7 @@ TEST(IpaImport, SeriesA) {
 }
 
 TEST(IpaImport, SeriesBTimeFromRowOrder) {
+  JOINTCOMP_REQUIRE_SHARED_FILE("the IPA UR10 data", "data/ipa-ur10/Series_B/measurements_joint_configurations.csv");
   const MeasurementCampaign c =
       importIpaUr10(ipaFile("Series_B/measurements_joint_configurations.csv"), ipaFile("Series_B/Trafo_TM_F_init.txt"));
   ASSERT_EQ(c.size(), 1495u);
@@ -75,11 +78,13 @@ TEST(IpaImport, SeriesBTimeFromRowOrder) {
 }
 
 TEST(IpaImport, WithoutTrafoThereIsNoTarget) {
+  JOINTCOMP_REQUIRE_SHARED_FILE("the IPA UR10 data", "data/ipa-ur10/Series_B/measurements_joint_configurations.csv");
   const MeasurementCampaign c = importIpaUr10(ipaFile("Series_B/measurements_joint_configurations.csv"));
   EXPECT_FALSE(c.has_target);
 }
 
 TEST(IpaImport, SurvivesTheCampaignFormat) {
+  JOINTCOMP_REQUIRE_SHARED_FILE("the IPA UR10 data", "data/ipa-ur10/Series_B/measurements_joint_configurations.csv");
   const MeasurementCampaign c =
       importIpaUr10(ipaFile("Series_B/measurements_joint_configurations.csv"), ipaFile("Series_B/Trafo_TM_F_init.txt"));
   const std::string path = ::testing::TempDir() + "jointcomp_ipa_b.csv";
