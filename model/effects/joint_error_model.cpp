@@ -60,6 +60,7 @@ void computeLoadTorque(const JointErrorModel& model, EffectMask mask, JointError
   forwardKinematics(model.robot(), ws.robot, ctx.q);
   gravityTorquesAtCurrentPose(model.robot(), ws.robot, ctx.load_torque);
   addNonGravityLoadsAtCurrentPose(model, mask, ws, ctx);
+  if (ctx.inertial_torque.size() == ctx.load_torque.size()) ctx.load_torque += ctx.inertial_torque;
 }
 
 void addNonGravityLoadsAtCurrentPose(const JointErrorModel& model, EffectMask mask, JointErrorWorkspace& ws,

@@ -1,0 +1,72 @@
+// Offline compensation of the dynamic joint errors: the joint references that make the modelled robot
+// (flexible joints, drives and their controller, every effect of the parameter file) put its links on a
+// planned trajectory with time, at any speed.
+//
+// Two stages, both before the motion:
+// 1. Closed form, sample by sample: the full inverse-dynamics load of the planned motion (inertia and
+//    Coriolis, besides gravity, payload and tool wrench) deflects the joints through their compliance,
+//    and the static compensator inverts that together with every other effect (the paper's
+//    Q_ref = Q_theo - dQ, with dQ under the dynamic load). This removes what the links' own inertia does.
+// 2. Iterative refinement against the nominal plant (iterative learning control): the reference is run
+//    through the plant built from the nominal model and drives, and each sample of the reference moves by
+//    the link error the run left there, until the largest error is below the tolerance. This removes what
+//    stage 1 does not model: the drives' tracking lag (motor inertia, friction, the PID and its
+//    feed-forward), the transmission damping and the reference's interpolation between samples.
+// Why both: stage 1 alone leaves the drive lag, which dominates at speed (issue 18: 3e-5 rad on a 5 degree
+// move in 2 s); stage 2 alone would need many more plant runs from the planned positions. Together the
+// refinement converges in a few runs (each one plant run of the trajectory).
+#pragma once
+
+#include <vector>
+
+#include "model/compensation/joint_trajectory.hpp"
+#include "model/effects/joint_error_model.hpp"
+#include "model/plant/drive_parameters.hpp"
+#include "model/plant/flexible_joint_plant.hpp"
+
+namespace jointcomp {
+
+struct DynamicCompensationOptions {
+  double tolerance_rad = 2e-7;  // largest link error of the nominal plant on the reference (0.4 um at 2 m)
+  int max_iterations = 40;      // plant runs of stage 2, at most
+  FixedPointOptions fixed_point;
+  // The nominal plant's runs: integrated a hundred times tighter than the plant's default (whose relative
+  // tolerance of 1e-6 allows errors of that order on joint angles near 1 rad), so that the refinement
+  // sees the reference's effect rather than the integrator's.
+  PlantOptions plant = tightPlantOptions();
+  static PlantOptions tightPlantOptions() {
+    PlantOptions tight;
+    tight.relative_tolerance = 1e-8;
+    tight.absolute_tolerance = 1e-10;
+    return tight;
+  }
+};
+
+struct DynamicCompensationReport {
+  int iterations = 0;                 // plant runs made
+  double initial_error_rad = 0.0;     // largest link error of the closed-form reference (stages 1 and 1b)
+  double max_error_rad = 0.0;         // the same for the reference returned (the best run's)
+  std::vector<double> error_per_run;  // largest link error of each run, in order
+  double max_correction_rad = 0.0;    // largest |Q_theo - Q_ref|
+};
+
+// The references (and their velocities, which the controller interpolates with) for `planned`: its
+// samples' times, positions and velocities (accelerations by central differences). Throws SolverError when
+// the refinement does not reach the tolerance (within max_iterations runs, or before it stops improving
+// for five runs) or a run of the nominal plant fails, InvalidArgument when
+// the trajectory or the drives are malformed (fewer than three samples, times not increasing, a drive
+// per joint missing), UnreachableError when a reference leaves the joint limits.
+DynamicCompensationReport compensateDynamically(const JointErrorModel& nominal,
+                                                const std::vector<DriveParameters>& drives,
+                                                const JointTrajectory& planned, std::vector<JointVector>& reference,
+                                                std::vector<JointVector>& reference_velocity,
+                                                const DynamicCompensationOptions& options = {});
+
+// Runs `reference` (with its velocities) through `plant` the way the spiral experiment does: reset at the
+// first sample, then at each sample set the reference, read the links, advance to the next sample time.
+// Returns the link positions at the samples.
+std::vector<JointVector> runReference(FlexibleJointPlant& plant, const std::vector<double>& time,
+                                      const std::vector<JointVector>& reference,
+                                      const std::vector<JointVector>& reference_velocity);
+
+}  // namespace jointcomp
