@@ -50,6 +50,9 @@ struct PlantOptions {
   // The plant's own Jacobian for CVODE's Newton iterations (when hasAnalyticJacobian()); false: CVODE's
   // difference quotients of the right-hand side, as before issue 17 (kept to compare against).
   bool analytic_jacobian = true;
+  // With that Jacobian, solve CVODE's Newton systems by eliminating the link and motor positions and the
+  // integrals (a 2n x 2n LU instead of 5n x 5n); false: SUNDIALS' dense LU (kept to compare against).
+  bool structured_linear_solver = true;
   bool control = true;         // false: no motor torque at all (free response)
   bool motors_locked = false;  // true: motor positions held where they are (static tests)
 };
@@ -130,6 +133,9 @@ public:
   // d(dy/dt)/dy at (t, y) into `jacobian`, stateSize() x stateSize() column-major; exposed for tests. Throws
   // InvalidArgument without hasAnalyticJacobian().
   void jacobian(double t, const double* y, double* jacobian);
+  // Solves (I - gamma jacobian(t, y)) x = b as CVODE's Newton iterations do with structured_linear_solver;
+  // exposed for tests. Throws SolverError when the system is singular.
+  void solveNewtonSystem(double t, const double* y, double gamma, const double* b, double* x);
 
   const JointErrorModel& model() const { return truth_; }
   const PlantOptions& options() const { return options_; }
