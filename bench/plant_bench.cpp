@@ -1,14 +1,20 @@
 // The flexible-joint plant: how fast it simulates the paper's spiral, and what one right-hand side costs
 // next to forward dynamics (ours and KDL's), on the RX170, in one binary and one run.
 //
-//   BM_Ours_PlantSpiral          the whole experiment (runSpiralExperiment with the drives of
+//   BM_Ours_PlantSpiral/2        the whole experiment (runSpiralExperiment with the drives of
 //                                model/params/rx170.json, default PlantOptions: 3 runs of the spiral on the
 //                                plant); counters: real_time_factor (motion seconds simulated per wall-clock
 //                                second spent simulating, planning and compensation excluded), and per
 //                                experiment CVODE's steps, rhs_evaluations (those of its difference-quotient
-//                                Jacobians included) and jacobian_evaluations.
+//                                Jacobians included), jacobian_rhs (those alone), jacobian_evaluations,
+//                                newton_iterations and lu_setups (factorisations of I - gamma J).
+//   BM_Ours_PlantSpiral/1, /0    the same with SUNDIALS' dense LU instead of the structured Newton solver
+//                                (/1), and also with CVODE's difference-quotient Jacobians (/0: the plant
+//                                before issue 17); compare them in one run, e.g. with
+//                                --benchmark_repetitions=5 --benchmark_enable_random_interleaving=true
 //   BM_Ours_PlantRightHandSide   one FlexibleJointPlant::derivative() (link forward dynamics, transmission
 //                                error and its sensitivity, loads, controller)
+//   BM_Ours_PlantJacobian        one FlexibleJointPlant::jacobian() (what CVODE's Newton iterations use)
 //   BM_Ours_ForwardDynamics      jointcomp::forwardDynamics
 //   BM_Kdl_ForwardDynamics       KDL::ChainFdSolver_RNE::CartToJnt on the same URDF chain, base_link -> flange
 //
@@ -159,6 +165,8 @@ void BM_Ours_PlantSpiral(benchmark::State& state) {
   Fixture& f = fixture();
   SpiralExperimentSpec spec;
   spec.drives = f.drives;
+  spec.plant.analytic_jacobian = state.range(0) >= 1;
+  spec.plant.structured_linear_solver = state.range(0) >= 2;
   double motion = 0.0, simulating = 0.0;
   PlantStatistics total;
   for (auto _ : state) {
@@ -168,6 +176,9 @@ void BM_Ours_PlantSpiral(benchmark::State& state) {
     total.steps += result.plant_statistics.steps;
     total.rhs_evaluations += result.plant_statistics.rhs_evaluations;
     total.jacobian_evaluations += result.plant_statistics.jacobian_evaluations;
+    total.jacobian_rhs_evaluations += result.plant_statistics.jacobian_rhs_evaluations;
+    total.nonlinear_iterations += result.plant_statistics.nonlinear_iterations;
+    total.linear_solver_setups += result.plant_statistics.linear_solver_setups;
     benchmark::DoNotOptimize(result.runs[2].metrics.ra);
   }
   const double experiments = static_cast<double>(state.iterations());
@@ -177,9 +188,12 @@ void BM_Ours_PlantSpiral(benchmark::State& state) {
   state.counters["steps"] = static_cast<double>(total.steps) / experiments;
   state.counters["rhs_evaluations"] = static_cast<double>(total.rhs_evaluations) / experiments;
   state.counters["jacobian_evaluations"] = static_cast<double>(total.jacobian_evaluations) / experiments;
+  state.counters["jacobian_rhs"] = static_cast<double>(total.jacobian_rhs_evaluations) / experiments;
+  state.counters["newton_iterations"] = static_cast<double>(total.nonlinear_iterations) / experiments;
+  state.counters["lu_setups"] = static_cast<double>(total.linear_solver_setups) / experiments;
   state.counters["rhs_per_motion_s"] = static_cast<double>(total.rhs_evaluations) / motion;
 }
-BENCHMARK(BM_Ours_PlantSpiral)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(3);
+BENCHMARK(BM_Ours_PlantSpiral)->Arg(0)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(3);
 
 // ---------------------------------------------------------------------------------------------------
 // One right-hand side against forward dynamics.
@@ -200,6 +214,23 @@ void BM_Ours_PlantRightHandSide(benchmark::State& state) {
   allocations.report(state);
 }
 BENCHMARK(BM_Ours_PlantRightHandSide);
+
+void BM_Ours_PlantJacobian(benchmark::State& state) {
+  Fixture& f = fixture();
+  FlexibleJointPlant plant(*f.model, f.drives);
+  plant.reset(f.samples[0].q);
+  std::vector<double> jacobian(static_cast<std::size_t>(plant.stateSize() * plant.stateSize()));
+  std::size_t k = 0;
+  const AllocationCounter allocations;
+  for (auto _ : state) {
+    plant.jacobian(0.0, f.samples[k & (kStates - 1)].y.data(), jacobian.data());
+    benchmark::DoNotOptimize(jacobian.data());
+    benchmark::ClobberMemory();
+    ++k;
+  }
+  allocations.report(state);
+}
+BENCHMARK(BM_Ours_PlantJacobian);
 
 void BM_Ours_ForwardDynamics(benchmark::State& state) {
   Fixture& f = fixture();

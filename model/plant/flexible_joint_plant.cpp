@@ -4,11 +4,13 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <limits>
 
 #include <cvode/cvode.h>
 #include <nvector/nvector_serial.h>
 #include <sunlinsol/sunlinsol_dense.h>
 #include <sunmatrix/sunmatrix_dense.h>
+#include <Eigen/LU>
 
 #include "model/common/errors.hpp"
 #include "model/effects/compliance.hpp"
@@ -18,6 +20,103 @@
 
 namespace jointcomp {
 
+// Solves CVODE's Newton systems (I - gamma J) x = b for the plant's layout y = [q, qd, p, pd, z]: the rows
+// of q and p are the identity and -gamma on their own velocity, those of z are diagonal in p, pd and z, so
+// q, p and z are eliminated and a 2n x 2n system in (qd, pd) remains, one 12 x 12 LU for the RX170 instead
+// of 30 x 30 (the Schur complement further onto 6 would save little more). Setup checks that layout and
+// fails unrecoverably on a matrix without it.
+struct StructuredLinearSolver {
+  using Reduced =
+      Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::ColMajor, 2 * kMaxJoints, 2 * kMaxJoints>;
+  using ReducedVector = Eigen::Matrix<double, Eigen::Dynamic, 1, Eigen::ColMajor, 2 * kMaxJoints, 1>;
+
+  int n = 0;
+  Reduced reduced;
+  Eigen::PartialPivLU<Reduced> lu;
+  ReducedVector rhs, solution;
+  // Per joint: q = b_q + position_gain qd, p = b_p + motor_gain pd, and the integral row
+  // integral_by_p p + integral_by_pd pd + integral_self z = b_z, so z = (b_z - integral_by_p b_p) / integral_self
+  // + integral_by_pd_reduced pd.
+  JointVector position_gain, motor_gain, integral_by_p, integral_by_pd, integral_self, integral_by_pd_reduced;
+  JointVector integral_offset;
+  long last_flag = 0;
+
+  explicit StructuredLinearSolver(int dof)
+      : n(dof),
+        reduced(2 * dof, 2 * dof),
+        lu(2 * dof),
+        rhs(2 * dof),
+        solution(2 * dof),
+        position_gain(dof),
+        motor_gain(dof),
+        integral_by_p(dof),
+        integral_by_pd(dof),
+        integral_self(dof),
+        integral_by_pd_reduced(dof),
+        integral_offset(dof) {}
+
+  int setup(const double* matrix) {
+    const int size = 5 * n;
+    auto at = [&](int row, int column) { return matrix[static_cast<std::size_t>(column) * size + row]; };
+    for (int k = 0; k < n; ++k) {
+      const int q = k, qd = n + k, p = 2 * n + k, pd = 3 * n + k, z = 4 * n + k;
+      for (int c = 0; c < size; ++c) {
+        const bool q_row_ok = c == qd || at(q, c) == (c == q ? 1.0 : 0.0);
+        const bool p_row_ok = c == pd || at(p, c) == (c == p ? 1.0 : 0.0);
+        const bool z_row_ok = c == p || c == pd || c == z || at(z, c) == 0.0;
+        if (!q_row_ok || !p_row_ok || !z_row_ok) return last_flag = SUNLS_PACKAGE_FAIL_UNREC;
+      }
+      position_gain[k] = -at(q, qd);
+      motor_gain[k] = -at(p, pd);
+      integral_by_p[k] = at(z, p);
+      integral_by_pd[k] = at(z, pd);
+      integral_self[k] = at(z, z);
+      if (integral_self[k] == 0.0) return last_flag = SUNLS_LUFACT_FAIL;
+      integral_by_pd_reduced[k] = -(integral_by_p[k] * motor_gain[k] + integral_by_pd[k]) / integral_self[k];
+    }
+    for (int i = 0; i < 2 * n; ++i) {
+      const int row = i < n ? n + i : 2 * n + i;  // the rows of qd, then those of pd
+      for (int k = 0; k < n; ++k) {
+        reduced(i, k) = at(row, n + k) + at(row, k) * position_gain[k];
+        reduced(i, n + k) =
+            at(row, 3 * n + k) + at(row, 2 * n + k) * motor_gain[k] + at(row, 4 * n + k) * integral_by_pd_reduced[k];
+      }
+    }
+    lu.compute(reduced);
+    const auto pivots = lu.matrixLU().diagonal();
+    for (int i = 0; i < 2 * n; ++i) {
+      if (!(pivots[i] != 0.0) || !std::isfinite(pivots[i])) return last_flag = SUNLS_LUFACT_FAIL;  // recoverable
+    }
+    return last_flag = SUNLS_SUCCESS;
+  }
+
+  // x and b may be the same vector: every value of b is read before x is written where it was.
+  int solve(const double* matrix, double* x, const double* b) {
+    const int size = 5 * n;
+    auto at = [&](int row, int column) { return matrix[static_cast<std::size_t>(column) * size + row]; };
+    for (int k = 0; k < n; ++k)
+      integral_offset[k] = (b[4 * n + k] - integral_by_p[k] * b[2 * n + k]) / integral_self[k];
+    for (int i = 0; i < 2 * n; ++i) {
+      const int row = i < n ? n + i : 2 * n + i;
+      double value = b[row];
+      for (int k = 0; k < n; ++k) {
+        value -= at(row, k) * b[k] + at(row, 2 * n + k) * b[2 * n + k] + at(row, 4 * n + k) * integral_offset[k];
+      }
+      rhs[i] = value;
+    }
+    solution = lu.solve(rhs);
+    for (int k = 0; k < n; ++k) {
+      const double link_rate = solution[k], motor_rate = solution[n + k];
+      x[k] = b[k] + position_gain[k] * link_rate;
+      x[n + k] = link_rate;
+      x[2 * n + k] = b[2 * n + k] + motor_gain[k] * motor_rate;
+      x[3 * n + k] = motor_rate;
+      x[4 * n + k] = integral_offset[k] + integral_by_pd_reduced[k] * motor_rate;
+    }
+    return last_flag = SUNLS_SUCCESS;
+  }
+};
+
 // Every SUNDIALS object of one plant, each with its owner here and freed in reverse order.
 struct FlexibleJointPlant::Solver {
   SUNContext context = nullptr;
@@ -26,9 +125,10 @@ struct FlexibleJointPlant::Solver {
   SUNMatrix jacobian = nullptr;
   SUNLinearSolver linear_solver = nullptr;
   void* cvode = nullptr;
-  std::string last_error;          // CVODE's own message for the last failure
-  std::string rhs_error;           // why our right-hand side refused, if it did
-  PlantStatistics before_restart;  // counts of earlier integrator runs (a restart zeroes CVODE's)
+  std::unique_ptr<StructuredLinearSolver> structured;  // the content of linear_solver when it is ours
+  std::string last_error;                              // CVODE's own message for the last failure
+  std::string rhs_error;                               // why our right-hand side refused, if it did
+  PlantStatistics before_restart;                      // counts of earlier integrator runs (a restart zeroes CVODE's)
 
   ~Solver() {
     if (cvode) CVodeFree(&cvode);
@@ -43,6 +143,8 @@ struct FlexibleJointPlant::Solver {
 namespace {
 
 int plantRightHandSide(realtype t, N_Vector y, N_Vector ydot, void* user_data);
+int plantJacobian(realtype t, N_Vector y, N_Vector fy, SUNMatrix jacobian, void* user_data, N_Vector, N_Vector,
+                  N_Vector);
 
 // CVODE's name of a return flag. SUNDIALS 6 allocates the name for the caller, who must free it.
 std::string flagName(long flag) {
@@ -56,6 +158,31 @@ void captureCvodeError(int error_code, const char* module, const char* function,
   auto* solver = static_cast<std::string*>(user_data);
   *solver = std::string(module ? module : "CVODE") + "/" + (function ? function : "?") + " (" + flagName(error_code) +
             "): " + (message ? message : "");
+}
+
+StructuredLinearSolver& structuredOf(SUNLinearSolver solver) {
+  return *static_cast<StructuredLinearSolver*>(solver->content);
+}
+
+// The SUNLinearSolver around a StructuredLinearSolver that `content` owns (outlives the solver).
+SUNLinearSolver newStructuredSolver(StructuredLinearSolver& content, SUNContext context) {
+  SUNLinearSolver solver = SUNLinSolNewEmpty(context);
+  if (!solver) return nullptr;
+  solver->content = &content;
+  solver->ops->gettype = [](SUNLinearSolver) { return SUNLINEARSOLVER_DIRECT; };
+  solver->ops->getid = [](SUNLinearSolver) { return SUNLINEARSOLVER_CUSTOM; };
+  solver->ops->initialize = [](SUNLinearSolver) { return SUNLS_SUCCESS; };
+  solver->ops->setup = [](SUNLinearSolver s, SUNMatrix a) { return structuredOf(s).setup(SUNDenseMatrix_Data(a)); };
+  solver->ops->solve = [](SUNLinearSolver s, SUNMatrix a, N_Vector x, N_Vector b, realtype) {
+    return structuredOf(s).solve(SUNDenseMatrix_Data(a), N_VGetArrayPointer(x), N_VGetArrayPointer(b));
+  };
+  solver->ops->lastflag = [](SUNLinearSolver s) { return static_cast<sunindextype>(structuredOf(s).last_flag); };
+  solver->ops->free = [](SUNLinearSolver s) {
+    s->content = nullptr;  // owned by the plant's Solver
+    SUNLinSolFreeEmpty(s);
+    return SUNLS_SUCCESS;
+  };
+  return solver;
 }
 
 void check(int flag, const char* call) {
@@ -174,7 +301,12 @@ FlexibleJointPlant::FlexibleJointPlant(const JointErrorModel& truth, std::vector
   s.y = N_VNew_Serial(stateSize(), s.context);
   s.jacobian = SUNDenseMatrix(stateSize(), stateSize(), s.context);
   if (!s.y || !s.jacobian) throw SolverError("plant: SUNDIALS could not allocate the state");
-  s.linear_solver = SUNLinSol_Dense(s.y, s.jacobian, s.context);
+  if (analytic_slope_ && options_.analytic_jacobian && options_.structured_linear_solver) {
+    s.structured = std::make_unique<StructuredLinearSolver>(n_);
+    s.linear_solver = newStructuredSolver(*s.structured, s.context);
+  } else {
+    s.linear_solver = SUNLinSol_Dense(s.y, s.jacobian, s.context);
+  }
   s.cvode = CVodeCreate(CV_BDF, s.context);
   if (!s.linear_solver || !s.cvode) throw SolverError("plant: SUNDIALS could not create the solver");
   check(CVodeSetErrHandlerFn(s.cvode, captureCvodeError, &s.last_error), "CVodeSetErrHandlerFn");
@@ -190,6 +322,7 @@ FlexibleJointPlant::FlexibleJointPlant(const JointErrorModel& truth, std::vector
   }
   check(CVodeSVtolerances(s.cvode, options_.relative_tolerance, s.absolute_tolerances), "CVodeSVtolerances");
   check(CVodeSetLinearSolver(s.cvode, s.linear_solver, s.jacobian), "CVodeSetLinearSolver");
+  if (analytic_slope_ && options_.analytic_jacobian) check(CVodeSetJacFn(s.cvode, plantJacobian), "CVodeSetJacFn");
   check(CVodeSetMaxNumSteps(s.cvode, options_.max_steps_per_advance), "CVodeSetMaxNumSteps");
   if (options_.max_order < 1 || options_.max_order > 5) throw InvalidArgument("plant: max_order must be 1 to 5");
   check(CVodeSetMaxOrd(s.cvode, options_.max_order), "CVodeSetMaxOrd");
@@ -331,11 +464,7 @@ void FlexibleJointPlant::transmissionTorques(const JointVector& p, const JointVe
   JointMatrix slope = JointMatrix::Zero(n_, n_);
   if (error_mask_ != 0 && analytic_slope_) {
     JointVector motor_slope = JointVector::Zero(n_);
-    for (int i = 0; i < truth_.effectCount(); ++i) {
-      const Effect& effect = truth_.effect(i);
-      if ((error_mask_ >> i & 1) != 0 && effect.dependsOnCommand())
-        effect.addMotorSlope(truth_.robot(), ctx_, motor_slope);
-    }
+    addMotorSlopes(motor_slope);
     slope = motor_slope.asDiagonal() * truth_.gears().motorFromJoint();
   } else if (error_mask_ != 0) {
     JointVector shifted = p;
@@ -356,8 +485,25 @@ void FlexibleJointPlant::transmissionTorques(const JointVector& p, const JointVe
   motor_reaction = link_torque + slope.transpose() * link_torque;
 }
 
-void FlexibleJointPlant::derivative(double t, const double* y, double* ydot) {
+void FlexibleJointPlant::addMotorSlopes(JointVector& slope) const {
+  for (int i = 0; i < truth_.effectCount(); ++i) {
+    const Effect& effect = truth_.effect(i);
+    if ((error_mask_ >> i & 1) != 0 && effect.dependsOnCommand()) effect.addMotorSlope(truth_.robot(), ctx_, slope);
+  }
+}
+
+void FlexibleJointPlant::linkAcceleration(const JointVector& q, const JointVector& qd, const JointVector& spring_torque,
+                                          JointVector& qdd) {
   const Robot& robot = truth_.robot();
+  forwardKinematics(robot, ws_.robot, q);
+  ctx_.q = q;
+  ctx_.load_torque.setZero(n_);
+  addNonGravityLoadsAtCurrentPose(truth_, load_mask_, ws_, ctx_);
+  const JointVector link_torque = spring_torque - ctx_.load_torque;
+  forwardDynamicsAtCurrentPose(robot, ws_.robot, qd, link_torque, qdd);  // at the pose computed above
+}
+
+void FlexibleJointPlant::derivative(double t, const double* y, double* ydot) {
   const Eigen::Map<const Eigen::VectorXd> state(y, stateSize());
   const JointVector q = state.segment(0, n_);
   const JointVector qd = state.segment(n_, n_);
@@ -368,14 +514,8 @@ void FlexibleJointPlant::derivative(double t, const double* y, double* ydot) {
   JointVector spring_torque, motor_reaction;
   transmissionTorques(p, pd, q, qd, spring_torque, motor_reaction);
 
-  // Link side.
-  forwardKinematics(robot, ws_.robot, q);
-  ctx_.q = q;
-  ctx_.load_torque.setZero(n_);
-  addNonGravityLoadsAtCurrentPose(truth_, load_mask_, ws_, ctx_);
-  JointVector link_torque = spring_torque - ctx_.load_torque;
   JointVector qdd;
-  forwardDynamicsAtCurrentPose(robot, ws_.robot, qd, link_torque, qdd);  // at the pose computed above
+  linkAcceleration(q, qd, spring_torque, qdd);
 
   // Motor side and controller.
   JointVector motor_torque, clamped_excess;
@@ -397,6 +537,141 @@ void FlexibleJointPlant::derivative(double t, const double* y, double* ydot) {
   }
 }
 
+// Closed form except where the rigid-body dynamics enter: the link accelerations' columns for q and qd
+// (M(q), Coriolis, gravity and the pose-dependent loads) are forward differences of the link dynamics
+// alone at the fixed transmitted torque (2 n forward dynamics instead of CVODE's 5 n right-hand sides),
+// and the transmission error's curvature is a central difference of the effects' own slopes.
+void FlexibleJointPlant::jacobian(double t, const double* y, double* jacobian) {
+  if (!analytic_slope_) {
+    throw InvalidArgument("plant: no analytic Jacobian: an effect of the transmission error does not give its slope");
+  }
+  const Robot& robot = truth_.robot();
+  const int n = n_;
+  const Eigen::Map<const Eigen::VectorXd> state(y, stateSize());
+  const JointVector q = state.segment(0, n);
+  const JointVector qd = state.segment(n, n);
+  const JointVector p = state.segment(2 * n, n);
+  const JointVector pd = state.segment(3 * n, n);
+  const JointVector integral = state.segment(4 * n, n);
+  Eigen::Map<Eigen::MatrixXd> J(jacobian, stateSize(), stateSize());
+  J.setZero();
+  JacobianScratch& w = jacobian_scratch_;
+
+  // Transmission: tau_s = K (p + e(p) - q) + D (S pd - qd), the motors feel S^T tau_s, S = I + diag(s) G with
+  // s the slopes de_j/dm_j at the motor angles m = G p and s' their curvatures.
+  JointVector spring_torque, motor_reaction;
+  transmissionTorques(p, pd, q, qd, spring_torque, motor_reaction);  // leaves ctx_.motor at G p
+  const JointMatrix& gears = truth_.gears().motorFromJoint();
+  JointVector slope = JointVector::Zero(n);
+  w.curvature.setZero(n);
+  if (error_mask_ != 0) {
+    addMotorSlopes(slope);
+    constexpr double kMotorStep = 1e-6;  // rad of motor angle; every motor at once (e_j depends on m_j only)
+    const JointVector motor = ctx_.motor;
+    w.ahead.setZero(n);
+    w.behind.setZero(n);
+    ctx_.motor.array() += kMotorStep;
+    addMotorSlopes(w.ahead);
+    ctx_.motor.array() = motor.array() - kMotorStep;
+    addMotorSlopes(w.behind);
+    ctx_.motor = motor;
+    w.curvature = (w.ahead - w.behind) / (2.0 * kMotorStep);
+  }
+  JointVector damping(n);
+  for (int j = 0; j < n; ++j) damping[j] = drives_[j].transmission_damping_nms_per_rad;
+  JointMatrix output_by_motor = slope.asDiagonal() * gears;  // S
+  output_by_motor.diagonal().array() += 1.0;
+  const JointVector motor_rate = gears * pd;
+  // d tau_s/dp = K S + diag(D s' (G pd)) G, d tau_s/dpd = D S, d tau_s/dq = -K, d tau_s/dqd = -D.
+  w.spring_by_motor.noalias() = stiffness_.asDiagonal() * output_by_motor;
+  w.spring_by_motor.noalias() += damping.cwiseProduct(w.curvature).cwiseProduct(motor_rate).asDiagonal() * gears;
+  // d(S^T tau_s)/dp = S^T d tau_s/dp + G^T diag(s' tau_s) G (S moves with p), and S^T D S for pd.
+  w.reaction_by_motor.noalias() = output_by_motor.transpose() * w.spring_by_motor;
+  w.reaction_by_motor.noalias() += gears.transpose() * (w.curvature.cwiseProduct(spring_torque).asDiagonal() * gears);
+  w.reaction_by_motor_rate.noalias() = output_by_motor.transpose() * (damping.asDiagonal() * output_by_motor);
+
+  // Link side: qdd = M(q)^-1 (tau_s - loads(q) - bias(q, qd)).
+  JointVector qdd, shifted_qdd;
+  linkAcceleration(q, qd, spring_torque, qdd);
+  w.link_by_q.resize(n, n);
+  w.link_by_qd.resize(n, n);
+  w.inverse_mass = ws_.robot.mass_llt.solve(JointMatrix::Identity(n, n));
+  const JointVector link_torque = spring_torque - ctx_.load_torque;
+  const double step = std::sqrt(std::numeric_limits<double>::epsilon());
+  JointVector shifted = qd;
+  for (int k = 0; k < n; ++k) {  // same pose, same loads: only the bias torques change
+    const double h = step * std::max(1.0, std::abs(qd[k]));
+    shifted[k] = qd[k] + h;
+    forwardDynamicsAtCurrentPose(robot, ws_.robot, shifted, link_torque, shifted_qdd);
+    shifted[k] = qd[k];
+    w.link_by_qd.col(k) = (shifted_qdd - qdd) / h;
+  }
+  shifted = q;
+  for (int k = 0; k < n; ++k) {
+    const double h = step * std::max(1.0, std::abs(q[k]));
+    shifted[k] = q[k] + h;
+    linkAcceleration(shifted, qd, spring_torque, shifted_qdd);
+    shifted[k] = q[k];
+    w.link_by_q.col(k) = (shifted_qdd - qdd) / h;
+  }
+  for (int j = 0; j < n; ++j) J(j, n + j) = 1.0;
+  J.block(n, 0, n, n) = w.link_by_q - w.inverse_mass * stiffness_.asDiagonal();
+  J.block(n, n, n, n) = w.link_by_qd - w.inverse_mass * damping.asDiagonal();
+  J.block(n, 2 * n, n, n).noalias() = w.inverse_mass * w.spring_by_motor;
+  J.block(n, 3 * n, n, n).noalias() = w.inverse_mass * (damping.asDiagonal() * output_by_motor);
+
+  // Motor side: B pdd = tau_m - S^T tau_s - friction(pd); tau_m = kp (r - p) + kd (rd - pd) + ki z + ..., whose
+  // slopes vanish while the drive saturates, when the anti-windup takes them over in the integral's rate.
+  JointVector motor_torque, clamped_excess;
+  computeMotorTorques(t, p, pd, integral, motor_torque, &clamped_excess);
+  for (int j = 0; j < n; ++j) {
+    const DriveParameters& d = drives_[j];
+    const bool free = options_.control && clamped_excess[j] == 0.0;
+    const bool saturated = options_.control && clamped_excess[j] != 0.0;
+    if (!options_.motors_locked) {
+      const double per_inertia = 1.0 / d.motor_inertia_kgm2;
+      const double scale = d.coulomb_velocity_scale_rad_per_s;
+      const double coulomb = std::tanh(pd[j] / scale);
+      const double friction_slope =
+          d.viscous_friction_nms_per_rad + d.coulomb_friction_nm * (1.0 - coulomb * coulomb) / scale;
+      J(2 * n + j, 3 * n + j) = 1.0;
+      for (int k = 0; k < n; ++k) {
+        J(3 * n + j, k) = output_by_motor(k, j) * stiffness_[k] * per_inertia;  // -d(S^T tau_s)/dq
+        J(3 * n + j, n + k) = output_by_motor(k, j) * damping[k] * per_inertia;
+        J(3 * n + j, 2 * n + k) = -w.reaction_by_motor(j, k) * per_inertia;
+        J(3 * n + j, 3 * n + k) = -w.reaction_by_motor_rate(j, k) * per_inertia;
+      }
+      J(3 * n + j, 3 * n + j) -= friction_slope * per_inertia;
+      if (free) {
+        J(3 * n + j, 2 * n + j) -= d.kp_nm_per_rad * per_inertia;
+        J(3 * n + j, 3 * n + j) -= d.kd_nms_per_rad * per_inertia;
+        J(3 * n + j, 4 * n + j) = d.ki_nm_per_rad_s * per_inertia;
+      }
+    }
+    if (options_.control) {  // dz/dt = r - p + (clamped - unclamped torque) / (ki Tt)
+      J(4 * n + j, 2 * n + j) = -1.0;
+      if (saturated) {
+        J(4 * n + j, 2 * n + j) += windup_gain_[j] * d.kp_nm_per_rad;
+        J(4 * n + j, 3 * n + j) = windup_gain_[j] * d.kd_nms_per_rad;
+        J(4 * n + j, 4 * n + j) = -windup_gain_[j] * d.ki_nm_per_rad_s;
+      }
+    }
+  }
+  if (!J.allFinite()) throw SolverError("plant: the Jacobian has an entry that is not finite");
+}
+
+void FlexibleJointPlant::solveNewtonSystem(double t, const double* y, double gamma, const double* b, double* x) {
+  const int size = stateSize();
+  std::vector<double> matrix(static_cast<std::size_t>(size) * size);
+  jacobian(t, y, matrix.data());
+  Eigen::Map<Eigen::MatrixXd> newton(matrix.data(), size, size);
+  newton *= -gamma;
+  newton.diagonal().array() += 1.0;
+  StructuredLinearSolver solver(n_);
+  if (solver.setup(matrix.data()) != SUNLS_SUCCESS) throw SolverError("plant: the Newton system is singular");
+  solver.solve(matrix.data(), x, b);
+}
+
 namespace {
 
 int plantRightHandSide(realtype t, N_Vector y, N_Vector ydot, void* user_data) {
@@ -409,6 +684,17 @@ int plantRightHandSide(realtype t, N_Vector y, N_Vector ydot, void* user_data) {
   const double* values = N_VGetArrayPointer(ydot);
   for (int i = 0; i < plant->stateSize(); ++i) {
     if (!std::isfinite(values[i])) return 1;
+  }
+  return 0;
+}
+
+int plantJacobian(realtype t, N_Vector y, N_Vector, SUNMatrix jacobian, void* user_data, N_Vector, N_Vector, N_Vector) {
+  auto* plant = static_cast<FlexibleJointPlant*>(user_data);
+  double* values = SUNDenseMatrix_Data(jacobian);
+  try {
+    plant->jacobian(t, N_VGetArrayPointer(y), values);  // throws on an entry that is not finite
+  } catch (const std::exception&) {
+    return 1;  // recoverable, as for the right-hand side: CVODE retries smaller and reports if it cannot
   }
   return 0;
 }
@@ -440,6 +726,9 @@ void FlexibleJointPlant::advance(double end_time) {
   realtype reached = time_;
   const int flag = CVode(s.cvode, end_time, s.y, &reached, CV_NORMAL);
   long steps = 0, rhs = 0, jacobians = 0, error_failures = 0, convergence_failures = 0, rhs_for_jacobians = 0;
+  long newton_iterations = 0, setups = 0;
+  CVodeGetNumNonlinSolvIters(s.cvode, &newton_iterations);
+  CVodeGetNumLinSolvSetups(s.cvode, &setups);
   CVodeGetNumSteps(s.cvode, &steps);
   CVodeGetNumRhsEvals(s.cvode, &rhs);
   CVodeGetNumJacEvals(s.cvode, &jacobians);
@@ -448,7 +737,10 @@ void FlexibleJointPlant::advance(double end_time) {
   CVodeGetNumNonlinSolvConvFails(s.cvode, &convergence_failures);
   statistics_.steps = s.before_restart.steps + steps;
   statistics_.rhs_evaluations = s.before_restart.rhs_evaluations + rhs + rhs_for_jacobians;
+  statistics_.jacobian_rhs_evaluations = s.before_restart.jacobian_rhs_evaluations + rhs_for_jacobians;
   statistics_.jacobian_evaluations = s.before_restart.jacobian_evaluations + jacobians;
+  statistics_.nonlinear_iterations = s.before_restart.nonlinear_iterations + newton_iterations;
+  statistics_.linear_solver_setups = s.before_restart.linear_solver_setups + setups;
   statistics_.error_test_failures = s.before_restart.error_test_failures + error_failures;
   statistics_.nonlinear_convergence_failures = s.before_restart.nonlinear_convergence_failures + convergence_failures;
   if (flag < 0) {

@@ -47,6 +47,12 @@ struct PlantOptions {
   // PlantLimitError.
   double tracking_envelope_rad = 0.2;
   double joint_limit_margin_rad = 0.02;
+  // The plant's own Jacobian for CVODE's Newton iterations (when hasAnalyticJacobian()); false: CVODE's
+  // difference quotients of the right-hand side, as before issue 17 (kept to compare against).
+  bool analytic_jacobian = true;
+  // With that Jacobian, solve CVODE's Newton systems by eliminating the link and motor positions and the
+  // integrals (a 2n x 2n LU instead of 5n x 5n); false: SUNDIALS' dense LU (kept to compare against).
+  bool structured_linear_solver = true;
   bool control = true;         // false: no motor torque at all (free response)
   bool motors_locked = false;  // true: motor positions held where they are (static tests)
 };
@@ -54,7 +60,11 @@ struct PlantOptions {
 struct PlantStatistics {
   long steps = 0;
   long rhs_evaluations = 0;  // right-hand sides, those of the difference-quotient Jacobians included
+  long jacobian_rhs_evaluations =
+      0;  // of which CVODE's difference-quotient Jacobians used (0 with the plant's Jacobian)
   long jacobian_evaluations = 0;
+  long nonlinear_iterations = 0;
+  long linear_solver_setups = 0;  // LU factorisations of I - gamma J
   long error_test_failures = 0;
   long nonlinear_convergence_failures = 0;
 };
@@ -117,6 +127,15 @@ public:
 
   // The right-hand side dy/dt at (t, y), both of stateSize(); exposed for linearisation and tests.
   void derivative(double t, const double* y, double* ydot);
+  // True when every command-dependent joint error gives its motor slope: the plant then gives CVODE
+  // jacobian() below, otherwise CVODE builds its Jacobians from difference quotients of derivative().
+  bool hasAnalyticJacobian() const { return analytic_slope_; }
+  // d(dy/dt)/dy at (t, y) into `jacobian`, stateSize() x stateSize() column-major; exposed for tests. Throws
+  // InvalidArgument without hasAnalyticJacobian().
+  void jacobian(double t, const double* y, double* jacobian);
+  // Solves (I - gamma jacobian(t, y)) x = b as CVODE's Newton iterations do with structured_linear_solver;
+  // exposed for tests. Throws SolverError when the system is singular.
+  void solveNewtonSystem(double t, const double* y, double gamma, const double* b, double* x);
 
   const JointErrorModel& model() const { return truth_; }
   const PlantOptions& options() const { return options_; }
@@ -132,6 +151,11 @@ private:
   void transmissionError(const JointVector& p, const JointVector& q, JointVector& error);
   void transmissionTorques(const JointVector& p, const JointVector& pd, const JointVector& q, const JointVector& qd,
                            JointVector& link_torque, JointVector& motor_reaction);
+  // Sum of the command-dependent effects' motor slopes at the motor angles in ctx_.
+  void addMotorSlopes(JointVector& slope) const;
+  // Link accelerations for the transmitted torque `spring_torque`: loads, then forward dynamics at q.
+  void linkAcceleration(const JointVector& q, const JointVector& qd, const JointVector& spring_torque,
+                        JointVector& qdd);
   void staticFeedforward(const JointVector& position, JointVector& torque);
 
   JointErrorModel truth_;
@@ -152,6 +176,11 @@ private:
   JointContext ctx_;
   JointErrorWorkspace ws_;
   PlantStatistics statistics_;
+  // The Jacobian's scratch, here so that jacobian() allocates nothing.
+  struct JacobianScratch {
+    JointMatrix inverse_mass, spring_by_motor, reaction_by_motor, reaction_by_motor_rate, link_by_q, link_by_qd;
+    JointVector curvature, ahead, behind;
+  } jacobian_scratch_;
   std::unique_ptr<Solver> solver_;
 };
 
