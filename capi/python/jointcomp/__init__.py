@@ -19,6 +19,7 @@ environment variable).
 from . import _native
 from .errors import (FileError, InternalError, InvalidArgumentError, JointcompError, OutOfMemoryError,
                      PlantLimitError, SolverError, UnreachableError, WrongHandleError)
+from .distributed import DistributedError, FleetResult, MonteCarloResult, fleet, monte_carlo
 from .identification import (Report, calibrate, discover, identify_stiffness, identify_transmission_error,
                              simulate_campaign)
 from .metrics import Metrics, accuracy_metrics, average_absolute_deviation, peak_to_peak_deviation
@@ -70,7 +71,7 @@ def last_error():
 
 
 __all__ = [
-    "ABI_VERSION", "__version__", "FileError", "InternalError", "InvalidArgumentError", "JointcompError", "Metrics",
+    "ABI_VERSION", "__version__", "DistributedError", "FleetResult", "MonteCarloResult", "fleet", "monte_carlo", "FileError", "InternalError", "InvalidArgumentError", "JointcompError", "Metrics",
     "OutOfMemoryError", "Plant", "PlantLimitError", "PlantStatistics", "RUN_NAMES", "Report", "Robot", "SolverError", "SpiralExperiment",
     "SpiralPlan", "TrajectoryCompensation", "UnreachableError", "WrongHandleError", "abi_version",
     "accuracy_metrics", "average_absolute_deviation", "calibrate", "discover", "identify_stiffness",
