@@ -146,8 +146,8 @@ struct ClusterOptions {
                    "address of a running Dask scheduler, e.g. tcp://host:8786 "
                    "(default: a local cluster of worker processes)");
     app.add_option("--workers", workers, "local worker processes (default: the machine's cores)")
-        ->check(CLI::PositiveNumber);
-    app.add_option("--timeout", timeout, "seconds for all tasks, then an error")->check(CLI::PositiveNumber);
+        ->check(CLI::Range(1, 1 << 16));
+    app.add_option("--timeout", timeout, "seconds for all tasks, then an error")->check(CLI::Range(1e-3, 1e9));
   }
   void append(std::vector<std::string>& arguments) const {
     if (!scheduler.empty()) arguments.insert(arguments.end(), {"--scheduler", scheduler});
@@ -180,9 +180,9 @@ int runMonteCarlo(int argc, char** argv) {
   app.add_option("--distribution", distribution, "JSON file: a list of {parameter, law, scale, relative}")
       ->check(CLI::ExistingFile)
       ->excludes(report_option);
-  app.add_option("--samples", samples, "number of draws")->check(CLI::PositiveNumber);
+  app.add_option("--samples", samples, "number of draws")->check(CLI::Range(1, 1 << 30));
   app.add_option("--seed", seed, "random seed (draw k uses its own generator of seed and k)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(CLI::Range(0LL, (1LL << 62)));
   app.add_flag("--plant", plant, "simulate the flexible-joint plant (needs drives) instead of the quasi-static robot");
   app.add_option("--out", out, "output folder");
   ClusterOptions cluster;

@@ -19,12 +19,23 @@ environment variable).
 from . import _native
 from .errors import (FileError, InternalError, InvalidArgumentError, JointcompError, OutOfMemoryError,
                      PlantLimitError, SolverError, UnreachableError, WrongHandleError)
-from .distributed import DistributedError, FleetResult, MonteCarloResult, fleet, monte_carlo
 from .identification import (Report, calibrate, discover, identify_stiffness, identify_transmission_error,
                              simulate_campaign)
 from .metrics import Metrics, accuracy_metrics, average_absolute_deviation, peak_to_peak_deviation
 from .plant import Plant, PlantStatistics
 from .robot import RUN_NAMES, Robot, SpiralExperiment, SpiralPlan, TrajectoryCompensation
+
+# jointcomp.distributed (Dask) is imported when first used: `python3 -m jointcomp.distributed` runs it as
+# __main__, which an import here would have loaded a second time.
+_DISTRIBUTED = ("DistributedError", "FleetResult", "MonteCarloResult", "fleet", "monte_carlo")
+
+
+def __getattr__(name):
+    if name in _DISTRIBUTED:
+        from . import distributed
+        return getattr(distributed, name)
+    raise AttributeError("module 'jointcomp' has no attribute %r" % name)
+
 
 ABI_VERSION = _native.ABI_VERSION
 library_path = _native.library_path

@@ -659,7 +659,7 @@ def monte_carlo(urdf, parameters, *, samples=100, seed=DEFAULT_SEED, report=None
     JSON text. The law: ``report`` (a report or its report.json, see :func:`report_distribution`), else
     ``distribution`` (a list of entries or a JSON file, see the module's comments), else the main job's
     perturbation (:func:`main_job_distribution`). ``samples`` draws of ``seed``. ``use_plant``: the
-    flexible-joint plant (needs drives; about 10 times slower) instead of the quasi-static robot.
+    flexible-joint plant (needs drives; about 2.5 times slower) instead of the quasi-static robot.
     Where: ``client`` (a distributed.Client), ``scheduler`` (an address), a LocalCluster of ``n_workers``
     processes, or ``serial=True`` for this process only (the same results). ``timeout``: seconds for all
     draws; ``retries``: reruns of a task whose worker died or raised.
