@@ -11,5 +11,8 @@ int runCalibrate(int argc, char** argv);
 int runSimulate(int argc, char** argv);
 int runIdentify(int argc, char** argv);
 int runDiscover(int argc, char** argv);
+// cli/distributed_commands.cpp: run jointcomp.distributed (Python, Dask)
+int runMonteCarlo(int argc, char** argv);
+int runFleet(int argc, char** argv);
 
 }  // namespace jointcomp::cli

@@ -45,6 +45,14 @@ void printUsage() {
       "                             time (time-blocked CV + BIC), and writes the extended parameter file;\n"
       "                             types: offset, compliance, nonlinear_compliance, harmonic, backlash,\n"
       "                             hysteresis, thermal, geometric, payload, periodic, instrument_scale\n"
+      "  montecarlo [--urdf FILE] [--params FILE] [--report REPORT.json | --distribution FILE] [--samples N]\n"
+      "        [--seed N] [--plant] [--out DIR] [--scheduler tcp://HOST:8786] [--workers N] [--timeout S]\n"
+      "                             the spiral's accuracy under parameter uncertainty (percentiles, 95 %% bounds,\n"
+      "                             error band along the path), on a Dask cluster (Python: jointcomp.distributed)\n"
+      "  fleet --campaign FILE [FILE ..] [--urdf FILE] [--params FILE] [--method calibrate|discover] [--out DIR]\n"
+      "        [--scheduler tcp://HOST:8786] [--workers N] [--timeout S]\n"
+      "                             calibrate many robots, one campaign each, on a Dask cluster: a report per\n"
+      "                             robot and a fleet summary with outliers flagged\n"
       "  help                       this text; jointcomp <command> --help lists a command's options\n"
       "  --version                  the version, and where the robots, parameter files and plot scripts are\n"
       "Every command that reads --urdf also takes --base-link LINK and --tip-link LINK (default: the URDF's\n"
@@ -75,6 +83,8 @@ int main(int argc, char** argv) {
     if (command == "simulate") return jointcomp::cli::runSimulate(argc - 1, argv + 1);
     if (command == "identify") return jointcomp::cli::runIdentify(argc - 1, argv + 1);
     if (command == "discover") return jointcomp::cli::runDiscover(argc - 1, argv + 1);
+    if (command == "montecarlo") return jointcomp::cli::runMonteCarlo(argc - 1, argv + 1);
+    if (command == "fleet") return jointcomp::cli::runFleet(argc - 1, argv + 1);
     std::fprintf(stderr, "jointcomp: unknown command '%s'\n", command.c_str());
     printUsage();
     return 2;

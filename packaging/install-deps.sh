@@ -16,6 +16,7 @@ packages=(
   libxml2-utils            # xmllint validates modelDescription.xml against the FMI schemas
   python3-numpy python3-matplotlib python3-pytest python3-pycparser  # bindings, plots, binding tests
   python3-venv python3-pip python3-setuptools python3-wheel  # the pip install of the bindings (tests/packaging)
+  python3-distributed python3-dask  # jointcomp.distributed: Monte Carlo and fleet calibration on a Dask cluster
   dpkg-dev                 # dpkg-shlibdeps: the .deb's dependencies (cpack, tests/packaging)
   zip unzip                # packs and unpacks the FMU
   clang libclang-rt-14-dev # sanitizers and libFuzzer

@@ -39,7 +39,18 @@ JointTrajectory planSpiralTrajectory(const Robot& robot, const SpiralSpec& spira
 
 SpiralExperimentResult runSpiralExperiment(const JointErrorModel& nominal, const SpiralExperimentSpec& spec,
                                            const std::function<void(const std::string&)>& progress) {
+  return runSpiralExperiment(nominal, perturbedModel(nominal, spec.truth), spec, progress);
+}
+
+SpiralExperimentResult runSpiralExperiment(const JointErrorModel& nominal, const JointErrorModel& truth,
+                                           const SpiralExperimentSpec& spec,
+                                           const std::function<void(const std::string&)>& progress) {
   const Robot& robot = nominal.robot();
+  const Robot& true_robot = truth.robot();
+  if (true_robot.dof() != robot.dof()) {
+    throw InvalidArgument("the truth robot '" + true_robot.name + "' has " + std::to_string(true_robot.dof()) +
+                          " joints, the nominal robot '" + robot.name + "' " + std::to_string(robot.dof()));
+  }
   for (int joint : spec.compensated_joints) {
     if (joint < 0 || joint >= robot.dof()) {
       throw InvalidArgument("compensated joint " + std::to_string(joint + 1) + " does not exist: robot '" + robot.name +
@@ -50,13 +61,13 @@ SpiralExperimentResult runSpiralExperiment(const JointErrorModel& nominal, const
   tell(progress, "planning the spiral (feed rate, inverse kinematics)");
   result.planned = planSpiralTrajectory(robot, spec.spiral, spec.feed_rate, spec.seed_posture);
 
-  const JointErrorModel truth = perturbedModel(nominal, spec.truth);
   const EffectMask truth_mask = truth.allEffects();
   const EffectMask run_masks[3] = {0, nominal.loadsAnd({"compliance"}),
                                    nominal.loadsAnd({"compliance", "transmission_error"})};
   const char* run_names[3] = {"without correction", "stiffness correction", "stiffness and kinematic correction"};
 
   JointErrorWorkspace ws(robot);
+  JointErrorWorkspace true_ws(true_robot);
   result.dynamic = !spec.drives.empty();
   std::unique_ptr<FlexibleJointPlant> plant;
   if (result.dynamic) plant = std::make_unique<FlexibleJointPlant>(truth, spec.drives, spec.plant);
@@ -94,7 +105,7 @@ SpiralExperimentResult runSpiralExperiment(const JointErrorModel& nominal, const
         ctx.command = run.reference[k];
         ctx.velocity = result.planned.qd[k];
         ctx.time = result.planned.time[k];
-        const FixedPointReport settled = settleStatically(truth, truth_mask, ws, ctx, spec.compensation);
+        const FixedPointReport settled = settleStatically(truth, truth_mask, true_ws, ctx, spec.compensation);
         if (!settled.converged) {
           throw SolverError("the simulated robot did not settle at sample " + std::to_string(k));
         }
@@ -103,8 +114,9 @@ SpiralExperimentResult runSpiralExperiment(const JointErrorModel& nominal, const
     }
     result.simulation_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
     for (std::size_t k = 0; k < count; ++k) {
-      forwardKinematics(robot, ws.robot, run.actual[k]);
-      const Eigen::Vector3d position = ws.robot.tool_pose.translation();
+      // The tool goes where the true robot's geometry puts it (the nominal one when the truth shares it).
+      forwardKinematics(true_robot, true_ws.robot, run.actual[k]);
+      const Eigen::Vector3d position = true_ws.robot.tool_pose.translation();
       const double sigma = spec.noise.sigma(position);
       // One draw per statement: the order of a constructor's arguments is unspecified (GCC evaluates them
       // last to first, clang first to last), so three draws in one call gave each compiler other noise.

@@ -77,4 +77,11 @@ JointTrajectory planSpiralTrajectory(const Robot& robot, const SpiralSpec& spira
 SpiralExperimentResult runSpiralExperiment(const JointErrorModel& nominal, const SpiralExperimentSpec& spec,
                                            const std::function<void(const std::string&)>& progress = {});
 
+// The same with the simulated robot's truth given (spec.truth is not used): the compensation uses
+// `nominal`, the robot follows `truth` (its joint errors, and its geometry when measured), as Monte Carlo
+// runs over a parameter distribution need. Both must have the same number of joints.
+SpiralExperimentResult runSpiralExperiment(const JointErrorModel& nominal, const JointErrorModel& truth,
+                                           const SpiralExperimentSpec& spec,
+                                           const std::function<void(const std::string&)>& progress = {});
+
 }  // namespace jointcomp

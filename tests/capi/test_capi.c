@@ -512,6 +512,21 @@ static void test_spiral(jc_robot* robot, jc_robot* bare) {
   EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "use_plant is 2", jc_spiral_experiment(robot, 2, metrics, 15, NULL, 0));
   EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "metrics_len is 5", jc_spiral_experiment(robot, 0, metrics, 5, NULL, 0));
   EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "errors_len", jc_spiral_experiment(robot, 0, metrics, 15, errors, 3 * m));
+  {
+    /* A given truth (jc_spiral_experiment_truth): the robot itself as its own truth leaves less after both
+       corrections than the built-in perturbed truth does; the errors give back the metrics. */
+    double own[15], run_metrics[5];
+    EXPECT_OK(jc_spiral_experiment_truth(robot, robot, 0, own, 15, errors, 9 * m));
+    CHECK(own[12] < quasi_static[12] && own[12] < 0.1 * own[2]);
+    EXPECT_OK(jc_accuracy_metrics(errors + 2 * 3 * m, 3 * m, run_metrics, 5));
+    CHECK(same_bits(run_metrics, own + 10, 5));
+    EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "truth is NULL",
+                  jc_spiral_experiment_truth(robot, NULL, 0, own, 15, NULL, 0));
+    EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "truth's parameters have no \"plant\"",
+                  jc_spiral_experiment_truth(robot, bare, 1, own, 15, NULL, 0));
+    EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "errors_len",
+                  jc_spiral_experiment_truth(robot, robot, 0, own, 15, errors, 3 * m));
+  }
   free(time);
   free(positions);
   free(q);

@@ -190,6 +190,9 @@ std::vector<RobotCall> everyRobotCall() {
              b, [r](jc_robot** o, jc_report** p) { return jc_discover(r, "c.csv", nullptr, nullptr, o, p); });
        },
        "nominal"},
+      {"jc_spiral_experiment_truth",
+       [](jc_robot* r, Buffers& b) { return jc_spiral_experiment_truth(r, r, 0, b.a.data(), 15, nullptr, 0); },
+       "nominal"},
       {"jc_robot_free", [](jc_robot* r, Buffers&) { return jc_robot_free(r); }},
   };
 }

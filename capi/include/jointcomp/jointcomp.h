@@ -302,6 +302,16 @@ JOINTCOMP_API jc_status jc_report_json(jc_report* report, char* buffer, int32_t 
 JOINTCOMP_API jc_status jc_report_summary(jc_report* report, char* buffer, int32_t capacity, int32_t* length);
 JOINTCOMP_API jc_status jc_report_free(jc_report* report);
 
+/* ---- The spiral with a given truth (Monte Carlo over parameter distributions, issue 19) -------------------
+   jc_spiral_experiment with the simulated robot's truth given instead of the built-in perturbation: the
+   three runs are compensated with `nominal`'s parameters and followed by `truth` (its joint errors, its
+   geometry, and its drives when use_plant is 1), measured by the same simulated tracker. Both robots must
+   have the same number of joints; the spiral is planned with `nominal`. metrics and errors as for
+   jc_spiral_experiment. Neither handle is changed or locked (their models are immutable). */
+JOINTCOMP_API jc_status jc_spiral_experiment_truth(jc_robot* nominal, jc_robot* truth, int32_t use_plant,
+                                                   double* metrics, int32_t metrics_len, double* errors,
+                                                   int32_t errors_len);
+
 #ifdef __cplusplus
 }
 #endif

@@ -25,6 +25,18 @@ from .metrics import Metrics, accuracy_metrics, average_absolute_deviation, peak
 from .plant import Plant, PlantStatistics
 from .robot import RUN_NAMES, Robot, SpiralExperiment, SpiralPlan, TrajectoryCompensation
 
+# jointcomp.distributed (Dask) is imported when first used: `python3 -m jointcomp.distributed` runs it as
+# __main__, which an import here would have loaded a second time.
+_DISTRIBUTED = ("DistributedError", "FleetResult", "MonteCarloResult", "fleet", "monte_carlo")
+
+
+def __getattr__(name):
+    if name in _DISTRIBUTED:
+        from . import distributed
+        return getattr(distributed, name)
+    raise AttributeError("module 'jointcomp' has no attribute %r" % name)
+
+
 ABI_VERSION = _native.ABI_VERSION
 library_path = _native.library_path
 
@@ -70,7 +82,7 @@ def last_error():
 
 
 __all__ = [
-    "ABI_VERSION", "__version__", "FileError", "InternalError", "InvalidArgumentError", "JointcompError", "Metrics",
+    "ABI_VERSION", "__version__", "DistributedError", "FleetResult", "MonteCarloResult", "fleet", "monte_carlo", "FileError", "InternalError", "InvalidArgumentError", "JointcompError", "Metrics",
     "OutOfMemoryError", "Plant", "PlantLimitError", "PlantStatistics", "RUN_NAMES", "Report", "Robot", "SolverError", "SpiralExperiment",
     "SpiralPlan", "TrajectoryCompensation", "UnreachableError", "WrongHandleError", "abi_version",
     "accuracy_metrics", "average_absolute_deviation", "calibrate", "discover", "identify_stiffness",

@@ -94,6 +94,7 @@ PROTOTYPES = {
     "jc_accuracy_metrics": (_i32, [_double_p, _i32, _double_p, _i32]),
     "jc_average_absolute_deviation": (_i32, [_double_p, _i32, _double_p]),
     "jc_peak_to_peak_deviation": (_i32, [_double_p, _i32, _double_p]),
+    "jc_spiral_experiment_truth": (_i32, [_handle, _handle, _i32, _double_p, _i32, _double_p, _i32]),
 }
 
 

@@ -309,20 +309,30 @@ class Robot(OwnedHandle):
                                                  q.size, _native.pointer(qd), qd.size))
         return SpiralPlan(time, positions, q, qd)
 
-    def spiral_experiment(self, use_plant=None, errors=False):
+    def spiral_experiment(self, use_plant=None, errors=False, truth=None):
         """The paper's experiment (three runs, see RUN_NAMES) as a SpiralExperiment.
 
         ``use_plant``: simulate the robot as the flexible-joint plant (True) or quasi-statically (False);
-        None picks the plant when the parameters describe the drives. ``errors``: also return the
-        measured-minus-planned tool positions of every run.
+        None picks the plant when the parameters (of the truth, when given) describe the drives.
+        ``errors``: also return the measured-minus-planned tool positions of every run. ``truth``: a Robot
+        the simulated robot follows (this robot's parameters compensate; jc_spiral_experiment_truth); None:
+        the built-in seeded perturbation of this robot's parameters (jc_spiral_experiment).
         """
+        if truth is not None and not isinstance(truth, Robot):
+            raise TypeError("truth must be a jointcomp.Robot, not %s" % type(truth).__name__)
+        simulated = self if truth is None else truth
         if use_plant is None:
-            use_plant = self.has_drives
+            use_plant = simulated.has_drives
         metrics = np.empty((3, 5))
         error_array = np.empty((3, self.spiral_sample_count(), 3)) if errors else None
-        _native.check(_native.lib.jc_spiral_experiment(self.handle, 1 if use_plant else 0, _native.pointer(metrics),
-                                                       metrics.size, _native.pointer(error_array),
-                                                       _length(error_array)))
+        if truth is None:
+            _native.check(_native.lib.jc_spiral_experiment(self.handle, 1 if use_plant else 0,
+                                                           _native.pointer(metrics), metrics.size,
+                                                           _native.pointer(error_array), _length(error_array)))
+        else:
+            _native.check(_native.lib.jc_spiral_experiment_truth(
+                self.handle, truth.handle, 1 if use_plant else 0, _native.pointer(metrics), metrics.size,
+                _native.pointer(error_array), _length(error_array)))
         return SpiralExperiment([Metrics(*row) for row in metrics.tolist()], error_array, bool(use_plant))
 
     def plant(self):

@@ -1,0 +1,225 @@
+// jointcomp montecarlo and jointcomp fleet: thin commands that check their options (CLI11: --help, usage and
+// exit 2 on bad ones) and hand the work to Python, `/usr/bin/python3 -m jointcomp.distributed <command>`
+// (capi/python/jointcomp/distributed.py), which spreads it over a Dask cluster. The child is started from an
+// argument vector (no shell), with PYTHONPATH and JOINTCOMP_LIBRARY naming this installation's (or build
+// tree's) package and library, and dies with its parent.
+#include <cerrno>
+#include <csignal>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include <sys/prctl.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+#include <CLI/CLI.hpp>
+
+#include "cli/commands.hpp"
+#include "cli/file_locations.hpp"
+#include "cli/options.hpp"
+
+extern char** environ;
+
+namespace jointcomp::cli {
+namespace {
+
+constexpr const char* kPython = "/usr/bin/python3";  // Debian's, with python3-distributed and numpy
+
+bool exists(const std::string& path) {
+  struct stat info {};
+  return ::stat(path.c_str(), &info) == 0;
+}
+
+// The Python package's folder and the C library the child is to use: installed, <prefix>/lib/python3/
+// dist-packages and <prefix>/<libdir>/libjointcomp.so.1 beside <prefix>/bin/jointcomp; otherwise the
+// source tree's capi/python and the build tree's library.
+struct PythonSide {
+  std::string package_root;
+  std::string library;
+};
+
+PythonSide pythonSide() {
+  const FileLocations& files = fileLocations();
+  if (files.installed) {
+    // files.data is <prefix>/share/jointcomp, resolved.
+    const std::string prefix = files.data + "/../..";
+    return {prefix + "/" + JOINTCOMP_PYTHON_INSTALL_DIR, prefix + "/" + JOINTCOMP_LIBRARY_INSTALL_PATH};
+  }
+  return {JOINTCOMP_PYTHON_SOURCE_DIR, JOINTCOMP_LIBRARY_BUILD_PATH};
+}
+
+// The child's environment: ours with PYTHONPATH (the package first) and JOINTCOMP_LIBRARY set.
+std::vector<std::string> childEnvironment(const PythonSide& side) {
+  std::vector<std::string> environment;
+  std::string python_path = side.package_root;
+  for (char** e = environ; *e; ++e) {
+    const std::string entry(*e);
+    if (entry.rfind("PYTHONPATH=", 0) == 0) {
+      if (entry.size() > 11) python_path += ":" + entry.substr(11);
+    } else if (entry.rfind("JOINTCOMP_LIBRARY=", 0) != 0) {
+      environment.push_back(entry);
+    }
+  }
+  environment.push_back("PYTHONPATH=" + python_path);
+  environment.push_back("JOINTCOMP_LIBRARY=" + side.library);
+  return environment;
+}
+
+// Runs python3 -m jointcomp.distributed with `arguments`; its exit status, or 1 when it could not run.
+int runPython(const std::vector<std::string>& arguments) {
+  const PythonSide side = pythonSide();
+  if (!exists(side.package_root + "/jointcomp/distributed.py")) {
+    std::fprintf(stderr, "jointcomp: the Python package is not at %s (jointcomp/distributed.py)\n",
+                 side.package_root.c_str());
+    return 1;
+  }
+  if (!exists(side.library)) {
+    std::fprintf(stderr, "jointcomp: the library %s is not there (build the jointcomp_capi target)\n",
+                 side.library.c_str());
+    return 1;
+  }
+  std::vector<std::string> argv_text = {kPython, "-m", "jointcomp.distributed"};
+  argv_text.insert(argv_text.end(), arguments.begin(), arguments.end());
+  const std::vector<std::string> environment = childEnvironment(side);
+  std::vector<char*> argv, envp;
+  for (const std::string& a : argv_text) argv.push_back(const_cast<char*>(a.c_str()));
+  argv.push_back(nullptr);
+  for (const std::string& e : environment) envp.push_back(const_cast<char*>(e.c_str()));
+  envp.push_back(nullptr);
+  std::fflush(stdout);
+  std::fflush(stderr);
+  const pid_t parent = getpid();
+  const pid_t child = fork();
+  if (child < 0) {
+    std::fprintf(stderr, "jointcomp: cannot start %s: %s\n", kPython, std::strerror(errno));
+    return 1;
+  }
+  if (child == 0) {
+    // Dies with the parent; if the parent is already gone, do not start.
+    if (prctl(PR_SET_PDEATHSIG, SIGKILL) != 0 || getppid() != parent) _exit(127);
+    execve(kPython, argv.data(), envp.data());
+    _exit(127);
+  }
+  int status = 0;
+  while (waitpid(child, &status, 0) < 0) {
+    if (errno != EINTR) {
+      std::fprintf(stderr, "jointcomp: lost the Python process: %s\n", std::strerror(errno));
+      return 1;
+    }
+  }
+  if (WIFEXITED(status) && WEXITSTATUS(status) == 127) {
+    std::fprintf(stderr,
+                 "jointcomp: %s could not be run (needs Debian's python3, python3-numpy and "
+                 "python3-distributed: packaging/install-deps.sh)\n",
+                 kPython);
+    return 1;
+  }
+  if (WIFEXITED(status)) return WEXITSTATUS(status);
+  std::fprintf(stderr, "jointcomp: the Python process was killed by signal %d\n", WTERMSIG(status));
+  return 1;
+}
+
+// Parses with CLI11: --help prints the usage (HelpShown, exit 0), a bad command line is a UsageError
+// carrying the usage (exit 2).
+void parse(CLI::App& app, int argc, char** argv) {
+  app.set_help_flag("-h,--help", "this help");
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp&) {
+    std::printf("%s", app.help().c_str());
+    throw HelpShown();
+  } catch (const CLI::ParseError& error) {
+    throw UsageError(std::string(error.what()) + "\n" + app.help());
+  }
+}
+
+struct ClusterOptions {
+  std::string scheduler;
+  int workers = 0;
+  double timeout = 3600.0;
+
+  void add(CLI::App& app) {
+    app.add_option("--scheduler", scheduler,
+                   "address of a running Dask scheduler, e.g. tcp://host:8786 "
+                   "(default: a local cluster of worker processes)");
+    app.add_option("--workers", workers, "local worker processes (default: the machine's cores)")
+        ->check(CLI::Range(1, 1 << 16));
+    app.add_option("--timeout", timeout, "seconds for all tasks, then an error")->check(CLI::Range(1e-3, 1e9));
+  }
+  void append(std::vector<std::string>& arguments) const {
+    if (!scheduler.empty()) arguments.insert(arguments.end(), {"--scheduler", scheduler});
+    if (workers > 0) arguments.insert(arguments.end(), {"--workers", std::to_string(workers)});
+    char text[64];
+    std::snprintf(text, sizeof text, "%.17g", timeout);
+    arguments.insert(arguments.end(), {"--timeout", text});
+  }
+};
+
+}  // namespace
+
+int runMonteCarlo(int argc, char** argv) {
+  CLI::App app(
+      "the paper's spiral under parameter uncertainty: N parameter sets drawn from a report's standard "
+      "errors, a distribution file or the main job's perturbation; the compensation uses the nominal "
+      "parameters, the simulated robot each drawn set. Prints the percentiles of Ra, Rz, RMS and max "
+      "error and the 95 % bounds; writes montecarlo.json, montecarlo.csv and montecarlo_band.png",
+      "jointcomp montecarlo");
+  std::string urdf = robotFile("rx170"), params = parameterFile("rx170"), report, distribution, out = "out/montecarlo";
+  int samples = 100;
+  long long seed = 2019;
+  bool plant = false;
+  app.add_option("--urdf", urdf, optionHelp("urdf"))->check(CLI::ExistingFile);
+  app.add_option("--params", params, "the nominal (identified) parameter file")->check(CLI::ExistingFile);
+  auto* report_option = app.add_option("--report", report,
+                                       "report.json of identify, calibrate or discover: its standard errors are the "
+                                       "law")
+                            ->check(CLI::ExistingFile);
+  app.add_option("--distribution", distribution, "JSON file: a list of {parameter, law, scale, relative}")
+      ->check(CLI::ExistingFile)
+      ->excludes(report_option);
+  app.add_option("--samples", samples, "number of draws")->check(CLI::Range(1, 1 << 30));
+  app.add_option("--seed", seed, "random seed (draw k uses its own generator of seed and k)")
+      ->check(CLI::Range(0LL, (1LL << 62)));
+  app.add_flag("--plant", plant, "simulate the flexible-joint plant (needs drives) instead of the quasi-static robot");
+  app.add_option("--out", out, "output folder");
+  ClusterOptions cluster;
+  cluster.add(app);
+  parse(app, argc, argv);
+  std::vector<std::string> arguments = {
+      "montecarlo",         "--urdf", urdf, "--params", params, "--samples", std::to_string(samples), "--seed",
+      std::to_string(seed), "--out",  out};
+  if (!report.empty()) arguments.insert(arguments.end(), {"--report", report});
+  if (!distribution.empty()) arguments.insert(arguments.end(), {"--distribution", distribution});
+  if (plant) arguments.push_back("--plant");
+  cluster.append(arguments);
+  return runPython(arguments);
+}
+
+int runFleet(int argc, char** argv) {
+  CLI::App app(
+      "calibrates (or runs discovery on) many robots, one campaign file each: a report folder per robot "
+      "and a fleet summary (fleet_summary.csv/.json/.txt, fleet.png) with outliers flagged (after-RMS "
+      "above median + 3 x 1.4826 x MAD)",
+      "jointcomp fleet");
+  std::string urdf = robotFile("rx170"), params = parameterFile("rx170"), method = "calibrate", out = "out/fleet";
+  std::vector<std::string> campaigns;
+  app.add_option("--urdf", urdf, optionHelp("urdf"))->check(CLI::ExistingFile);
+  app.add_option("--params", params, "the nominal parameter file")->check(CLI::ExistingFile);
+  app.add_option("--campaign", campaigns, "campaign files, one robot each (several after one --campaign, or repeated)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  app.add_option("--method", method, "calibrate or discover")->check(CLI::IsMember({"calibrate", "discover"}));
+  app.add_option("--out", out, "output folder");
+  ClusterOptions cluster;
+  cluster.add(app);
+  parse(app, argc, argv);
+  std::vector<std::string> arguments = {"fleet", "--urdf", urdf, "--params", params, "--method", method, "--out", out};
+  for (const std::string& campaign : campaigns) arguments.insert(arguments.end(), {"--campaign", campaign});
+  cluster.append(arguments);
+  return runPython(arguments);
+}
+
+}  // namespace jointcomp::cli

@@ -1,0 +1,56 @@
+#!/usr/bin/env bash
+# jointcomp montecarlo and jointcomp fleet (cli/distributed_commands.cpp): --help exits 0, bad options exit 2
+# with the command's usage, and both run end to end through Python and a local Dask cluster of one worker.
+# usage: distributed_commands.sh JOINTCOMP_BINARY MODEL_DIR SCRATCH_DIR
+set -euo pipefail
+jointcomp="$1"
+model="$2"
+work="$3"
+fail() { echo "distributed_commands: $*" >&2; exit 1; }
+rm -rf "$work"
+mkdir -p "$work"
+cd "$work"
+
+for command in montecarlo fleet; do
+  "$jointcomp" "$command" --help >help.txt || fail "$command --help exited $?"
+  grep -q "Usage: jointcomp $command" help.txt || fail "$command --help printed no usage"
+done
+
+# Bad options: exit 2, the option named, the usage printed.
+expect_usage() {
+  local phrase="$1"
+  shift
+  local status=0
+  "$jointcomp" "$@" >log.txt 2>&1 || status=$?
+  [ "$status" -eq 2 ] || { cat log.txt; fail "jointcomp $* exited $status, expected 2"; }
+  grep -qF -- "$phrase" log.txt || { cat log.txt; fail "jointcomp $*: no '$phrase' in the message"; }
+  grep -qF -- "Usage: jointcomp $1" log.txt || { cat log.txt; fail "jointcomp $*: no usage"; }
+}
+expect_usage "--samples: Value 0 not in range" montecarlo --samples 0
+expect_usage "--workers: Value 0 not in range" montecarlo --workers 0
+expect_usage "--report: File does not exist: absent.json" montecarlo --report absent.json
+expect_usage "--report excludes --distribution" montecarlo --report "$model/params/rx170.json" --distribution "$model/params/rx170.json"
+expect_usage "--campaign is required" fleet
+expect_usage "--campaign: File does not exist: absent.csv" fleet --campaign absent.csv
+expect_usage "--method: discovery not in" fleet --campaign "$model/params/rx170.json" --method discovery
+
+# A malformed report reaches Python, which names it (exit 1).
+echo '{"format": "something else"}' >odd.json
+status=0
+"$jointcomp" montecarlo --report odd.json --samples 1 --workers 1 --out mc >log.txt 2>&1 || status=$?
+[ "$status" -eq 1 ] && grep -q "not a report jointcomp knows" log.txt || { cat log.txt; fail "odd report: exit $status"; }
+
+# End to end on one local worker: a small Monte Carlo and a fleet of two robots.
+"$jointcomp" montecarlo --samples 2 --workers 1 --out mc >log.txt 2>&1 || { cat log.txt; fail "montecarlo failed"; }
+grep -q "With 95 % confidence" log.txt || { cat log.txt; fail "montecarlo printed no bound"; }
+[ -s mc/montecarlo.json ] && [ -s mc/montecarlo.csv ] && [ -s mc/montecarlo_band.png ] || fail "montecarlo outputs missing"
+for k in 1 2; do
+  "$jointcomp" simulate --protocol random --truth "$model/params/rx170.json" --perturb "$k" --seed "$k" --count 30 \
+    --out "robot$k.csv" >/dev/null
+done
+"$jointcomp" fleet --campaign robot1.csv robot2.csv --workers 1 --out fleet >log.txt 2>&1 || { cat log.txt; fail "fleet failed"; }
+grep -q "Outliers: after-RMS above median" log.txt || { cat log.txt; fail "fleet printed no outlier rule"; }
+for f in robot1/report.json robot2/calibrated.urdf fleet_summary.csv fleet_summary.json fleet.png; do
+  [ -s "fleet/$f" ] || fail "fleet/$f missing"
+done
+echo "distributed_commands: all checks passed"
