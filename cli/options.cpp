@@ -22,6 +22,11 @@ const char* optionHelp(const std::string& name) {
       {"no-plot", "write no plot"},
       {"quiet", "print no progress lines"},
       {"quasi-static", "simulate the quasi-static robot instead of the flexible-joint plant"},
+      {"feed-rate",
+       "tool speed along the path in m/s (default: the paper's 0.03); acceleration and jerk limits scale with it"},
+      {"no-dynamic-correction",
+       "only the paper's three runs (by default the plant's run has a fourth: stiffness, kinematic and dynamic "
+       "correction)"},
       {"loss", "robust loss of the fit: huber, cauchy or none"},
       {"loss-scale-mm", "scale of the robust loss in mm (default: from the least-squares residuals)"},
       {"pivot-threshold", "relative pivot below which a parameter counts as not identifiable"},

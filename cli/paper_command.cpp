@@ -26,6 +26,7 @@ namespace {
 // Table II of Olabi et al. (IEEE ICIT 2012), in mm.
 constexpr double kPaperRa[3] = {0.2032, 0.0459, 0.0312};
 constexpr double kPaperRz[3] = {0.2882, 0.2097, 0.1502};
+constexpr double kPaperFeedRate = 0.03;  // m/s
 
 std::string runsCsv(const SpiralExperimentResult& result) {
   std::ostringstream csv;
@@ -37,7 +38,7 @@ std::string runsCsv(const SpiralExperimentResult& result) {
   for (int j = 1; j <= dof; ++j) csv << ",q_ref" << j << "_deg";
   csv << "\n";
   const double deg = 180.0 / 3.14159265358979323846;
-  for (int r = 0; r < 3; ++r) {
+  for (std::size_t r = 0; r < result.runs.size(); ++r) {
     const SpiralRun& run = result.runs[r];
     for (std::size_t k = 0; k < run.error.size(); ++k) {
       const Eigen::Vector3d p = result.planned.tool_position[k] * 1e3;
@@ -63,18 +64,27 @@ std::string summaryJson(const SpiralExperimentResult& result, const SpiralExperi
   summary["duration_s"] = result.planned.time.back();
   summary["truth_seed"] = spec.truth.seed;
   summary["simulated_robot"] = result.dynamic ? "flexible-joint plant (CVODE)" : "quasi-static";
-  for (int r = 0; r < 3; ++r) {
+  summary["feed_rate_m_per_s"] = spec.feed_rate.speed;  // (no timings: the same inputs give the same file)
+  for (std::size_t r = 0; r < result.runs.size(); ++r) {
     const SpiralRun& run = result.runs[r];
-    summary["runs"].push_back(
-        {{"name", run.name},
-         {"ra_mm", run.metrics.ra * 1e3},
-         {"rz_mm", run.metrics.rz * 1e3},
-         {"rms_3d_mm", run.metrics.rms * 1e3},
-         {"max_3d_mm", run.metrics.max * 1e3},
-         {"paper_ra_mm", kPaperRa[r]},
-         {"paper_rz_mm", kPaperRz[r]},
-         {"compensation_max_iterations", run.compensation.max_iterations},
-         {"compensation_max_correction_deg", run.compensation.max_correction * 180.0 / 3.14159265358979323846}});
+    nlohmann::ordered_json entry = {{"name", run.name},
+                                    {"ra_mm", run.metrics.ra * 1e3},
+                                    {"rz_mm", run.metrics.rz * 1e3},
+                                    {"rms_3d_mm", run.metrics.rms * 1e3},
+                                    {"max_3d_mm", run.metrics.max * 1e3}};
+    if (r < 3) {
+      entry["paper_ra_mm"] = kPaperRa[r];
+      entry["paper_rz_mm"] = kPaperRz[r];
+      entry["compensation_max_iterations"] = run.compensation.max_iterations;
+      entry["compensation_max_correction_deg"] = run.compensation.max_correction * 180.0 / 3.14159265358979323846;
+    } else {
+      const DynamicCompensationReport& d = run.dynamic_compensation;
+      entry["plant_runs"] = d.iterations;
+      entry["closed_form_max_link_error_rad"] = d.initial_error_rad;
+      entry["nominal_plant_max_link_error_rad"] = d.max_error_rad;
+      entry["compensation_max_correction_deg"] = d.max_correction_rad * 180.0 / 3.14159265358979323846;
+    }
+    summary["runs"].push_back(entry);
   }
 
   return summary.dump(2) + "\n";
@@ -85,19 +95,32 @@ void printTable(const SpiralExperimentResult& result) {
   if (result.dynamic) {
     const PlantStatistics& st = result.plant_statistics;
     std::printf(
-        "  plant: %.1fx real time (%.3f s for 3 x %.1f s of motion); CVODE %ld steps, %ld right-hand sides, "
+        "  plant: %.1fx real time (%.3f s for %zu x %.1f s of motion); CVODE %ld steps, %ld right-hand sides, "
         "%ld Jacobians\n",
-        3.0 * result.planned.time.back() / result.simulation_seconds, result.simulation_seconds,
-        result.planned.time.back(), st.steps, st.rhs_evaluations, st.jacobian_evaluations);
+        static_cast<double>(result.runs.size()) * result.planned.time.back() / result.simulation_seconds,
+        result.simulation_seconds, result.runs.size(), result.planned.time.back(), st.steps, st.rhs_evaluations,
+        st.jacobian_evaluations);
+    if (result.runs.size() > 3) {
+      const DynamicCompensationReport& d = result.runs[3].dynamic_compensation;
+      std::printf(
+          "  dynamic correction: %.2f s; largest link error of the nominal plant %.2g rad in closed form, %.2g rad "
+          "after %d runs\n",
+          result.runs[3].compensation_seconds, d.initial_error_rad, d.max_error_rad, d.iterations);
+    }
   }
   std::printf("\nTable II analogue (%zu samples, %.1f s of motion; errors measured by a simulated tracker)\n",
               result.planned.size(), result.planned.time.back());
   std::printf("%-36s %9s %9s %11s %11s %10s %10s\n", "run", "Ra [mm]", "Rz [mm]", "RMS3D [mm]", "max3D [mm]",
               "paper Ra", "paper Rz");
-  for (int r = 0; r < 3; ++r) {
+  for (std::size_t r = 0; r < result.runs.size(); ++r) {
     const AccuracyMetrics& m = result.runs[r].metrics;
-    std::printf("%-36s %9.4f %9.4f %11.4f %11.4f %10.4f %10.4f\n", result.runs[r].name.c_str(), m.ra * 1e3, m.rz * 1e3,
-                m.rms * 1e3, m.max * 1e3, kPaperRa[r], kPaperRz[r]);
+    if (r < 3) {
+      std::printf("%-36s %9.4f %9.4f %11.4f %11.4f %10.4f %10.4f\n", result.runs[r].name.c_str(), m.ra * 1e3,
+                  m.rz * 1e3, m.rms * 1e3, m.max * 1e3, kPaperRa[r], kPaperRz[r]);
+    } else {
+      std::printf("%-36s %9.4f %9.4f %11.4f %11.4f %10s %10s\n", result.runs[r].name.c_str(), m.ra * 1e3, m.rz * 1e3,
+                  m.rms * 1e3, m.max * 1e3, "-", "-");
+    }
   }
   const double ra_gain = 1.0 - result.runs[2].metrics.ra / result.runs[0].metrics.ra;
   const double rz_gain = 1.0 - result.runs[2].metrics.rz / result.runs[0].metrics.rz;
@@ -135,6 +158,26 @@ SpiralExperimentSpec specFromOptions(const Options& options, const ParameterSet&
     spec.drives = parameters.drives;
   }
   if (options.has("seed")) spec.truth.seed = std::stoull(options.get("seed", "2012"));
+  if (options.has("feed-rate")) {
+    const std::string text = options.get("feed-rate", "");
+    std::size_t used = 0;
+    double speed = 0.0;
+    try {
+      speed = std::stod(text, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (used != text.size() || !(speed > 0.0) || !(speed <= 2.0)) {
+      throw std::invalid_argument("--feed-rate: '" + text + "' is not a tool speed in m/s between 0 and 2");
+    }
+    // The acceleration and jerk limits scale with the speed, so the ramps take the same time as the paper's.
+    const double scale = speed / kPaperFeedRate;
+    spec.feed_rate.speed = speed;
+    spec.feed_rate.acceleration *= scale;
+    spec.feed_rate.jerk *= scale;
+  }
+  // The fourth run wherever the plant runs: the dynamic correction needs the drives.
+  spec.dynamic_correction = !spec.drives.empty() && !options.has("no-dynamic-correction");
   if (options.has("compensate-joints")) {
     for (const std::string& item : splitCommaList(options.get("compensate-joints", ""))) {
       if (item.empty() || item.size() > 2 || item.find_first_not_of("0123456789") != std::string::npos) {
@@ -149,10 +192,10 @@ SpiralExperimentSpec specFromOptions(const Options& options, const ParameterSet&
 }  // namespace
 
 int runPaper(int argc, char** argv) {
-  const Options options(
-      argc, argv,
-      {"urdf", "base-link", "tip-link", "params", "out", "seed", "compensate-joints", "no-plot", "quasi-static"},
-      {"no-plot", "quasi-static"});
+  const Options options(argc, argv,
+                        {"urdf", "base-link", "tip-link", "params", "out", "seed", "compensate-joints", "no-plot",
+                         "quasi-static", "feed-rate", "no-dynamic-correction"},
+                        {"no-plot", "quasi-static", "no-dynamic-correction"});
   const std::string out = options.get("out", "out/paper");
   prepareOutputFolder(out);
   const auto started = std::chrono::steady_clock::now();
@@ -165,6 +208,9 @@ int runPaper(int argc, char** argv) {
   std::printf("  simulated robot: %s\n", spec.drives.empty()
                                              ? "quasi-static (kinematics, elastostatics, transmission error)"
                                              : "flexible-joint plant integrated by CVODE");
+  std::printf("  feed rate %.3g m/s (acceleration %.3g m/s^2, jerk %.3g m/s^3)%s\n", spec.feed_rate.speed,
+              spec.feed_rate.acceleration, spec.feed_rate.jerk,
+              spec.feed_rate.speed == kPaperFeedRate ? ", the paper's" : "");
   std::printf(
       "  truth: nominal parameters moved by up to %.0f %% (stiffness), %.0f %% (harmonic amplitudes), "
       "%.2f rad (phases); seed %llu\n",

@@ -11,7 +11,8 @@ import numpy as np  # noqa: E402
 
 from atomic_png import save_figure  # noqa: E402  (a sibling of this script)
 
-NAMES = ["without correction", "stiffness correction", "stiffness and kinematic correction"]
+NAMES = ["without correction", "stiffness correction", "stiffness and kinematic correction",
+         "stiffness, kinematic and dynamic correction"]
 
 
 def main(csv_path, png_path):
@@ -19,6 +20,8 @@ def main(csv_path, png_path):
     figure, (along, plan) = plt.subplots(1, 2, figsize=(13, 5.6), layout="constrained")
     for run, name in enumerate(NAMES):
         rows = data[data["run"] == run]
+        if len(rows) == 0:
+            continue  # the dynamic correction's run is there only when asked for
         z = rows["error_z_mm"]
         along.plot(rows["t_s"], z, lw=0.7, label=f"{name}: Ra {np.mean(np.abs(z)):.4f} mm, Rz {np.ptp(z):.4f} mm")
     along.set_xlabel("time along the spiral [s]")

@@ -64,29 +64,50 @@ SpiralExperimentResult runSpiralExperiment(const JointErrorModel& nominal, const
   const EffectMask truth_mask = truth.allEffects();
   const EffectMask run_masks[3] = {0, nominal.loadsAnd({"compliance"}),
                                    nominal.loadsAnd({"compliance", "transmission_error"})};
-  const char* run_names[3] = {"without correction", "stiffness correction", "stiffness and kinematic correction"};
+  const char* run_names[4] = {"without correction", "stiffness correction", "stiffness and kinematic correction",
+                              "stiffness, kinematic and dynamic correction"};
 
   JointErrorWorkspace ws(robot);
   JointErrorWorkspace true_ws(true_robot);
   result.dynamic = !spec.drives.empty();
   std::unique_ptr<FlexibleJointPlant> plant;
   if (result.dynamic) plant = std::make_unique<FlexibleJointPlant>(truth, spec.drives, spec.plant);
-  for (int r = 0; r < 3; ++r) {
+  if (spec.dynamic_correction && !result.dynamic) {
+    throw InvalidArgument(
+        "the dynamic correction needs the plant (drives in the parameter file), not the "
+        "quasi-static robot");
+  }
+  const int run_count = spec.dynamic_correction ? 4 : 3;
+  result.runs.resize(run_count);
+  for (int r = 0; r < run_count; ++r) {
     SpiralRun& run = result.runs[r];
     run.name = run_names[r];
-    tell(progress, std::string("run ") + std::to_string(r + 1) + "/3: " + run.name);
-    run.compensation = compensateTrajectory(nominal, run_masks[r], result.planned.q, result.planned.qd, run.reference,
-                                            spec.compensation);
+    tell(progress, "run " + std::to_string(r + 1) + "/" + std::to_string(run_count) + ": " + run.name);
+    // The controller interpolates with the planned velocities, or with the dynamic references' own.
+    std::vector<JointVector> reference_velocity = result.planned.qd;
+    const auto computing = std::chrono::steady_clock::now();
+    if (r < 3) {
+      run.compensation = compensateTrajectory(nominal, run_masks[r], result.planned.q, result.planned.qd, run.reference,
+                                              spec.compensation);
+    } else {
+      run.dynamic_compensation =
+          compensateDynamically(nominal, spec.drives, result.planned, run.reference, reference_velocity, spec.dynamic);
+    }
+    run.compensation_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - computing).count();
     if (!spec.compensated_joints.empty()) {
       for (std::size_t k = 0; k < run.reference.size(); ++k) {
         for (int j = 0; j < robot.dof(); ++j) {
           bool selected = false;
           for (int c : spec.compensated_joints) selected = selected || c == j;
-          if (!selected) run.reference[k][j] = result.planned.q[k][j];
+          if (!selected) {
+            run.reference[k][j] = result.planned.q[k][j];
+            reference_velocity[k][j] = result.planned.qd[k][j];
+          }
         }
       }
     }
-    DeterministicRandom noise(spec.noise_seed * 1000003ULL + static_cast<std::uint64_t>(r));
+    // Each run has its own tracker noise; the dynamic correction's is the static one's it is compared with.
+    DeterministicRandom noise(spec.noise_seed * 1000003ULL + static_cast<std::uint64_t>(std::min(r, 2)));
     const std::size_t count = run.reference.size();
     run.actual.resize(count);
     run.measured.resize(count);
@@ -95,7 +116,7 @@ SpiralExperimentResult runSpiralExperiment(const JointErrorModel& nominal, const
     if (result.dynamic) {
       plant->reset(run.reference[0], result.planned.time[0]);
       for (std::size_t k = 0; k < count; ++k) {
-        plant->setReference(run.reference[k], result.planned.qd[k]);
+        plant->setReference(run.reference[k], reference_velocity[k]);
         run.actual[k] = plant->linkPositions();
         if (k + 1 < count) plant->advance(result.planned.time[k + 1]);
       }

@@ -16,6 +16,7 @@
 #include "model/compensation/path.hpp"
 #include "model/effects/perturbation.hpp"
 #include "model/io/instrument_noise.hpp"
+#include "model/plant/dynamic_compensation.hpp"
 #include "model/plant/flexible_joint_plant.hpp"
 
 namespace jointcomp {
@@ -43,6 +44,10 @@ struct SpiralExperimentSpec {
   // quasi-static robot (kinematics, elastostatics and transmission error only).
   std::vector<DriveParameters> drives;
   PlantOptions plant;
+  // A fourth run, "stiffness, kinematic and dynamic correction" (the plant only): the references of
+  // compensateDynamically (model/plant/dynamic_compensation.hpp) for the nominal model and drives.
+  bool dynamic_correction = false;
+  DynamicCompensationOptions dynamic;
 
   // The paper's spiral: a = 24 mm, b = 0.15, theta 0 to 4 pi, in the plane Z = 200 mm, centred at
   // X = 1.2 m in front of the robot where the arm reaches out and joint 2 carries most of the error.
@@ -57,14 +62,16 @@ struct SpiralRun {
   std::vector<Eigen::Vector3d> error;     // measured - planned
   AccuracyMetrics metrics;
   TrajectoryCompensationReport compensation;
+  DynamicCompensationReport dynamic_compensation;  // the fourth run's
+  double compensation_seconds = 0.0;               // CPU time computing the references
 };
 
 struct SpiralExperimentResult {
   JointTrajectory planned;
   bool dynamic = false;              // the plant (true) or the quasi-static robot
-  PlantStatistics plant_statistics;  // summed over the three runs
+  PlantStatistics plant_statistics;  // summed over the runs
   double simulation_seconds = 0.0;   // wall-clock time spent simulating the robot
-  std::array<SpiralRun, 3> runs;
+  std::vector<SpiralRun> runs;       // the paper's three, and the dynamic correction's when asked for
 };
 
 // The spiral as a joint trajectory: feed-rate planned, tool pointing down, inverse kinematics from
