@@ -78,9 +78,9 @@ asan_stage() {
   #   code paths that faster tests cover here: sweeps over seeds and data sets (discovery, calibration and
   #   identification statistics), the paper's 30 s spiral run again and again (at fine steps through the
   #   FMUs, through the plant and the C API), the plant's energy over a long horizon, two FMU instances in
-  #   threads, and the FMI 2 twin of two slow FMU tests whose FMI 3 version runs here (the versions share
+  #   threads, the dynamic correction (its refinement runs the plant ten or more times), and the FMI 2 twin of two slow FMU tests whose FMI 3 version runs here (the versions share
   #   the instance). The FMU state is fuzzed here too (fmu_state).
-  slow_under_sanitizers='DiscoverySweep\.|DiscoveryIpaUr10\.|IpaUr10Calibration\.|IntervalsCoverTheTruth|OverSeeds|SpiralAt1ms|FmuRegression\.|VaryingCommunicationSteps|RegressionThroughTheFmuEqualsTheCApi|PlantEnergy\.ConservedWithoutLossesOrControl|CapiMatchesCore\.SpiralPlanTrajectoryCompensationAndExperiment|Discovery\.RaRzOnHeldOutSpiral|TwoInstancesInTwoThreads|SpiralExperiment\.(ADifferentNoiseSeed|RunsAreCompleteAndNamed|DefaultSpecReproduces)|PlantSpiralRegression\.(MetricsFollowFromTheErrors|CorrectionRemovesMostOfRa)|PlantMisuse\.AbsurdGains|(RestoringAStateMidRunContinuesIdentically|BadStepsAreRefused)/fmi2'
+  slow_under_sanitizers='TheDynamicCorrectionFollowsTheSpiral|DynamicCompensation\.WithTheModelEqualToTheRobot|DiscoverySweep\.|DiscoveryIpaUr10\.|IpaUr10Calibration\.|IntervalsCoverTheTruth|OverSeeds|SpiralAt1ms|FmuRegression\.|VaryingCommunicationSteps|RegressionThroughTheFmuEqualsTheCApi|PlantEnergy\.ConservedWithoutLossesOrControl|CapiMatchesCore\.SpiralPlanTrajectoryCompensationAndExperiment|Discovery\.RaRzOnHeldOutSpiral|TwoInstancesInTwoThreads|SpiralExperiment\.(ADifferentNoiseSeed|RunsAreCompleteAndNamed|DefaultSpecReproduces)|PlantSpiralRegression\.(MetricsFollowFromTheErrors|CorrectionRemovesMostOfRa)|PlantMisuse\.AbsurdGains|(RestoringAStateMidRunContinuesIdentically|BadStepsAreRefused)/fmi2'
   # JOINTCOMP_ASAN_ALL=1 runs the slow ones under the sanitizers too (each takes 10 s to 5 min there).
   if [ "${JOINTCOMP_ASAN_ALL:-0}" = 1 ]; then
     not_under_sanitizers="^fmu_binary_fmi[23]$|^io_kill_during_write$|^capi_threads$|^cli_workflow$"

@@ -138,5 +138,34 @@ TEST(SpiralExperiment, UnreachableSpiralNamesThePathSample) {
   }
 }
 
+// The fourth run at ten times the paper's speed, on the plant with model != truth: the dynamic correction
+// removes what the static one leaves of the drives' lag and the links' inertia (README's table).
+TEST(SpiralExperiment, TheDynamicCorrectionFollowsTheSpiralAtTenTimesThePapersSpeed) {
+  const ParameterSet set = loadParameterSet(std::string(JOINTCOMP_DATA_DIR) + "/params/rx170.json", rx170());
+  SpiralExperimentSpec spec;
+  spec.drives = set.drives;
+  spec.dynamic_correction = true;
+  spec.feed_rate.speed *= 10.0;
+  spec.feed_rate.acceleration *= 10.0;
+  spec.feed_rate.jerk *= 10.0;
+  const SpiralExperimentResult result = runSpiralExperiment(set.model, spec);
+  ASSERT_EQ(result.runs.size(), 4u);
+  const AccuracyMetrics& static_run = result.runs[2].metrics;
+  const AccuracyMetrics& dynamic_run = result.runs[3].metrics;
+  EXPECT_EQ(result.runs[3].name, "stiffness, kinematic and dynamic correction");
+  EXPECT_LT(dynamic_run.rms, 0.1 * static_run.rms);
+  EXPECT_LT(dynamic_run.max, 0.1 * static_run.max);
+  EXPECT_LT(dynamic_run.rz, 0.5 * static_run.rz);
+  EXPECT_LT(dynamic_run.ra, static_run.ra);
+  EXPECT_LE(result.runs[3].dynamic_compensation.max_error_rad, spec.dynamic.tolerance_rad);
+  EXPECT_GT(result.runs[3].dynamic_compensation.initial_error_rad, result.runs[3].dynamic_compensation.max_error_rad);
+}
+
+TEST(SpiralExperiment, TheDynamicCorrectionNeedsThePlant) {
+  SpiralExperimentSpec spec;  // no drives: the quasi-static robot
+  spec.dynamic_correction = true;
+  EXPECT_THROW(runSpiralExperiment(nominal(), spec), InvalidArgument);
+}
+
 }  // namespace
 }  // namespace jointcomp
