@@ -50,6 +50,12 @@ void checkInputs(const Robot& robot, const std::vector<DriveParameters>& drives,
       options.max_iterations > 1000) {
     throw InvalidArgument("dynamic compensation: tolerance_rad must be positive and max_iterations in 1..1000");
   }
+  if (!std::isfinite(options.payload_mass) || options.payload_mass < 0.0 || !options.payload_com.allFinite() ||
+      !options.tool_wrench.allFinite()) {
+    throw InvalidArgument(
+        "dynamic compensation: the payload mass must be finite and non-negative, its centre and "
+        "the tool wrench finite");
+  }
 }
 
 // Stage 1b: the references that make each drive's motor follow the motor positions p_d of stage 1
@@ -60,8 +66,9 @@ void checkInputs(const Robot& robot, const std::vector<DriveParameters>& drives,
 // a stable second-order filter of the right side (the integral's rest value already holds the start),
 // integrated here by the trapezoidal rule, exact for a right side linear between samples.
 void invertDrives(const JointErrorModel& nominal, const std::vector<DriveParameters>& drives,
-                  const std::vector<double>& time, const std::vector<JointVector>& motor_reaction,
-                  std::vector<JointVector>& reference, std::vector<JointVector>& reference_velocity) {
+                  const DynamicCompensationOptions& options, const std::vector<double>& time,
+                  const std::vector<JointVector>& motor_reaction, std::vector<JointVector>& reference,
+                  std::vector<JointVector>& reference_velocity) {
   const Robot& robot = nominal.robot();
   const int n = robot.dof();
   const std::size_t count = time.size();
@@ -69,7 +76,10 @@ void invertDrives(const JointErrorModel& nominal, const std::vector<DriveParamet
   differentiate(time, reference, velocity);
   differentiate(time, velocity, acceleration);
   JointErrorWorkspace ws(robot);
-  JointContext at_reference(n);
+  JointContext at_reference(n);  // the controller's static feed-forward sees the payload and the wrench too
+  at_reference.payload_mass = options.payload_mass;
+  at_reference.payload_com = options.payload_com;
+  at_reference.tool_wrench = options.tool_wrench;
   std::vector<JointVector> demand(count);
   for (std::size_t k = 0; k < count; ++k) {
     at_reference.q = reference[k];
@@ -150,9 +160,9 @@ namespace {
 
 // Stages 1 and 1b for the link trajectory `target` (times, positions, velocities): the references and
 // their velocities that the model says bring the links onto it.
-void invertModel(const JointErrorModel& nominal, const std::vector<DriveParameters>& drives, Compensator& compensator,
-                 const JointTrajectory& target, std::vector<JointVector>& reference,
-                 std::vector<JointVector>& reference_velocity) {
+void invertModel(const JointErrorModel& nominal, const std::vector<DriveParameters>& drives,
+                 const DynamicCompensationOptions& options, Compensator& compensator, const JointTrajectory& target,
+                 std::vector<JointVector>& reference, std::vector<JointVector>& reference_velocity) {
   const Robot& robot = nominal.robot();
   const int n = robot.dof();
   const std::size_t count = target.time.size();
@@ -160,6 +170,9 @@ void invertModel(const JointErrorModel& nominal, const std::vector<DriveParamete
   differentiate(target.time, target.qd, acceleration);
   RobotWorkspace workspace(robot);
   JointContext ctx(n);
+  ctx.payload_mass = options.payload_mass;
+  ctx.payload_com = options.payload_com;
+  ctx.tool_wrench = options.tool_wrench;
   JointVector with_motion, at_rest;
   std::vector<JointVector> motor_reaction(count);  // (I + E)^T tau_s: what the motors must push against
   const int compliance = nominal.findEffect("compliance");
@@ -189,7 +202,7 @@ void invertModel(const JointErrorModel& nominal, const std::vector<DriveParamete
     const JointMatrix slope = motor_slope.asDiagonal() * nominal.gears().motorFromJoint();
     motor_reaction[k] = ctx.load_torque + slope.transpose() * ctx.load_torque;
   }
-  invertDrives(nominal, drives, target.time, motor_reaction, reference, reference_velocity);
+  invertDrives(nominal, drives, options, target.time, motor_reaction, reference, reference_velocity);
 }
 
 }  // namespace
@@ -205,7 +218,7 @@ DynamicCompensationReport compensateDynamically(const JointErrorModel& nominal,
   DynamicCompensationReport report;
   Compensator compensator(nominal, nominal.allEffects(), options.fixed_point);
   JointTrajectory target = planned;
-  invertModel(nominal, drives, compensator, target, reference, reference_velocity);
+  invertModel(nominal, drives, options, compensator, target, reference, reference_velocity);
 
   // Stage 2: run the reference through the nominal plant, move the target by the error left at each
   // sample, and invert the model again for it: pre-distortion through the model's own inverse, which
@@ -214,6 +227,8 @@ DynamicCompensationReport compensateDynamically(const JointErrorModel& nominal,
   // represent is left alone instead of being amplified run after run. The best reference is kept.
   constexpr double kLearningGain = 0.7;
   FlexibleJointPlant plant(nominal, drives, options.plant);
+  plant.setPayload(options.payload_mass, options.payload_com);
+  plant.setToolWrench(options.tool_wrench);
   std::vector<JointVector> offset(count, JointVector::Zero(robot.dof())), offset_rate, increment(count);
   std::vector<JointVector> best_reference = reference, best_velocity = reference_velocity;
   double best = std::numeric_limits<double>::infinity();
@@ -246,7 +261,7 @@ DynamicCompensationReport compensateDynamically(const JointErrorModel& nominal,
       target.q[k] = planned.q[k] + offset[k];
       target.qd[k] = planned.qd[k] + offset_rate[k];
     }
-    invertModel(nominal, drives, compensator, target, reference, reference_velocity);
+    invertModel(nominal, drives, options, compensator, target, reference, reference_velocity);
   }
   report.initial_error_rad = report.error_per_run.front();
   report.max_error_rad = best;

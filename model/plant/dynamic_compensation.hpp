@@ -32,6 +32,11 @@ struct DynamicCompensationOptions {
   // times its speed.
   double tolerance_rad = 2e-6;
   int max_iterations = 40;  // plant runs of stage 2, at most
+  // The conditions of the motion: a payload at the tool (its weight loads the joints) and a known tool
+  // wrench (a process force, base frame), both in the inverse model and in the nominal plant.
+  double payload_mass = 0.0;                              // kg
+  Eigen::Vector3d payload_com = Eigen::Vector3d::Zero();  // m, tool frame
+  Vector6 tool_wrench = Vector6::Zero();
   FixedPointOptions fixed_point;
   // The nominal plant's runs, integrated tighter than the plant's default (whose relative tolerance of
   // 1e-6 allows errors of that order on joint angles near 1 rad), so that the refinement sees the

@@ -75,6 +75,27 @@ TEST(DynamicCompensation, WithTheModelEqualToTheRobotTheLinksFollowAFastMoveWith
   EXPECT_GT(report.max_correction_rad, 1e-4);
 }
 
+// With a payload and a process force, given to the compensation as to the robot, the same holds.
+TEST(DynamicCompensation, APayloadAndAToolWrenchAreCompensatedToo) {
+  const ParameterSet set = loadParameterSet(kParameters, rx170());
+  const JointTrajectory planned = septicMove(0.8);
+  DynamicCompensationOptions options;
+  options.tolerance_rad = 2e-7;
+  options.plant = DynamicCompensationOptions::tightPlantOptions(1e-8);
+  options.payload_mass = 40.0;
+  options.payload_com = Eigen::Vector3d(0.0, 0.05, 0.12);
+  options.tool_wrench << 150.0, -80.0, -200.0, 5.0, 0.0, -3.0;
+  std::vector<JointVector> reference, velocity;
+  compensateDynamically(set.model, set.drives, planned, reference, velocity, options);
+  FlexibleJointPlant robot(set.model, set.drives, options.plant);
+  robot.setPayload(options.payload_mass, options.payload_com);
+  robot.setToolWrench(options.tool_wrench);
+  EXPECT_LT(largestLinkError(runReference(robot, planned.time, reference, velocity), planned.q), 1e-6);
+  // The same references without the load leave the links off by what the load deflects.
+  FlexibleJointPlant unloaded(set.model, set.drives, options.plant);
+  EXPECT_GT(largestLinkError(runReference(unloaded, planned.time, reference, velocity), planned.q), 1e-5);
+}
+
 // The inertial torque a context carries is one more load the joints deflect under.
 TEST(DynamicCompensation, TheInertialTorqueAddsToTheLoad) {
   const ParameterSet set = loadParameterSet(kParameters, rx170());
