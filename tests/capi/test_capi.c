@@ -451,6 +451,51 @@ static void test_errors_and_compensation(jc_robot* robot) {
   EXPECT_OK(jc_robot_free(wild));
 }
 
+/* The dynamic compensation of a robot held still is the static compensation of its posture (no motion, no
+   lag), found on the first run of the nominal plant; malformed calls are refused with the reason. */
+static void test_dynamic_compensation(jc_robot* robot, jc_robot* bare) {
+  enum { kSamples = 10 };
+  double times[kSamples], planned[6 * kSamples], velocities[6 * kSamples], references[6 * kSamples];
+  double reference_velocities[6 * kSamples], point_reference[6], max_link_error = -1.0;
+  int32_t runs = 0, k, j;
+  for (k = 0; k < kSamples; ++k) {
+    times[k] = 0.004 * k;
+    for (j = 0; j < 6; ++j) {
+      planned[6 * k + j] = kPosture[j];
+      velocities[6 * k + j] = 0.0;
+    }
+  }
+  EXPECT_OK(jc_compensate_trajectory_dynamic(robot, times, kSamples, planned, 6 * kSamples, velocities, 6 * kSamples,
+                                             references, 6 * kSamples, reference_velocities, 6 * kSamples, &runs,
+                                             &max_link_error));
+  CHECK(runs == 1 && max_link_error >= 0.0 && max_link_error < 1e-9);
+  EXPECT_OK(jc_compensate_point(robot, NULL, kPosture, 6, NULL, 0, point_reference, 6, NULL));
+  for (k = 0; k < kSamples; ++k) {
+    CHECK(max_abs_difference(references + 6 * k, point_reference, 6) < 1e-9);
+    CHECK(max_abs_difference(reference_velocities + 6 * k, velocities, 6) < 1e-6);
+  }
+  CHECK(max_abs_difference(point_reference, kPosture, 6) > 1e-5); /* the posture does need a correction */
+  EXPECT_OK(jc_compensate_trajectory_dynamic(robot, times, kSamples, planned, 6 * kSamples, velocities, 6 * kSamples,
+                                             references, 6 * kSamples, NULL, 0, NULL, NULL));
+  EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "no \"plant\" object",
+                jc_compensate_trajectory_dynamic(bare, times, kSamples, planned, 6 * kSamples, velocities, 6 * kSamples,
+                                                 references, 6 * kSamples, NULL, 0, NULL, NULL));
+  EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "at least 3 samples",
+                jc_compensate_trajectory_dynamic(robot, times, 2, planned, 12, velocities, 12, references, 12, NULL, 0,
+                                                 NULL, NULL));
+  EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "planned_len",
+                jc_compensate_trajectory_dynamic(robot, times, kSamples, planned, 6 * kSamples - 1, velocities,
+                                                 6 * kSamples, references, 6 * kSamples, NULL, 0, NULL, NULL));
+  times[4] = times[3];
+  EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "increasing",
+                jc_compensate_trajectory_dynamic(robot, times, kSamples, planned, 6 * kSamples, velocities,
+                                                 6 * kSamples, references, 6 * kSamples, NULL, 0, NULL, NULL));
+  times[4] = kNaN;
+  EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "times[4] is NaN",
+                jc_compensate_trajectory_dynamic(robot, times, kSamples, planned, 6 * kSamples, velocities,
+                                                 6 * kSamples, references, 6 * kSamples, NULL, 0, NULL, NULL));
+}
+
 static void test_spiral(jc_robot* robot, jc_robot* bare) {
   int32_t m = 0, max_iterations = 0, k;
   double *time, *positions, *q, *qd, *references, *errors;
@@ -910,6 +955,7 @@ int main(void) {
   test_kinematics(robot, ur10);
   test_errors_and_compensation(robot);
   test_spiral(robot, bare);
+  test_dynamic_compensation(robot, bare);
   test_unreachable_spiral(ur10);
   test_metrics();
   test_identification(robot, bare);

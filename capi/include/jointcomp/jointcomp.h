@@ -312,6 +312,24 @@ JOINTCOMP_API jc_status jc_spiral_experiment_truth(jc_robot* nominal, jc_robot* 
                                                    double* metrics, int32_t metrics_len, double* errors,
                                                    int32_t errors_len);
 
+/* ---- Dynamic compensation of a trajectory with time (issue 18) ------------------------------------------
+   The references that make the modelled robot (flexible joints, the drives and controller of the
+   parameters' "plant" object, every effect, the handle's payload and tool wrench) put its links on a
+   planned trajectory at any speed, computed offline (model/plant/dynamic_compensation.hpp): m samples at
+   `times` (m, finite and increasing), planned positions and velocities (m x n each, m = times_len);
+   references (m x n) and, optional, their velocities (m x n: what the controller interpolates with; NULL
+   and 0 for none). *runs and *max_link_error (optional) receive the runs of the nominal plant the
+   refinement made and the largest link error left on it (rad). JC_ERROR_INVALID_ARGUMENT when the
+   parameters have no "plant" object or the trajectory is malformed (fewer than three samples, say);
+   JC_ERROR_SOLVER when the refinement does not reach 2e-6 rad; JC_ERROR_UNREACHABLE when a reference
+   leaves the joint limits. */
+JOINTCOMP_API jc_status jc_compensate_trajectory_dynamic(jc_robot* robot, const double* times, int32_t times_len,
+                                                         const double* planned, int32_t planned_len,
+                                                         const double* velocities, int32_t velocities_len,
+                                                         double* references, int32_t references_len,
+                                                         double* reference_velocities, int32_t reference_velocities_len,
+                                                         int32_t* runs, double* max_link_error);
+
 #ifdef __cplusplus
 }
 #endif

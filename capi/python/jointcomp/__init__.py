@@ -23,7 +23,8 @@ from .identification import (Report, calibrate, discover, identify_stiffness, id
                              simulate_campaign)
 from .metrics import Metrics, accuracy_metrics, average_absolute_deviation, peak_to_peak_deviation
 from .plant import Plant, PlantStatistics
-from .robot import RUN_NAMES, Robot, SpiralExperiment, SpiralPlan, TrajectoryCompensation
+from .robot import (RUN_NAMES, DynamicCompensation, Robot, SpiralExperiment, SpiralPlan,
+                    TrajectoryCompensation)
 
 # jointcomp.distributed (Dask) is imported when first used: `python3 -m jointcomp.distributed` runs it as
 # __main__, which an import here would have loaded a second time.
@@ -82,7 +83,7 @@ def last_error():
 
 
 __all__ = [
-    "ABI_VERSION", "__version__", "DistributedError", "FleetResult", "MonteCarloResult", "fleet", "monte_carlo", "FileError", "InternalError", "InvalidArgumentError", "JointcompError", "Metrics",
+    "ABI_VERSION", "__version__", "DynamicCompensation", "DistributedError", "FleetResult", "MonteCarloResult", "fleet", "monte_carlo", "FileError", "InternalError", "InvalidArgumentError", "JointcompError", "Metrics",
     "OutOfMemoryError", "Plant", "PlantLimitError", "PlantStatistics", "RUN_NAMES", "Report", "Robot", "SolverError", "SpiralExperiment",
     "SpiralPlan", "TrajectoryCompensation", "UnreachableError", "WrongHandleError", "abi_version",
     "accuracy_metrics", "average_absolute_deviation", "calibrate", "discover", "identify_stiffness",

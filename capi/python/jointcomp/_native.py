@@ -60,6 +60,9 @@ PROTOTYPES = {
     "jc_compensate_point": (_i32, [_handle, _text, _double_p, _i32, _double_p, _i32, _double_p, _i32, _int32_p]),
     "jc_compensate_trajectory": (
         _i32, [_handle, _text, _double_p, _i32, _double_p, _i32, _double_p, _i32, _int32_p, _double_p]),
+    "jc_compensate_trajectory_dynamic": (
+        _i32, [_handle, _double_p, _i32, _double_p, _i32, _double_p, _i32, _double_p, _i32, _double_p, _i32, _int32_p,
+               _double_p]),
     "jc_spiral_sample_count": (_i32, [_handle, _int32_p]),
     "jc_spiral_plan": (_i32, [_handle, _double_p, _i32, _double_p, _i32, _double_p, _i32, _double_p, _i32]),
     "jc_spiral_experiment": (_i32, [_handle, _i32, _double_p, _i32, _double_p, _i32]),

@@ -499,8 +499,10 @@ def _run_tasks(client, function, job, items, timeout, retries, describe):
     if client is None:
         return [function(job, *item) for item in items]
     import distributed
-    remote_job = client.scatter(job, broadcast=True)
-    futures = [client.submit(function, remote_job, *item, retries=retries, pure=False) for item in items]
+    # The job (paths, JSON text, seeds: a few kB) travels inside each task rather than scattered: data
+    # scattered to a worker that is then killed is lost, and every task that needs it is cancelled (seen
+    # on a loaded machine, where the cluster's second worker was not up yet when the job was scattered).
+    futures = [client.submit(function, job, *item, retries=retries, pure=False) for item in items]
     try:
         with client.as_current():
             distributed.wait(futures, timeout=timeout)

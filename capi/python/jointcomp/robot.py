@@ -21,6 +21,10 @@ measured minus planned tool positions (3, m, 3) in m, or None when not asked for
 simulated robot was the flexible-joint plant."""
 
 TrajectoryCompensation = collections.namedtuple("TrajectoryCompensation", "references max_iterations max_correction")
+# The dynamic compensation of a trajectory with time: references and their velocities (m, n), the runs of
+# the nominal plant the refinement made and the largest link error it left (rad).
+DynamicCompensation = collections.namedtuple("DynamicCompensation",
+                                             "references reference_velocities runs max_link_error")
 TrajectoryCompensation.__doc__ = """Compensated joint references (m, n) in rad, the largest fixed-point
 iteration count, and the largest |planned - reference| in rad."""
 
@@ -292,6 +296,32 @@ class Robot(OwnedHandle):
             _length(velocities), _native.pointer(references), references.size, ctypes.byref(max_iterations),
             ctypes.byref(max_correction)))
         return TrajectoryCompensation(references.reshape(shape), max_iterations.value, max_correction.value)
+
+    def compensate_dynamic(self, times, planned, velocities):
+        """The dynamic compensation of a trajectory with time: ``times`` (m,), ``planned`` and
+        ``velocities`` (m, n). The references make the modelled robot (flexible joints, drives and
+        controller, every effect, the payload and tool wrench set on this robot) put its links on the plan
+        at any speed; give the plant (or the robot's controller) the references with their velocities.
+        Needs the parameters' "plant" object. Returns a DynamicCompensation."""
+        times = np.ascontiguousarray(times, dtype=np.float64)
+        planned = np.ascontiguousarray(planned, dtype=np.float64)
+        velocities = np.ascontiguousarray(velocities, dtype=np.float64)
+        if times.ndim != 1:
+            raise InvalidArgumentError(f"times has shape {times.shape}; expected (m,)")
+        expected = (times.size, self._dof)
+        for name, array in (("planned", planned), ("velocities", velocities)):
+            if array.shape != expected:
+                raise InvalidArgumentError(f"{name} has shape {array.shape}; expected {expected}")
+        references = np.empty(expected)
+        reference_velocities = np.empty(expected)
+        runs = ctypes.c_int32()
+        max_link_error = ctypes.c_double()
+        _native.check(_native.lib.jc_compensate_trajectory_dynamic(
+            self.handle, _native.pointer(times), times.size, _native.pointer(planned), planned.size,
+            _native.pointer(velocities), velocities.size, _native.pointer(references), references.size,
+            _native.pointer(reference_velocities), reference_velocities.size, ctypes.byref(runs),
+            ctypes.byref(max_link_error)))
+        return DynamicCompensation(references, reference_velocities, runs.value, max_link_error.value)
 
     # ---- the paper's spiral ----
 
