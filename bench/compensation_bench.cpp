@@ -65,6 +65,30 @@ void BM_Ours_CompensateSpiralPoint(benchmark::State& state) {
 }
 BENCHMARK(BM_Ours_CompensateSpiralPoint);
 
+// The dynamic compensation (model/plant/dynamic_compensation.hpp) of the whole 30 s spiral at the paper's
+// feed rate and at ten times it, with the parameter file's drives: closed form and refinement against the
+// nominal plant, one core (target: under 1 s at the paper's feed rate).
+void BM_Ours_DynamicCompensationSpiral(benchmark::State& state) {
+  const Fixture& f = fixture();
+  const std::vector<DriveParameters> drives = loadParameterSet(JOINTCOMP_DATA_DIR "/params/rx170.json", f.robot).drives;
+  SpiralExperimentSpec spec;
+  const double speed_up = static_cast<double>(state.range(0));
+  spec.feed_rate.speed *= speed_up;
+  spec.feed_rate.acceleration *= speed_up;
+  spec.feed_rate.jerk *= speed_up;
+  const JointTrajectory planned = planSpiralTrajectory(*f.robot, spec.spiral, spec.feed_rate);
+  std::vector<JointVector> reference, velocity;
+  int runs = 0;
+  for (auto _ : state) {
+    runs = compensateDynamically(*f.model, drives, planned, reference, velocity).iterations;
+    benchmark::DoNotOptimize(reference.data());
+  }
+  state.counters["plant_runs"] = runs;
+  state.counters["samples"] = static_cast<double>(planned.size());
+  state.counters["motion_s"] = planned.time.back();
+}
+BENCHMARK(BM_Ours_DynamicCompensationSpiral)->Arg(1)->Arg(10)->Unit(benchmark::kMillisecond);
+
 // The same fixed point, with the load torque from KDL's gravity solver (plus the same spring balancer).
 void BM_Kdl_CompensateSpiralPoint(benchmark::State& state) {
   const Fixture& f = fixture();

@@ -16,7 +16,7 @@ namespace bench_ipa {
 
 inline std::string ipa(const std::string& file) {
   const char* root = std::getenv("JOINTCOMP_SHARED");
-  return std::string(root ? root : "(JOINTCOMP_SHARED not set)") + "/data/ipa-ur10/" + file;
+  return std::string(root && *root ? root : "(JOINTCOMP_SHARED not set)") + "/data/ipa-ur10/" + file;
 }
 
 inline bool haveData() { return std::ifstream(ipa("Series_A/measurements_grid.csv")).good(); }
