@@ -122,18 +122,10 @@ int runPython(const std::vector<std::string>& arguments) {
   return 1;
 }
 
-// Parses with CLI11: --help prints the usage (HelpShown, exit 0), a bad command line is a UsageError
-// carrying the usage (exit 2).
+// Parses with CLI11 as every command does (cli/options.hpp): --help exits 0, a bad command line 2.
 void parse(CLI::App& app, int argc, char** argv) {
   app.set_help_flag("-h,--help", "this help");
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::CallForHelp&) {
-    std::printf("%s", app.help().c_str());
-    throw HelpShown();
-  } catch (const CLI::ParseError& error) {
-    throw UsageError(std::string(error.what()) + "\n" + app.help());
-  }
+  parseCommandLine(app, argc, argv);
 }
 
 struct ClusterOptions {

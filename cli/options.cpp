@@ -85,6 +85,10 @@ Options::Options(int argc, char** argv, const std::set<std::string>& known, cons
     }
   }
   if (argc <= 0) return;  // `jointcomp` alone: the defaults
+  parseCommandLine(app, argc, argv);
+}
+
+void parseCommandLine(CLI::App& app, int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp&) {

@@ -49,6 +49,16 @@ public:
   using std::invalid_argument::invalid_argument;
 };
 
+}  // namespace jointcomp::cli
+namespace CLI {
+class App;
+}
+namespace jointcomp::cli {
+
+// Parses `app` the way every command does: --help prints the usage and throws HelpShown, a command line
+// that does not parse throws UsageError carrying the message and the usage.
+void parseCommandLine(CLI::App& app, int argc, char** argv);
+
 // What each option means, for --help (one table: the options mean the same in every command).
 const char* optionHelp(const std::string& name);
 

@@ -1,6 +1,7 @@
 // Joint-error prediction, compensation and the paper's spiral experiment.
 #include "api_support.hpp"
 #include "model/experiment/spiral_experiment.hpp"
+#include "spiral_outputs.hpp"
 
 using namespace jointcomp;
 using namespace jointcomp::capi;
@@ -183,16 +184,7 @@ jc_status jc_spiral_experiment(jc_robot* robot, int32_t use_plant, double* metri
       throw std::logic_error("the experiment planned " + std::to_string(result.planned.size()) +
                              " samples, jc_spiral_plan " + std::to_string(m));
     }
-    for (int r = 0; r < 3; ++r) {
-      const AccuracyMetrics& run = result.runs[r].metrics;
-      const double values[5] = {run.ra, run.rz, run.rms, run.max, run.mean};
-      for (int i = 0; i < 5; ++i) metrics[5 * r + i] = values[i];
-      if (want_errors) {
-        for (std::int64_t k = 0; k < m; ++k) {
-          for (int i = 0; i < 3; ++i) errors[(r * m + k) * 3 + i] = result.runs[r].error[k][i];
-        }
-      }
-    }
+    writeSpiralRuns(result, m, metrics, want_errors ? errors : nullptr);
   });
 }
 

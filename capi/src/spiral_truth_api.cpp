@@ -2,6 +2,7 @@
 // another robot as the truth (Monte Carlo over a parameter distribution, jointcomp.distributed).
 #include "api_support.hpp"
 #include "model/experiment/spiral_experiment.hpp"
+#include "spiral_outputs.hpp"
 
 using namespace jointcomp;
 using namespace jointcomp::capi;
@@ -31,16 +32,7 @@ jc_status jc_spiral_experiment_truth(jc_robot* nominal, jc_robot* truth, int32_t
     const bool want_errors = optionalOutput(errors, errors_len, 9 * m, "errors", "3 runs x the spiral's samples x 3");
     // Both models are immutable once loaded: no handle lock is needed to read them.
     const SpiralExperimentResult result = runSpiralExperiment(model.model, real.model, spec);
-    for (int r = 0; r < 3; ++r) {
-      const AccuracyMetrics& run = result.runs[r].metrics;
-      const double values[5] = {run.ra, run.rz, run.rms, run.max, run.mean};
-      for (int i = 0; i < 5; ++i) metrics[5 * r + i] = values[i];
-      if (want_errors) {
-        for (std::int64_t k = 0; k < m; ++k) {
-          for (int i = 0; i < 3; ++i) errors[(r * m + k) * 3 + i] = result.runs[r].error[k][i];
-        }
-      }
-    }
+    writeSpiralRuns(result, m, metrics, want_errors ? errors : nullptr);
   });
 }
 
