@@ -43,6 +43,7 @@
 #include "model/io/atomic_file.hpp"
 #include "model/io/parameter_file.hpp"
 #include "model/io/robot_file.hpp"
+#include "model/plant/dynamic_compensation.hpp"
 #include "model/plant/flexible_joint_plant.hpp"
 #include "model/robot/kinematics.hpp"
 
@@ -1205,6 +1206,56 @@ TEST_P(FmuTest, APlainRunMovesTheRobotAndShowsTheCompensation) {
   EXPECT_LT(worst_error[0], 0.01) << "the links follow the demo move";
   EXPECT_LT(worst_error[2], 0.5 * worst_error[0])
       << "with correction " << worst_error[2] << " rad, without " << worst_error[0] << " rad";
+}
+
+// The dynamic compensation through the FMU (issue 18): the master computes the references offline
+// (jc_compensate_trajectory_dynamic, Python's compensate_dynamic, or here the core) and feeds them with their
+// velocities as inputs, compensation none; with the FMU's robot equal to the model and no noise, its links
+// follow a fast move (joints 1 to 3 by 20 to 30 degrees in 0.8 s) to within 1e-6 rad.
+TEST_P(FmuTest, OfflineDynamicReferencesMakeTheLinksFollowAFastMoveWithin1e6Rad) {
+  const ParameterSet set = loadParameterSet(unzipped(2) + "/resources/parameters.json", spiral().robot);
+  JointTrajectory planned;
+  const JointVector start = (JointVector(kDof) << 0, 30, 60, 0, 45, 0).finished() * kDegree;
+  const JointVector travel = (JointVector(kDof) << 30, 20, -25, 0, 15, 0).finished() * kDegree;
+  for (int k = 0; k <= 250; ++k) {
+    const double t = 0.004 * k, s = std::clamp((t - 0.1) / 0.8, 0.0, 1.0);
+    planned.time.push_back(t);
+    planned.q.push_back(start + s * s * s * s * (35 - 84 * s + 70 * s * s - 20 * s * s * s) * travel);
+    planned.qd.push_back(140 * s * s * s * (1 - s) * (1 - s) * (1 - s) / 0.8 * travel);
+  }
+  DynamicCompensationOptions options;
+  options.tolerance_rad = 2e-7;
+  options.plant = DynamicCompensationOptions::tightPlantOptions(1e-8);
+  std::vector<JointVector> reference, velocity;
+  compensateDynamically(set.model, set.drives, planned, reference, velocity, options);
+
+  auto m = makeMaster(GetParam());
+  ASSERT_TRUE(m->instantiate());
+  ASSERT_EQ(m->enterInitialization(), kOK);
+  ASSERT_EQ(m->setEnumeration(m->vr("compensation"), 0), kOK);
+  ASSERT_EQ(m->setBoolean(m->vr("use_velocity_inputs"), true), kOK);
+  ASSERT_EQ(m->setReals({m->vr("integrator.relative_tolerance"), m->vr("integrator.absolute_tolerance")},
+                        {options.plant.relative_tolerance, options.plant.absolute_tolerance}),
+            kOK);
+  ASSERT_EQ(m->setReals(m->vrs("q_desired_", kDof), values(reference[0])), kOK);
+  ASSERT_EQ(m->setReals(m->vrs("qd_desired_", kDof), values(velocity[0])), kOK);
+  ASSERT_EQ(m->exitInitialization(), kOK) << m->log();
+  double worst = 0.0, largest_correction = 0.0;
+  std::vector<double> link;
+  for (std::size_t k = 0; k < planned.time.size(); ++k) {
+    ASSERT_EQ(m->setReals(m->vrs("q_desired_", kDof), values(reference[k])), kOK);
+    ASSERT_EQ(m->setReals(m->vrs("qd_desired_", kDof), values(velocity[k])), kOK);
+    ASSERT_EQ(m->getReals(m->vrs("q_link_", kDof), link), kOK);
+    for (int j = 0; j < kDof; ++j) worst = std::max(worst, std::abs(link[j] - planned.q[k][j]));
+    for (int j = 0; j < kDof; ++j)
+      largest_correction = std::max(largest_correction, std::abs(reference[k][j] - planned.q[k][j]));
+    if (k + 1 < planned.time.size()) {
+      ASSERT_EQ(m->doStep(planned.time[k], planned.time[k + 1] - planned.time[k]), kOK) << m->log();
+    }
+  }
+  EXPECT_LT(worst, 1e-6);
+  EXPECT_GT(largest_correction, 1e-4) << "the references do differ from the plan";
+  EXPECT_EQ(m->terminate(), kOK);
 }
 
 // Inputs set during initialisation (even to their start values) make reference = auto follow the inputs;
