@@ -125,6 +125,22 @@ nlohmann::ordered_json calibrationReportJson(const CalibrationRun& run, const Me
     parameters.push_back(entry);
   }
   report["parameters"] = parameters;
+  // The identified parameters' correlation (from the fit's covariance): what Monte Carlo studies need
+  // beyond the sigmas, since placements, offsets and the target trade off against each other.
+  if (result.covariance.rows() == static_cast<Eigen::Index>(result.free.size()) && !result.free.empty()) {
+    nlohmann::ordered_json names = nlohmann::ordered_json::array(), matrix = nlohmann::ordered_json::array();
+    const Eigen::VectorXd sigma = result.covariance.diagonal().cwiseMax(0.0).cwiseSqrt();
+    for (std::size_t a = 0; a < result.free.size(); ++a) {
+      names.push_back(result.names[static_cast<std::size_t>(result.free[a])]);
+      nlohmann::ordered_json row = nlohmann::ordered_json::array();
+      for (std::size_t b = 0; b < result.free.size(); ++b) {
+        const double scale = sigma[a] * sigma[b];
+        row.push_back(a == b ? 1.0 : scale > 0.0 ? result.covariance(a, b) / scale : 0.0);
+      }
+      matrix.push_back(row);
+    }
+    report["correlation"] = {{"parameters", names}, {"matrix", matrix}};
+  }
   report["compliance_left_out"] = run.compliance_left_out;
   nlohmann::ordered_json campaigns = nlohmann::ordered_json::array();
   campaigns.push_back({{"file", sources.campaign},

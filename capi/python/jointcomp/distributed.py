@@ -61,6 +61,9 @@ class DistributedError(RuntimeError):
 #                                       the geometry (URDF joint origin: origin * Trans(d) * Exp(r) * Rot(axis, offset))
 #   effects/<i>/<key>[/<k>]             any number of the parameter file's effect i, by its JSON path
 # Geometry entries draw a deviation from the URDF as it is (their value is 0 there).
+# One more kind of entry correlates normal entries (a calibration report gives it from the fit's covariance):
+#   {"correlation": {"parameters": [NAME, ...], "matrix": [[1, r12, ...], ...]}}
+# Their standard normal draws are then mixed by a square root of that matrix before their scales apply.
 
 _GEOMETRY = re.compile(r"^(?P<joint>[^.]+)\.(?P<what>offset_rad|placement_(?:dx|dy|dz)_m|placement_(?:rx|ry|rz)_rad)$")
 _STIFFNESS = re.compile(r"^(?P<joint>[^.]+)\.(?P<what>stiffness_nm_per_rad|compliance_rad_per_nm)$")
@@ -122,8 +125,9 @@ def report_distribution(report):
     law around the identified value (the parameters must be the identified ones: the report's robot).
     Reports: stiffness and transmission-error identification (identify), calibration (its identified
     parameters; the instrument frame and target are the set-up's, not the robot's, and are listed in
-    not_propagated) and discovery (the discovered effects' parameters). Only the standard errors are
-    used: the reports give no covariance, so correlations between parameters are not propagated."""
+    not_propagated) and discovery (the discovered effects' parameters). A calibration report's correlation
+    (from the fit's covariance) comes along as a correlation entry over the propagated parameters; the
+    other reports give standard errors only."""
     data = _report_data(report)
     entries, left = [], []
     kind = data.get("format") or data.get("identification")
@@ -168,7 +172,16 @@ def report_distribution(report):
     if not entries:
         raise DistributedError("report: it states no parameter with a standard error that could be propagated"
                                + (" (%s)" % "; ".join(left) if left else ""))
-    return entries, left
+    correlation = data.get("correlation")
+    if correlation:
+        # The block of the propagated parameters (a principal block of a correlation matrix is one too).
+        names = [e["parameter"] for e in entries]
+        where = {name: k for k, name in enumerate(correlation["parameters"])}
+        kept = [name for name in names if name in where]
+        if len(kept) > 1:
+            matrix = [[correlation["matrix"][where[a]][where[b]] for b in kept] for a in kept]
+            entries.append({"correlation": {"parameters": kept, "matrix": matrix}})
+    return check_distribution(entries, "report"), left
 
 
 def _report_data(report):
@@ -204,7 +217,11 @@ def check_distribution(entries, where="distribution"):
     if not isinstance(entries, list) or not entries:
         raise DistributedError("%s: must be a non-empty list of {parameter, law, scale[, relative]}" % where)
     checked = []
+    correlations = []
     for k, e in enumerate(entries):
+        if isinstance(e, dict) and "correlation" in e:
+            correlations.append((k, e["correlation"]))
+            continue
         if not isinstance(e, dict) or "parameter" not in e or "scale" not in e:
             raise DistributedError("%s: entry %d needs \"parameter\" and \"scale\": %r" % (where, k, e))
         law = e.get("law", "normal")
@@ -222,7 +239,39 @@ def check_distribution(entries, where="distribution"):
                                    "phase_rad, joint_J.offset_rad, joint_J.placement_<d|r><x|y|z>_<m|rad>, "
                                    "effects/<i>/<key>[/<k>]" % (where, k, name))
         checked.append(_entry(name, law, scale, e.get("relative", False), e.get("source", where)))
+    if not checked:
+        raise DistributedError("%s: no parameter entry (only correlations)" % where)
+    for k, correlation in correlations:
+        checked.append(_check_correlation(correlation, checked, "%s: entry %d (correlation)" % (where, k)))
     return checked
+
+
+def _check_correlation(correlation, entries, where):
+    """A correlation entry checked, with the matrix's square root (``factor``) the draws are mixed by."""
+    if not isinstance(correlation, dict) or "parameters" not in correlation or "matrix" not in correlation:
+        raise DistributedError("%s: needs \"parameters\" and \"matrix\"" % where)
+    names = correlation["parameters"]
+    laws = {e["parameter"]: e["law"] for e in entries if "parameter" in e}
+    if not isinstance(names, list) or len(names) < 2 or len(set(names)) != len(names):
+        raise DistributedError("%s: \"parameters\" must list two or more different parameters" % where)
+    for name in names:
+        if laws.get(name) != "normal":
+            raise DistributedError("%s: %r is not a normal entry of the distribution" % (where, name))
+    try:
+        matrix = np.array(correlation["matrix"], dtype=float)
+    except (TypeError, ValueError):
+        raise DistributedError("%s: \"matrix\" is not a matrix of numbers" % where) from None
+    n = len(names)
+    if matrix.shape != (n, n) or not np.all(np.isfinite(matrix)):
+        raise DistributedError("%s: \"matrix\" must be %d x %d and finite" % (where, n, n))
+    if not np.allclose(matrix, matrix.T, atol=1e-9) or not np.allclose(np.diag(matrix), 1.0, atol=1e-9):
+        raise DistributedError("%s: \"matrix\" must be symmetric with ones on its diagonal" % where)
+    values, vectors = np.linalg.eigh(0.5 * (matrix + matrix.T))
+    if values.min() < -1e-6:
+        raise DistributedError("%s: \"matrix\" is not a correlation matrix (eigenvalue %.3g)" % (
+            where, values.min()))
+    factor = vectors * np.sqrt(np.clip(values, 0.0, None))  # factor @ factor.T == matrix
+    return {"correlation": {"parameters": list(names), "matrix": matrix.tolist(), "factor": factor.tolist()}}
 
 
 def sample_generator(seed, index):
@@ -235,8 +284,16 @@ def draw_parameters(parameters_json, urdf_text, distribution, seed, index):
     back only when a geometry parameter is drawn; ``clamped`` counts stiffnesses drawn at or below zero,
     held at 1 % of their value."""
     generator = sample_generator(seed, index)
+    correlations = [e["correlation"] for e in distribution if "correlation" in e]
+    distribution = [e for e in distribution if "parameter" in e]
     draws = [generator.standard_normal() if e["law"] == "normal" else generator.uniform(-1.0, 1.0)
              for e in distribution]  # every draw first, in the distribution's order
+    position = {e["parameter"]: k for k, e in enumerate(distribution)}
+    for correlation in correlations:
+        block = [position[name] for name in correlation["parameters"]]
+        mixed = np.array(correlation["factor"]) @ np.array([draws[k] for k in block])
+        for k, value in zip(block, mixed):
+            draws[k] = float(value)
     parameters = json.loads(parameters_json)
     joints = None
     urdf = None

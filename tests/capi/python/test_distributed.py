@@ -101,7 +101,7 @@ def test_a_calibration_report_gives_the_law(robot, tmp_path):
         calibrated.save(tmp_path / "calibrated.urdf", tmp_path / "calibrated.json")
     (tmp_path / "report.json").write_text(report.json)
     law, left = jd.report_distribution(tmp_path / "report.json")
-    names = {e["parameter"] for e in law}
+    names = {e["parameter"] for e in law if "parameter" in e}
     assert "joint_2.offset_rad" in names and "joint_2.compliance_rad_per_nm" in names
     assert any(item.startswith("target.") for item in left)
     result = jd.monte_carlo(tmp_path / "calibrated.urdf", tmp_path / "calibrated.json",
@@ -172,3 +172,42 @@ def test_the_outlier_rule():
     # median 0.415, MAD 0.015: threshold 0.415 + 3 x 1.4826 x 0.015 = 0.4817 mm
     assert result.threshold_mm == pytest.approx(0.415 + 3 * 1.4826 * 0.015)
     assert [r["name"] for r in robots if r["outlier"]] == ["r5"]
+
+
+def test_correlated_draws_follow_the_correlation():
+    parameters = RX170_PARAMETERS.read_text()
+    law = jd.check_distribution([
+        {"parameter": "joint_2.stiffness_nm_per_rad", "law": "normal", "scale": 1000.0},
+        {"parameter": "joint_3.stiffness_nm_per_rad", "law": "normal", "scale": 2000.0},
+        {"correlation": {"parameters": ["joint_2.stiffness_nm_per_rad", "joint_3.stiffness_nm_per_rad"],
+                         "matrix": [[1.0, -0.9], [-0.9, 1.0]]}}])
+    nominal = next(e for e in json.loads(parameters)["effects"] if e["type"] == "compliance")["stiffness_nm_per_rad"]
+    moves = []
+    for k in range(600):
+        drawn, _, _ = jd.draw_parameters(parameters, None, law, 11, k)
+        stiffness = next(e for e in json.loads(drawn)["effects"] if e["type"] == "compliance")["stiffness_nm_per_rad"]
+        moves.append((stiffness[1] - nominal[1], stiffness[2] - nominal[2]))
+    moves = np.array(moves)
+    assert np.corrcoef(moves.T)[0, 1] == pytest.approx(-0.9, abs=0.03)
+    assert np.std(moves[:, 0]) == pytest.approx(1000.0, rel=0.1)
+    assert np.std(moves[:, 1]) == pytest.approx(2000.0, rel=0.1)
+    for bad, message in (([[1.0, 1.5], [1.5, 1.0]], "not a correlation matrix"),
+                         ([[1.0, 0.2], [0.3, 1.0]], "symmetric"),
+                         ([[1.0, 0.2]], "must be 2 x 2")):
+        with pytest.raises(jd.DistributedError, match=message):
+            jd.check_distribution(law[:2] + [{"correlation": {"parameters": law[2]["correlation"]["parameters"],
+                                                               "matrix": bad}}])
+
+
+def test_a_calibration_report_carries_its_correlation(robot, tmp_path):
+    campaign = tmp_path / "poses.csv"
+    jointcomp.simulate_campaign(robot, campaign, protocol="random", seed=5, count=60)
+    _, report = jointcomp.calibrate(robot, campaign)
+    data = json.loads(report.json)
+    correlation = np.array(data["correlation"]["matrix"])
+    assert correlation.shape[0] == len(data["correlation"]["parameters"]) >= 2
+    np.testing.assert_allclose(np.diag(correlation), 1.0)
+    assert np.max(np.abs(correlation - np.eye(len(correlation)))) > 0.1  # some parameters do trade off
+    law, _ = jd.report_distribution(data)
+    blocks = [e["correlation"] for e in law if "correlation" in e]
+    assert len(blocks) == 1 and all(name in {e.get("parameter") for e in law} for name in blocks[0]["parameters"])
