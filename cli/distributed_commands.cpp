@@ -205,11 +205,22 @@ int runFleet(int argc, char** argv) {
       ->check(CLI::ExistingFile);
   app.add_option("--method", method, "calibrate or discover")->check(CLI::IsMember({"calibrate", "discover"}));
   app.add_option("--out", out, "output folder");
+  std::vector<std::string> holdouts;
+  app.add_option(
+         "--holdout", holdouts,
+         "CAMPAIGN=HELD_OUT.csv: a held-out campaign of that campaign's robot (frame re-fitted; repeat for more)")
+      ->check([](const std::string& item) {
+        const std::size_t at = item.find('=');
+        if (at == std::string::npos || at == 0 || at + 1 == item.size())
+          return std::string("expected CAMPAIGN=HELD_OUT.csv");
+        return CLI::ExistingFile(item.substr(at + 1)).empty() ? std::string() : "no file " + item.substr(at + 1);
+      });
   ClusterOptions cluster;
   cluster.add(app);
   parse(app, argc, argv);
   std::vector<std::string> arguments = {"fleet", "--urdf", urdf, "--params", params, "--method", method, "--out", out};
   for (const std::string& campaign : campaigns) arguments.insert(arguments.end(), {"--campaign", campaign});
+  for (const std::string& holdout : holdouts) arguments.insert(arguments.end(), {"--holdout", holdout});
   cluster.append(arguments);
   return runPython(arguments);
 }

@@ -48,7 +48,13 @@ for k in 1 2; do
   "$jointcomp" simulate --protocol random --truth "$model/params/rx170.json" --perturb "$k" --seed "$k" --count 30 \
     --out "robot$k.csv" >/dev/null
 done
-"$jointcomp" fleet --campaign robot1.csv robot2.csv --workers 1 --out fleet >log.txt 2>&1 || { cat log.txt; fail "fleet failed"; }
+"$jointcomp" simulate --protocol random --truth "$model/params/rx170.json" --perturb 1 --seed 9 --count 20 \
+  --out robot1_again.csv >/dev/null
+expect_usage "expected CAMPAIGN=HELD_OUT.csv" fleet --campaign robot1.csv --holdout robot1_again.csv
+expect_usage "no file absent.csv" fleet --campaign robot1.csv --holdout robot1.csv=absent.csv
+"$jointcomp" fleet --campaign robot1.csv robot2.csv --holdout robot1.csv=robot1_again.csv --workers 1 --out fleet \
+  >log.txt 2>&1 || { cat log.txt; fail "fleet failed"; }
+grep -q "robot1_again" fleet/robot1/report.json || fail "robot1's report has no held-out campaign"
 grep -q "Outliers: after-RMS above median" log.txt || { cat log.txt; fail "fleet printed no outlier rule"; }
 for f in robot1/report.json robot2/calibrated.urdf fleet_summary.csv fleet_summary.json fleet.png; do
   [ -s "fleet/$f" ] || fail "fleet/$f missing"

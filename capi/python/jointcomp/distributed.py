@@ -950,6 +950,8 @@ def _parser():
     fl.add_argument("--campaign", action="append", required=True, help="a campaign file (repeat for more)")
     fl.add_argument("--method", choices=("calibrate", "discover"), default="calibrate")
     fl.add_argument("--out", default="out/fleet")
+    fl.add_argument("--holdout", action="append", default=[],
+                    help="CAMPAIGN=HELD_OUT.csv: a held-out campaign of that robot (repeat for more)")
     for sub in (mc, fl):
         sub.add_argument("--scheduler", help="address of a running Dask scheduler (tcp://host:8786)")
         sub.add_argument("--workers", type=int, default=None, help="local worker processes (default: cores)")
@@ -971,8 +973,15 @@ def main(argv=None):
             print(result.summary())
             print("wrote %s/montecarlo.{json,csv} and montecarlo_band.png" % arguments.out)
             return 0
+        holdouts = {}
+        for item in arguments.holdout:
+            campaign, separator, held = item.partition("=")
+            if not separator or not campaign or not held:
+                raise DistributedError("--holdout %r: expected CAMPAIGN=HELD_OUT.csv" % item)
+            holdouts.setdefault(campaign, []).append(held)
         result = fleet(arguments.urdf, arguments.params, arguments.campaign, arguments.out, method=arguments.method,
-                       scheduler=arguments.scheduler, n_workers=arguments.workers, timeout=arguments.timeout)
+                       holdouts=holdouts, scheduler=arguments.scheduler, n_workers=arguments.workers,
+                       timeout=arguments.timeout)
         print(result.summary())
         print("wrote %s/<robot>/ and %s/fleet_summary.{csv,json,txt}, fleet.png" % (arguments.out, arguments.out))
         return 1 if result.failed else 0
