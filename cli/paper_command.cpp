@@ -160,14 +160,9 @@ SpiralExperimentSpec specFromOptions(const Options& options, const ParameterSet&
   if (options.has("seed")) spec.truth.seed = std::stoull(options.get("seed", "2012"));
   if (options.has("feed-rate")) {
     const std::string text = options.get("feed-rate", "");
-    std::size_t used = 0;
-    double speed = 0.0;
-    try {
-      speed = std::stod(text, &used);
-    } catch (const std::exception&) {
-      used = 0;
-    }
-    if (used != text.size() || !(speed > 0.0) || !(speed <= 2.0)) {
+    const std::vector<double> given = numberList(text, "feed-rate");
+    const double speed = given.size() == 1 ? given[0] : 0.0;
+    if (!(speed > 0.0) || !(speed <= 2.0)) {
       throw std::invalid_argument("--feed-rate: '" + text + "' is not a tool speed in m/s between 0 and 2");
     }
     // The acceleration and jerk limits scale with the speed, so the ramps take the same time as the paper's.

@@ -153,6 +153,8 @@ for command in calibrate discover; do
 done
 expect_error "kp_nm_per_rad" identify stiffness --params "$work/bad_plant.json" --campaign "$work/fit.csv" --out "$work/x"
 expect_error "kp_nm_per_rad" paper --quasi-static --params "$work/bad_plant.json" --out "$work/x"
+expect_error "--feed-rate: '3' is not a tool speed in m/s" paper --quasi-static --feed-rate 3 --out "$work/x"
+expect_error "--feed-rate: 'fast' is not a number" paper --quasi-static --feed-rate fast --out "$work/x"
 expect_error "identify: unknown kind 'speed'" identify speed --campaign "$work/fit.csv" --out "$work/x"
 # A user's own export (';', decimal commas, a title line, its own names, radians and metres) imported, and the
 # campaign it gives read by calibrate's reader (a mapping to a missing column is refused naming the header).
