@@ -19,9 +19,7 @@ Compensator::Compensator(const JointErrorModel& model, EffectMask mask, FixedPoi
       continue;
     }
     iterate_ = true;
-    const auto* harmonics = dynamic_cast<const TransmissionErrorEffect*>(&model.effect(i));
-    command_effects_.push_back({i, harmonics, anchors_.size()});
-    if (harmonics != nullptr) anchors_.resize(anchors_.size() + harmonics->harmonics().size());
+    command_effects_.push_back(i);
   }
 }
 
@@ -56,15 +54,7 @@ FixedPointReport Compensator::compensate(JointContext& ctx, JointVector& referen
   for (report.iterations = 1; report.iterations <= options_.max_iterations; ++report.iterations) {
     motorAnglesOf(g, ctx.command, ctx.motor);
     for (Eigen::Index j = 0; j < n; ++j) dq_[j] = fixed_dq_[j];
-    for (const CommandEffect& e : command_effects_) {
-      if (e.harmonics == nullptr) {
-        model_.effect(e.index).addJointError(robot, ctx, dq_);
-      } else if (report.iterations == 1) {
-        e.harmonics->addJointErrorAnchored(ctx, anchors_.data() + e.first_anchor, dq_);
-      } else {
-        e.harmonics->addJointErrorNear(ctx, anchors_.data() + e.first_anchor, dq_);
-      }
-    }
+    for (const int i : command_effects_) model_.effect(i).addJointError(robot, ctx, dq_);
     double residual = 0.0, non_finite = 0.0;
     bool finite = true;
     for (Eigen::Index j = 0; j < n; ++j) {

@@ -8,7 +8,6 @@
 #include <vector>
 
 #include "model/effects/joint_error_model.hpp"
-#include "model/effects/transmission_error.hpp"
 
 namespace jointcomp {
 
@@ -34,14 +33,7 @@ private:
   bool iterate_;
   JointErrorWorkspace ws_;
   // The selected error effects, split once: those that do not read the command are summed once per point.
-  std::vector<int> fixed_effects_;
-  struct CommandEffect {
-    int index;
-    const TransmissionErrorEffect* harmonics;  // null: evaluated through the generic addJointError
-    std::size_t first_anchor;
-  };
-  std::vector<CommandEffect> command_effects_;
-  std::vector<TransmissionErrorEffect::Anchor> anchors_;
+  std::vector<int> fixed_effects_, command_effects_;
   JointVector fixed_dq_, dq_;
 };
 

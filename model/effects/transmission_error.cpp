@@ -65,42 +65,6 @@ void TransmissionErrorEffect::addJointError(const Robot&, const JointContext& ct
   }
 }
 
-void TransmissionErrorEffect::addJointErrorAnchored(const JointContext& ctx, Anchor* anchors, JointVector& dq) const {
-  for (std::size_t i = 0; i < harmonics_.size(); ++i) {
-    const Harmonic& h = harmonics_[i];
-    const double x = h.cycles_per_revolution * gears_.stageInputAngle(h.joint, h.stage, ctx.motor) + h.phase_rad;
-    anchors[i] = {x, std::sin(x), std::cos(x)};
-    dq[h.joint] += h.amplitude_rad * anchors[i].sin;
-  }
-}
-
-void TransmissionErrorEffect::addJointErrorNear(const JointContext& ctx, Anchor* anchors, JointVector& dq) const {
-  // Within 1/16 rad of the anchor, Taylor terms to d^9 (sine) and d^10 (cosine) leave < 1e-20.
-  constexpr double kNear = 0.0625;
-  for (std::size_t i = 0; i < harmonics_.size(); ++i) {
-    const Harmonic& h = harmonics_[i];
-    Anchor& a = anchors[i];
-    const double x = h.cycles_per_revolution * gears_.stageInputAngle(h.joint, h.stage, ctx.motor) + h.phase_rad;
-    const double d = x - a.argument;
-    double sine;
-    if (std::abs(d) <= kNear) {
-      const double d2 = d * d;
-      const double sd =
-          d *
-          (1.0 - d2 * (1.0 / 6.0) * (1.0 - d2 * (1.0 / 20.0) * (1.0 - d2 * (1.0 / 42.0) * (1.0 - d2 * (1.0 / 72.0)))));
-      const double cd_minus_1 =
-          -d2 * (1.0 / 2.0) *
-          (1.0 - d2 * (1.0 / 12.0) * (1.0 - d2 * (1.0 / 30.0) * (1.0 - d2 * (1.0 / 56.0) * (1.0 - d2 * (1.0 / 90.0)))));
-      // sin(a + d) = sin a + (sin a (cos d - 1) + cos a sin d): the small correction added last.
-      sine = a.sin + (a.sin * cd_minus_1 + a.cos * sd);
-    } else {
-      a = {x, std::sin(x), std::cos(x)};
-      sine = a.sin;
-    }
-    dq[h.joint] += h.amplitude_rad * sine;
-  }
-}
-
 bool TransmissionErrorEffect::addMotorSlope(const Robot&, const JointContext& ctx, JointVector& slope) const {
   for (const Harmonic& h : harmonics_) {
     const double angle = gears_.stageInputAngle(h.joint, h.stage, ctx.motor);

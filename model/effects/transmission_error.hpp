@@ -38,17 +38,6 @@ public:
   std::unique_ptr<Effect> clone() const override { return std::make_unique<TransmissionErrorEffect>(*this); }
 
   const std::vector<Harmonic>& harmonics() const { return harmonics_; }
-
-  // For fixed points whose commands move by small angles (compensation): addJointErrorAnchored adds the
-  // same terms as addJointError and keeps each harmonic's argument, sine and cosine in anchors (one per
-  // harmonic); addJointErrorNear then gets the sines at a nearby command by the angle-addition formula
-  // with a short polynomial instead of libm, re-anchoring a harmonic whose argument moved too far. The
-  // two differ from addJointError by rounding only.
-  struct Anchor {
-    double argument = 0.0, sin = 0.0, cos = 1.0;
-  };
-  void addJointErrorAnchored(const JointContext& ctx, Anchor* anchors, JointVector& dq) const;
-  void addJointErrorNear(const JointContext& ctx, Anchor* anchors, JointVector& dq) const;
   // "motor", "stage_k" or "output" for a stage number of a joint.
   std::string partName(int joint, int stage) const;
 

@@ -138,35 +138,6 @@ TEST(TransmissionError, IsTheFilesHarmonicSum) {
   EXPECT_LT(largest, 0.01 * kDegree);
 }
 
-// Compensation's fast path: anchored at one command, then at commands 1e-9 .. 1e-2 rad away (the largest
-// move the harmonics' arguments far enough to re-anchor), the same error as addJointError to rounding.
-TEST(TransmissionError, NearAnchorMatchesTheDirectSum) {
-  const JointErrorModel model = effects_test::rx170Model();
-  const Robot& robot = model.robot();
-  const auto& effect =
-      dynamic_cast<const TransmissionErrorEffect&>(model.effect(model.findEffect(TransmissionErrorEffect::kType)));
-  std::vector<TransmissionErrorEffect::Anchor> anchors(effect.harmonics().size());
-  std::mt19937 rng(22u);
-  for (int sample = 0; sample < 100; ++sample) {
-    JointContext ctx(robot.dof());
-    ctx.command = effects_test::randomConfiguration(robot, rng);
-    updateMotorAngles(model, ctx);
-    JointVector anchored = JointVector::Zero(robot.dof()), direct = JointVector::Zero(robot.dof());
-    effect.addJointErrorAnchored(ctx, anchors.data(), anchored);
-    effect.addJointError(robot, ctx, direct);
-    EXPECT_EQ(anchored, direct);
-    for (double step : {1e-9, 1e-6, 1e-4, 1e-3, 1e-2}) {
-      ctx.command.array() += step;
-      updateMotorAngles(model, ctx);
-      JointVector near = JointVector::Zero(robot.dof());
-      direct.setZero();
-      effect.addJointErrorNear(ctx, anchors.data(), near);
-      effect.addJointError(robot, ctx, direct);
-      for (int j = 0; j < robot.dof(); ++j) EXPECT_NEAR(near[j], direct[j], 1e-19) << "step " << step;
-    }
-  }
-}
-
 TEST(TransmissionError, FundamentalOfJoint2RepeatsTwicePerTurnOfTheStage2Input) {
   // Turning the stage-2 input of joint 2 by half a revolution (2 pi * 3 motor radians, i.e.
   // 2 pi * 3 / 120 joint radians) leaves the 2-cycle harmonic unchanged and flips the 1-cycle one.
