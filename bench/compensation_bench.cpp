@@ -8,6 +8,7 @@
 #include <memory>
 #include <stdexcept>
 
+#include "bench/support/allocation_counting.hpp"
 #include "model/compensation/compensator.hpp"
 #include "model/experiment/spiral_experiment.hpp"
 #include "model/io/parameter_file.hpp"
@@ -51,6 +52,7 @@ void BM_Ours_CompensateSpiralPoint(benchmark::State& state) {
   JointVector reference;
   std::size_t k = 0;
   int iterations = 0;
+  const jointcomp::bench::AllocationCounter allocations;  // must stay at 0 per call (issue 17)
   for (auto _ : state) {
     ctx.q = f.trajectory.q[k];
     ctx.velocity = f.trajectory.qd[k];
@@ -59,6 +61,7 @@ void BM_Ours_CompensateSpiralPoint(benchmark::State& state) {
     benchmark::DoNotOptimize(reference.data());
     if (++k == f.trajectory.size()) k = 0;
   }
+  allocations.report(state);
   state.SetItemsProcessed(state.iterations());
   state.counters["fixed_point_iterations"] =
       benchmark::Counter(static_cast<double>(iterations) / static_cast<double>(state.iterations()));

@@ -13,32 +13,69 @@ Compensator::Compensator(const JointErrorModel& model, EffectMask mask, FixedPoi
     throw InvalidArgument("compensator: tolerance must be positive and max_iterations at least 1");
   }
   for (int i = 0; i < model.effectCount(); ++i) {
-    if (((mask >> i) & 1U) && model.effect(i).dependsOnCommand()) iterate_ = true;
+    if (!((mask >> i) & 1U) || model.effect(i).role() != EffectRole::JointError) continue;
+    if (!model.effect(i).dependsOnCommand()) {
+      fixed_effects_.push_back(i);
+      continue;
+    }
+    iterate_ = true;
+    command_effects_.push_back(i);
   }
 }
 
+namespace {
+// ctx.motor = G * ctx.command, the same sums as GearTrain::motorAngles (column by column) without
+// Eigen's general matrix-vector kernel, whose dispatch costs more than the 6 x 6 product.
+void motorAnglesOf(const JointMatrix& g, const JointVector& command, JointVector& motor) {
+  const Eigen::Index n = g.rows();
+  motor.resize(n);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    double sum = 0.0;  // in a register: no store-to-load chain through motor
+    for (Eigen::Index j = 0; j < g.cols(); ++j) sum += g(i, j) * command[j];
+    motor[i] = sum;
+  }
+}
+}  // namespace
+
 FixedPointReport Compensator::compensate(JointContext& ctx, JointVector& reference) {
-  checkJointVector(model_.robot(), ctx.q, "planned q");
+  const Robot& robot = model_.robot();
+  const JointMatrix& g = model_.gears().motorFromJoint();
+  checkJointVector(robot, ctx.q, "planned q");
   computeLoadTorque(model_, mask_, ws_, ctx);
-  JointVector dq;
+  const Eigen::Index n = ctx.q.size();
+  // Errors that do not read the command (compliance at ctx.q's load) are the same at every iteration.
+  // Summed first, in effect order, as addSelectedJointErrors would when they precede the others.
+  fixed_dq_.setZero(n);
+  dq_.resize(n);
+  for (const int i : fixed_effects_) model_.effect(i).addJointError(robot, ctx, fixed_dq_);
   FixedPointReport report;
   ctx.command = ctx.q;
+  reference.resize(n);
   for (report.iterations = 1; report.iterations <= options_.max_iterations; ++report.iterations) {
-    updateMotorAngles(model_, ctx);
-    dq.setZero(ctx.q.size());
-    addSelectedJointErrors(model_, mask_, ctx, dq);
-    reference = ctx.q - dq;
-    report.residual = (reference - ctx.command).cwiseAbs().maxCoeff();
-    ctx.command = reference;
+    motorAnglesOf(g, ctx.command, ctx.motor);
+    for (Eigen::Index j = 0; j < n; ++j) dq_[j] = fixed_dq_[j];
+    for (const int i : command_effects_) model_.effect(i).addJointError(robot, ctx, dq_);
+    double residual = 0.0, non_finite = 0.0;
+    bool finite = true;
+    for (Eigen::Index j = 0; j < n; ++j) {
+      const double next = ctx.q[j] - dq_[j];
+      const double change = std::abs(next - ctx.command[j]);
+      if (finite && !std::isfinite(change)) non_finite = change;
+      finite = finite && std::isfinite(change);
+      residual = std::max(residual, change);
+      reference[j] = next;
+      ctx.command[j] = next;  // element-wise, not a vector copy of just-stored scalars (store forwarding)
+    }
+    report.residual = finite ? residual : non_finite;
     if (!iterate_ || report.residual <= options_.tolerance) {
-      report.converged = std::isfinite(report.residual);
+      report.converged = finite;
       break;
     }
-    if (!std::isfinite(report.residual)) break;
+    if (!finite) break;
   }
   report.iterations = std::min(report.iterations, options_.max_iterations);
-  updateMotorAngles(model_, ctx);
-  if (report.converged) requireWithinLimits(model_.robot(), reference);
+  motorAnglesOf(g, ctx.command, ctx.motor);
+  if (report.converged) requireWithinLimits(robot, reference);
   return report;
 }
 

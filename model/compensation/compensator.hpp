@@ -32,6 +32,9 @@ private:
   FixedPointOptions options_;
   bool iterate_;
   JointErrorWorkspace ws_;
+  // The selected error effects, split once: those that do not read the command are summed once per point.
+  std::vector<int> fixed_effects_, command_effects_;
+  JointVector fixed_dq_, dq_;
 };
 
 struct TrajectoryCompensationReport {

@@ -116,10 +116,6 @@ void GearTrain::motorAngles(const JointVector& joint_angles, JointVector& motor)
   motor.noalias() = motor_from_joint_ * joint_angles;
 }
 
-double GearTrain::stageInputAngle(int joint, int stage, const JointVector& motor) const {
-  return motor[joint] / ratio_before_[joint][stage - 1];
-}
-
 std::string GearTrain::partName(int joint, int stage) const {
   if (stage == 1) return "motor";
   if (stage == stageCount(joint) + 1) return "output";

@@ -33,7 +33,9 @@ public:
   // motor = G * joint angles.
   void motorAngles(const JointVector& joint_angles, JointVector& motor) const;
   // Angle of the input shaft of stage `stage` (1 = the motor, stageCount + 1 = the output) of a joint.
-  double stageInputAngle(int joint, int stage, const JointVector& motor) const;
+  double stageInputAngle(int joint, int stage, const JointVector& motor) const {
+    return motor[joint] / ratio_before_[joint][stage - 1];  // inline: compensation's fixed point calls it per harmonic
+  }
   // d(stage input angle)/d(motor angle) of a joint: 1 over the ratios of the stages before it.
   double stageInputPerMotor(int joint, int stage) const { return 1.0 / ratio_before_[joint][stage - 1]; }
 
