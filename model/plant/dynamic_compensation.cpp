@@ -7,6 +7,7 @@
 
 #include "model/common/errors.hpp"
 #include "model/compensation/compensator.hpp"
+#include "model/effects/compliance.hpp"
 #include "model/robot/dynamics.hpp"
 #include "model/robot/workspace.hpp"
 
@@ -107,7 +108,7 @@ void invertDrives(const JointErrorModel& nominal, const std::vector<DriveParamet
           delta = (rhs_delta - c * rhs_integral) / (1.0 + a * kp / kd + c * a);
           integral = rhs_integral + a * delta;
         } else if (kp > 0.0) {
-          delta = right / kp;  // no derivative gain: the proportional term alone
+          delta = right / kp;  // no derivative gain: the proportional term alone; the refinement does the rest
         }
       }
       reference[k][j] += delta;
@@ -175,7 +176,7 @@ void invertModel(const JointErrorModel& nominal, const std::vector<DriveParamete
   ctx.tool_wrench = options.tool_wrench;
   JointVector with_motion, at_rest;
   std::vector<JointVector> motor_reaction(count);  // (I + E)^T tau_s: what the motors must push against
-  const int compliance = nominal.findEffect("compliance");
+  const int compliance = nominal.findEffect(ComplianceEffect::kType);
   reference.resize(count);
   for (std::size_t k = 0; k < count; ++k) {
     // Stage 1: the static compensator under the motion's whole inverse-dynamics load.

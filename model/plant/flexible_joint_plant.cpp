@@ -492,6 +492,23 @@ void FlexibleJointPlant::addMotorSlopes(JointVector& slope) const {
   }
 }
 
+namespace {
+
+// The state y = [q, qd, p, pd, integral] in its parts, as the right-hand side and its Jacobian read it.
+struct PlantStateParts {
+  PlantStateParts(const double* y, int n) {
+    const Eigen::Map<const Eigen::VectorXd> state(y, 5 * n);
+    q = state.segment(0, n);
+    qd = state.segment(n, n);
+    p = state.segment(2 * n, n);
+    pd = state.segment(3 * n, n);
+    integral = state.segment(4 * n, n);
+  }
+  JointVector q, qd, p, pd, integral;
+};
+
+}  // namespace
+
 void FlexibleJointPlant::linkAcceleration(const JointVector& q, const JointVector& qd, const JointVector& spring_torque,
                                           JointVector& qdd) {
   const Robot& robot = truth_.robot();
@@ -504,12 +521,8 @@ void FlexibleJointPlant::linkAcceleration(const JointVector& q, const JointVecto
 }
 
 void FlexibleJointPlant::derivative(double t, const double* y, double* ydot) {
-  const Eigen::Map<const Eigen::VectorXd> state(y, stateSize());
-  const JointVector q = state.segment(0, n_);
-  const JointVector qd = state.segment(n_, n_);
-  const JointVector p = state.segment(2 * n_, n_);
-  const JointVector pd = state.segment(3 * n_, n_);
-  const JointVector integral = state.segment(4 * n_, n_);
+  const PlantStateParts parts(y, n_);
+  const JointVector &q = parts.q, &qd = parts.qd, &p = parts.p, &pd = parts.pd, &integral = parts.integral;
 
   JointVector spring_torque, motor_reaction;
   transmissionTorques(p, pd, q, qd, spring_torque, motor_reaction);
@@ -547,12 +560,8 @@ void FlexibleJointPlant::jacobian(double t, const double* y, double* jacobian) {
   }
   const Robot& robot = truth_.robot();
   const int n = n_;
-  const Eigen::Map<const Eigen::VectorXd> state(y, stateSize());
-  const JointVector q = state.segment(0, n);
-  const JointVector qd = state.segment(n, n);
-  const JointVector p = state.segment(2 * n, n);
-  const JointVector pd = state.segment(3 * n, n);
-  const JointVector integral = state.segment(4 * n, n);
+  const PlantStateParts parts(y, n);
+  const JointVector &q = parts.q, &qd = parts.qd, &p = parts.p, &pd = parts.pd, &integral = parts.integral;
   Eigen::Map<Eigen::MatrixXd> J(jacobian, stateSize(), stateSize());
   J.setZero();
   JacobianScratch& w = jacobian_scratch_;
