@@ -59,6 +59,32 @@ void checkInputs(const Robot& robot, const std::vector<DriveParameters>& drives,
   }
 }
 
+// The drive inverse filter of one joint, kd delta' + kp delta + ki int(delta) = right (stage 1b below):
+// delta' for the filter's state and its right side.
+double driveInverseRate(const DriveParameters& drive, double delta, double integral, double right) {
+  const double kp = drive.kp_nm_per_rad, ki = drive.ki_nm_per_rad_s, kd = drive.kd_nms_per_rad;
+  return kd > 0.0 ? (right - kp * delta - ki * integral) / kd : 0.0;
+}
+
+// One trapezoidal step of h seconds of that filter, from right side `right_before` to `right`: exact for
+// a right side linear over the step, and stable for any step.
+void driveInverseStep(const DriveParameters& drive, double h, double right_before, double right, double& delta,
+                      double& integral) {
+  const double kp = drive.kp_nm_per_rad, ki = drive.ki_nm_per_rad_s, kd = drive.kd_nms_per_rad;
+  if (kd > 0.0) {
+    // x = (integral, delta): x' = A x + b right, solved for the new x.
+    const double a = 0.5 * h;
+    const double rhs_integral = integral + a * delta;
+    const double rhs_delta = delta + a * driveInverseRate(drive, delta, integral, right_before) + a * right / kd;
+    // delta_new (1 + a kp / kd) + integral_new a ki / kd = rhs_delta; integral_new = rhs_integral + a delta_new
+    const double c = a * ki / kd;
+    delta = (rhs_delta - c * rhs_integral) / (1.0 + a * kp / kd + c * a);
+    integral = rhs_integral + a * delta;
+  } else if (kp > 0.0) {
+    delta = right / kp;  // no derivative gain: the proportional term alone; the refinement does the rest
+  }
+}
+
 // Stage 1b: the references that make each drive's motor follow the motor positions p_d of stage 1
 // (`reference` on entry) while it pushes against `motor_reaction`. On the way, the controller's torque
 // kp (r - p) + kd (r' - p') + ki int(r - p) + feed-forward (static load at r, friction at r') must equal
@@ -90,29 +116,14 @@ void invertDrives(const JointErrorModel& nominal, const std::vector<DriveParamet
   }
   reference_velocity.assign(count, JointVector::Zero(n));
   for (int j = 0; j < n; ++j) {
-    const double kp = drives[j].kp_nm_per_rad, ki = drives[j].ki_nm_per_rad_s, kd = drives[j].kd_nms_per_rad;
     double delta = 0.0, integral = 0.0;
-    auto rate = [&](double d, double i, double right) { return kd > 0.0 ? (right - kp * d - ki * i) / kd : 0.0; };
     for (std::size_t k = 0; k < count; ++k) {
       const double right = demand[k][j] - demand[0][j];
       if (k > 0) {
-        // Trapezoidal step of x = (integral, delta): x' = A x + b right, solved for the new x.
-        const double h = time[k] - time[k - 1];
-        const double right_before = demand[k - 1][j] - demand[0][j];
-        if (kd > 0.0) {
-          const double a = 0.5 * h;
-          const double rhs_integral = integral + a * delta;
-          const double rhs_delta = delta + a * rate(delta, integral, right_before) + a * right / kd;
-          // delta_new (1 + a kp / kd) + integral_new a ki / kd = rhs_delta; integral_new = rhs_integral + a delta_new
-          const double c = a * ki / kd;
-          delta = (rhs_delta - c * rhs_integral) / (1.0 + a * kp / kd + c * a);
-          integral = rhs_integral + a * delta;
-        } else if (kp > 0.0) {
-          delta = right / kp;  // no derivative gain: the proportional term alone; the refinement does the rest
-        }
+        driveInverseStep(drives[j], time[k] - time[k - 1], demand[k - 1][j] - demand[0][j], right, delta, integral);
       }
       reference[k][j] += delta;
-      reference_velocity[k][j] = velocity[k][j] + rate(delta, integral, right);
+      reference_velocity[k][j] = velocity[k][j] + driveInverseRate(drives[j], delta, integral, right);
     }
   }
 }
@@ -159,6 +170,35 @@ std::vector<JointVector> runReference(FlexibleJointPlant& plant, const std::vect
 
 namespace {
 
+// Stage 1 at one sample: the static compensator under the motion's whole inverse-dynamics load (ctx holds the
+// payload and the tool wrench), giving the motor positions `stage_one`, and what the motors must push
+// against there, (I + E)^T tau_s: the transmission carries ctx.load_torque, and through the gears' error
+// slope E = de/dp the motors feel (I + E)^T of it (as in the plant), E from the effects that give their slope.
+FixedPointReport closedFormSample(const JointErrorModel& nominal, int compliance, Compensator& compensator,
+                                  RobotWorkspace& workspace, JointContext& ctx, double time, const JointVector& q,
+                                  const JointVector& qd, const JointVector& qdd, JointVector& with_motion,
+                                  JointVector& at_rest, JointVector& stage_one, JointVector& motor_reaction) {
+  const Robot& robot = nominal.robot();
+  inverseDynamics(robot, workspace, q, qd, qdd, with_motion);
+  gravityTorques(robot, workspace, q, at_rest);
+  ctx.inertial_torque = with_motion - at_rest;
+  ctx.q = q;
+  ctx.velocity = qd;
+  ctx.time = time;
+  const FixedPointReport fixed_point = compensator.compensate(ctx, stage_one);
+  if (!fixed_point.converged) return fixed_point;
+  JointVector& motor_slope = at_rest;  // done with it: reused, nothing allocated
+  motor_slope.setZero(robot.dof());
+  for (int i = 0; i < nominal.effectCount(); ++i) {
+    const Effect& effect = nominal.effect(i);
+    if (i != compliance && effect.role() == EffectRole::JointError && effect.dependsOnCommand())
+      effect.addMotorSlope(robot, ctx, motor_slope);
+  }
+  const JointMatrix slope = motor_slope.asDiagonal() * nominal.gears().motorFromJoint();
+  motor_reaction = ctx.load_torque + slope.transpose() * ctx.load_torque;
+  return fixed_point;
+}
+
 // Stages 1 and 1b for the link trajectory `target` (times, positions, velocities): the references and
 // their velocities that the model says bring the links onto it.
 void invertModel(const JointErrorModel& nominal, const std::vector<DriveParameters>& drives,
@@ -175,33 +215,18 @@ void invertModel(const JointErrorModel& nominal, const std::vector<DriveParamete
   ctx.payload_com = options.payload_com;
   ctx.tool_wrench = options.tool_wrench;
   JointVector with_motion, at_rest;
-  std::vector<JointVector> motor_reaction(count);  // (I + E)^T tau_s: what the motors must push against
+  std::vector<JointVector> motor_reaction(count);
   const int compliance = nominal.findEffect(ComplianceEffect::kType);
   reference.resize(count);
   for (std::size_t k = 0; k < count; ++k) {
-    // Stage 1: the static compensator under the motion's whole inverse-dynamics load.
-    inverseDynamics(robot, workspace, target.q[k], target.qd[k], acceleration[k], with_motion);
-    gravityTorques(robot, workspace, target.q[k], at_rest);
-    ctx.inertial_torque = with_motion - at_rest;
-    ctx.q = target.q[k];
-    ctx.velocity = target.qd[k];
-    ctx.time = target.time[k];
-    const FixedPointReport fixed_point = compensator.compensate(ctx, reference[k]);
+    const FixedPointReport fixed_point =
+        closedFormSample(nominal, compliance, compensator, workspace, ctx, target.time[k], target.q[k], target.qd[k],
+                         acceleration[k], with_motion, at_rest, reference[k], motor_reaction[k]);
     if (!fixed_point.converged) {
       throw SolverError("dynamic compensation: the compensation of sample " + std::to_string(k) +
                         " (t = " + std::to_string(target.time[k]) + " s) did not converge (residual " +
                         std::to_string(fixed_point.residual) + " rad)");
     }
-    // The transmission carries ctx.load_torque; through the gears' error slope E = de/dp the motors feel
-    // (I + E)^T of it (as in the plant), E from the effects that give their slope.
-    JointVector motor_slope = JointVector::Zero(n);
-    for (int i = 0; i < nominal.effectCount(); ++i) {
-      const Effect& effect = nominal.effect(i);
-      if (i != compliance && effect.role() == EffectRole::JointError && effect.dependsOnCommand())
-        effect.addMotorSlope(robot, ctx, motor_slope);
-    }
-    const JointMatrix slope = motor_slope.asDiagonal() * nominal.gears().motorFromJoint();
-    motor_reaction[k] = ctx.load_torque + slope.transpose() * ctx.load_torque;
   }
   invertDrives(nominal, drives, options, target.time, motor_reaction, reference, reference_velocity);
 }
@@ -280,6 +305,91 @@ DynamicCompensationReport compensateDynamically(const JointErrorModel& nominal,
         std::max(report.max_correction_rad, (planned.q[k] - reference[k]).cwiseAbs().maxCoeff());
   }
   return report;
+}
+
+OnlineDynamicCompensator::OnlineDynamicCompensator(const JointErrorModel& nominal,
+                                                   const std::vector<DriveParameters>& drives,
+                                                   const DynamicCompensationOptions& options)
+    : nominal_(nominal),
+      drives_(drives),
+      options_(options),
+      compensator_(nominal, nominal.allEffects(), options.fixed_point),
+      robot_ws_(nominal.robot()),
+      load_ws_(nominal.robot()),
+      ctx_(nominal.robot().dof()),
+      at_reference_(nominal.robot().dof()),
+      compliance_(nominal.findEffect(ComplianceEffect::kType)) {
+  const int n = nominal.robot().dof();
+  if (static_cast<int>(drives.size()) != n) {
+    throw InvalidArgument("dynamic compensation: " + std::to_string(drives.size()) + " drives for a robot with " +
+                          std::to_string(n) + " joints (the parameter file's \"plant\" object)");
+  }
+  if (!std::isfinite(options.payload_mass) || options.payload_mass < 0.0 || !options.payload_com.allFinite()) {
+    throw InvalidArgument("dynamic compensation: the payload mass must be finite and non-negative, its centre finite");
+  }
+  for (JointContext* ctx : {&ctx_, &at_reference_}) {
+    ctx->payload_mass = options.payload_mass;
+    ctx->payload_com = options.payload_com;
+  }
+  for (JointVector* v : {&with_motion_, &at_rest_, &stage_one_, &motor_reaction_, &demand_}) v->setZero(n);
+}
+
+OnlineDynamicState OnlineDynamicCompensator::initialState() const {
+  const int n = nominal_.robot().dof();
+  OnlineDynamicState state;
+  for (JointVector* v : {&state.correction, &state.demand_at_start, &state.demand, &state.delta, &state.integral})
+    v->setZero(n);
+  return state;
+}
+
+FixedPointReport OnlineDynamicCompensator::compensate(const OnlineDynamicState& before, double time,
+                                                      const JointVector& q, const JointVector& qd,
+                                                      const JointVector& qdd, const Vector6& tool_wrench,
+                                                      JointVector& reference, JointVector& reference_velocity,
+                                                      OnlineDynamicState& after) {
+  const Robot& robot = nominal_.robot();
+  const int n = robot.dof();
+  if (!std::isfinite(time) || (before.started && !(time > before.time))) {
+    throw InvalidArgument("dynamic compensation: sample at t = " + std::to_string(time) +
+                          " s, which is not after the last one (t = " + std::to_string(before.time) + " s)");
+  }
+  checkJointVector(robot, q, "planned position");
+  checkJointVector(robot, qd, "planned velocity");
+  checkJointVector(robot, qdd, "planned acceleration");
+  if (!tool_wrench.allFinite()) throw InvalidArgument("dynamic compensation: the tool wrench is not finite");
+  reference.resize(n);  // within JointVector's fixed capacity: no allocation
+  reference_velocity.resize(n);
+  ctx_.tool_wrench = tool_wrench;
+  at_reference_.tool_wrench = tool_wrench;
+  const FixedPointReport fixed_point = closedFormSample(nominal_, compliance_, compensator_, robot_ws_, ctx_, time, q,
+                                                        qd, qdd, with_motion_, at_rest_, stage_one_, motor_reaction_);
+  if (!fixed_point.converged) return fixed_point;
+  // Stage 1b, causal: the right side at this sample, then one filter step from the last one.
+  at_reference_.q = stage_one_;
+  computeLoadTorque(nominal_, nominal_.loadsAnd({}), load_ws_, at_reference_);
+  demand_ = motor_reaction_ - at_reference_.load_torque;
+  for (int j = 0; j < n; ++j) demand_[j] += drives_[j].motor_inertia_kgm2 * qdd[j];
+  const double h = before.started ? time - before.time : 0.0;
+  if (&after != &before) after = before;
+  for (int j = 0; j < n; ++j) {
+    const double correction = stage_one_[j] - q[j];
+    const double correction_rate = before.started ? (correction - before.correction[j]) / h : 0.0;
+    if (!before.started) after.demand_at_start[j] = demand_[j];
+    const double right = demand_[j] - after.demand_at_start[j];
+    if (before.started) {
+      driveInverseStep(drives_[j], h, before.demand[j] - before.demand_at_start[j], right, after.delta[j],
+                       after.integral[j]);
+    }
+    reference[j] = stage_one_[j] + after.delta[j];
+    reference_velocity[j] =
+        qd[j] + correction_rate + driveInverseRate(drives_[j], after.delta[j], after.integral[j], right);
+    after.correction[j] = correction;
+    after.demand[j] = demand_[j];
+  }
+  after.started = true;
+  after.time = time;
+  requireWithinLimits(robot, reference);
+  return fixed_point;
 }
 
 }  // namespace jointcomp

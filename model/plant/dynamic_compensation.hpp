@@ -19,10 +19,12 @@
 
 #include <vector>
 
+#include "model/compensation/compensator.hpp"
 #include "model/compensation/joint_trajectory.hpp"
 #include "model/effects/joint_error_model.hpp"
 #include "model/plant/drive_parameters.hpp"
 #include "model/plant/flexible_joint_plant.hpp"
+#include "model/robot/workspace.hpp"
 
 namespace jointcomp {
 
@@ -69,6 +71,52 @@ DynamicCompensationReport compensateDynamically(const JointErrorModel& nominal,
                                                 const JointTrajectory& planned, std::vector<JointVector>& reference,
                                                 std::vector<JointVector>& reference_velocity,
                                                 const DynamicCompensationOptions& options = {});
+
+// What the closed form run one sample at a time carries from one sample to the next: the drive inverse
+// filter's state and the correction at the last sample (whose change gives the stage-1 reference's velocity).
+struct OnlineDynamicState {
+  bool started = false;  // false until the first sample: that one sets the rest the filter starts from
+  double time = 0.0;     // s, of the last sample
+  JointVector correction;       // stage-1 reference minus planned position at the last sample
+  JointVector demand_at_start;  // the drive filter's right side at the first sample (held by the integral)
+  JointVector demand;           // its right side at the last sample
+  JointVector delta;            // the drive inverse's addition to the reference at the last sample
+  JointVector integral;         // and its integral
+};
+
+// Stages 1 and 1b sample by sample, for a trajectory that arrives while it runs (the FMU's dynamic mode):
+// the drive inverse is a causal filter, so only its state passes between samples; the stage-1 reference's
+// velocity is the planned one plus the correction's backward difference, its acceleration the planned one.
+// Without stage 2 it leaves what the closed form leaves (the test measures it against the offline form).
+// Allocates nothing per sample.
+class OnlineDynamicCompensator {
+public:
+  // Throws InvalidArgument for a drive count other than the robot's joint count or malformed options.
+  OnlineDynamicCompensator(const JointErrorModel& nominal, const std::vector<DriveParameters>& drives,
+                           const DynamicCompensationOptions& options = {});
+
+  // The reference and its velocity for the planned sample (time, q, qd, qdd, with `tool_wrench` as the
+  // known process force) after the samples `before` has seen; `after` receives the state with this sample
+  // (it may be `before`'s own object only if the caller does not need to repeat the sample). A sample at
+  // a time not after the last one is InvalidArgument; a compensation that does not converge is reported
+  // (converged false, outputs unchanged), one that leaves the joint limits throws UnreachableError.
+  FixedPointReport compensate(const OnlineDynamicState& before, double time, const JointVector& q,
+                              const JointVector& qd, const JointVector& qdd, const Vector6& tool_wrench,
+                              JointVector& reference, JointVector& reference_velocity, OnlineDynamicState& after);
+
+  OnlineDynamicState initialState() const;
+
+private:
+  const JointErrorModel& nominal_;
+  std::vector<DriveParameters> drives_;
+  DynamicCompensationOptions options_;
+  Compensator compensator_;
+  RobotWorkspace robot_ws_;
+  JointErrorWorkspace load_ws_;
+  JointContext ctx_, at_reference_;
+  JointVector with_motion_, at_rest_, stage_one_, motor_reaction_, demand_;
+  int compliance_;
+};
 
 // Runs `reference` (with its velocities) through `plant` the way the spiral experiment does: reset at the
 // first sample, then at each sample set the reference, read the links, advance to the next sample time.

@@ -40,6 +40,33 @@ JointTrajectory septicMove(double duration) {
   return planned;
 }
 
+// The planned accelerations of septicMove(duration), from the profile's second derivative.
+std::vector<JointVector> septicAcceleration(const JointTrajectory& planned, double duration) {
+  const JointVector travel = joints({30, 20, -25, 0, 15, 0});
+  const double hold = 0.2;
+  std::vector<JointVector> acceleration;
+  for (double t : planned.time) {
+    const double s = std::min(1.0, std::max(0.0, (t - hold) / duration));
+    acceleration.push_back(420 * s * s * (1 - s) * (1 - s) * (1 - 2 * s) / (duration * duration) * travel);
+  }
+  return acceleration;
+}
+
+// The closed form run sample by sample, as the FMU's dynamic mode does.
+void compensateOnline(const ParameterSet& set, const JointTrajectory& planned,
+                      const std::vector<JointVector>& acceleration, std::vector<JointVector>& reference,
+                      std::vector<JointVector>& velocity) {
+  OnlineDynamicCompensator online(set.model, set.drives);
+  OnlineDynamicState state = online.initialState();
+  reference.resize(planned.time.size());
+  velocity.resize(planned.time.size());
+  for (std::size_t k = 0; k < planned.time.size(); ++k) {
+    const FixedPointReport report = online.compensate(state, planned.time[k], planned.q[k], planned.qd[k],
+                                                      acceleration[k], Vector6::Zero(), reference[k], velocity[k], state);
+    ASSERT_TRUE(report.converged) << "sample " << k;
+  }
+}
+
 double largestLinkError(const std::vector<JointVector>& actual, const std::vector<JointVector>& planned) {
   double largest = 0.0;
   for (std::size_t k = 0; k < actual.size(); ++k)
@@ -73,6 +100,77 @@ TEST(DynamicCompensation, WithTheModelEqualToTheRobotTheLinksFollowAFastMoveWith
   EXPECT_LT(dynamic_error, 0.01 * static_error);
   EXPECT_LE(report.iterations, 30);
   EXPECT_GT(report.max_correction_rad, 1e-4);
+}
+
+// The online closed form (causal drive filter, planned accelerations) is the offline closed form (one run,
+// no refinement; velocities and accelerations by central differences) re-derived: the references agree to
+// a small part of the correction, and on the robot both leave the same error, a fraction of the static one.
+TEST(DynamicCompensation, TheOnlineClosedFormMatchesTheOfflineOneAndRemovesMostOfTheDynamicError) {
+  const ParameterSet set = loadParameterSet(kParameters, rx170());
+  const double duration = 1.0;
+  const JointTrajectory planned = septicMove(duration);
+  std::vector<JointVector> offline, offline_velocity;
+  DynamicCompensationOptions closed_form_only;
+  closed_form_only.max_iterations = 1;
+  closed_form_only.tolerance_rad = 1.0;  // whatever the first run leaves: the closed form is returned
+  closed_form_only.plant = DynamicCompensationOptions::tightPlantOptions(1e-8);
+  const DynamicCompensationReport offline_report =
+      compensateDynamically(set.model, set.drives, planned, offline, offline_velocity, closed_form_only);
+  std::vector<JointVector> online, online_velocity;
+  compensateOnline(set, planned, septicAcceleration(planned, duration), online, online_velocity);
+
+  double difference = 0.0;
+  for (std::size_t k = 0; k < planned.time.size(); ++k)
+    difference = std::max(difference, (online[k] - offline[k]).cwiseAbs().maxCoeff());
+  FlexibleJointPlant robot(set.model, set.drives, closed_form_only.plant);
+  const double online_error =
+      largestLinkError(runReference(robot, planned.time, online, online_velocity), planned.q);
+  std::vector<JointVector> static_reference;
+  compensateTrajectory(set.model, set.model.allEffects(), planned.q, planned.qd, static_reference);
+  const double static_error =
+      largestLinkError(runReference(robot, planned.time, static_reference, planned.qd), planned.q);
+  std::printf("online vs offline closed form: references differ by %.3g rad (correction %.3g rad); link error "
+              "static %.3g, offline closed form %.3g, online %.3g rad\n",
+              difference, offline_report.max_correction_rad, static_error, offline_report.initial_error_rad,
+              online_error);
+  EXPECT_LT(difference, 0.02 * offline_report.max_correction_rad);  // central versus backward differences
+  EXPECT_LT(online_error, 0.2 * static_error);
+  EXPECT_LT(online_error, 2.0 * offline_report.initial_error_rad);
+}
+
+// The online state is a value: a sample repeated from the same state gives the same reference bit for bit;
+// samples must move forward in time; drives must match the joints.
+TEST(DynamicCompensation, TheOnlineStateIsAValueAndSamplesMoveForward) {
+  const ParameterSet set = loadParameterSet(kParameters, rx170());
+  const double duration = 0.5;
+  const JointTrajectory planned = septicMove(duration);
+  const std::vector<JointVector> acceleration = septicAcceleration(planned, duration);
+  OnlineDynamicCompensator online(set.model, set.drives);
+  OnlineDynamicState state = online.initialState(), once, twice;
+  JointVector reference, velocity, again, again_velocity;
+  for (std::size_t k = 0; k < 120; ++k) {
+    online.compensate(state, planned.time[k], planned.q[k], planned.qd[k], acceleration[k], Vector6::Zero(), reference,
+                      velocity, state);
+  }
+  const std::size_t k = 120;
+  online.compensate(state, planned.time[k], planned.q[k], planned.qd[k], acceleration[k], Vector6::Zero(), reference,
+                    velocity, once);
+  online.compensate(state, planned.time[k], planned.q[k], planned.qd[k], acceleration[k], Vector6::Zero(), again,
+                    again_velocity, twice);
+  EXPECT_EQ(reference, again);
+  EXPECT_EQ(velocity, again_velocity);
+  EXPECT_EQ(once.delta, twice.delta);
+  EXPECT_NE(once.delta, state.delta) << "the drive filter moved during the move";
+  EXPECT_THROW(online.compensate(once, planned.time[k], planned.q[k], planned.qd[k], acceleration[k],
+                                 Vector6::Zero(), reference, velocity, twice),
+               InvalidArgument);
+  JointVector not_finite = acceleration[k];
+  not_finite[2] = std::nan("");
+  EXPECT_THROW(online.compensate(once, planned.time[k + 1], planned.q[k + 1], planned.qd[k + 1], not_finite,
+                                 Vector6::Zero(), reference, velocity, twice),
+               InvalidArgument);
+  std::vector<DriveParameters> five(set.drives.begin(), set.drives.begin() + 5);
+  EXPECT_THROW(OnlineDynamicCompensator(set.model, five), InvalidArgument);
 }
 
 // With a payload and a process force, given to the compensation as to the robot, the same holds.
