@@ -41,7 +41,9 @@ struct Instance::Models {
   std::vector<double> built_values;
   std::unique_ptr<JointErrorModel> nominal;
   std::unique_ptr<FlexibleJointPlant> plant;
-  std::unique_ptr<Compensator> compensator;  // after nominal: it refers to it
+  std::vector<DriveParameters> drives;               // the plant's drives: the dynamic mode inverts their tracking
+  std::unique_ptr<Compensator> compensator;          // after nominal: it refers to it
+  std::unique_ptr<OnlineDynamicCompensator> online;  // compensation = dynamic; refers to nominal too
   int compensator_mode = -1;
 
   JointContext compensation_ctx;
@@ -95,11 +97,12 @@ const GroupTable kGroups;
 // The reference parameter's items (modelDescription/enumerations.csv, ReferenceSource).
 constexpr double kReferenceAuto = 0.0;
 constexpr double kReferenceDemo = 2.0;
+constexpr int kCompensationDynamic = 3;  // the CompensationMode item "dynamic"
 
 // q_desired or qd_desired: the inputs the robot follows unless it follows the demo move.
 bool isDesiredInput(int index) {
   for (int j = 0; j < table::kDof; ++j) {
-    if (index == role::q_desired[j] || index == role::qd_desired[j]) return true;
+    if (index == role::q_desired[j] || index == role::qd_desired[j] || index == role::qdd_desired[j]) return true;
   }
   return false;
 }
@@ -255,11 +258,14 @@ void Instance::ensureModels() {
     return;
   }
   VariableBinding::Models built = m.binding.apply(m.base, *m.robot, state_.values);
+  std::vector<DriveParameters> drives = built.drives;
   auto plant = std::make_unique<FlexibleJointPlant>(built.truth, std::move(built.drives), built.options);
   auto nominal_model = std::make_unique<JointErrorModel>(std::move(built.nominal));
   // Everything built: commit.
   m.compensator.reset();
+  m.online.reset();
   m.nominal = std::move(nominal_model);
+  m.drives = std::move(drives);
   m.plant = std::move(plant);
   m.compensator_mode = -1;
   m.built_values = state_.values;
@@ -276,8 +282,10 @@ void Instance::ensureCompensator() {
   if (mode == 1) mask = m.nominal->loadsAnd({"compliance"});
   // Mode 2 corrects every effect of the parameter file: for the shipped RX170 that is the paper's
   // compliance and transmission error; a file extended by discovery brings its effects along.
-  if (mode == 2) mask = m.nominal->allEffects();
+  if (mode >= 2) mask = m.nominal->allEffects();
   m.compensator = std::make_unique<Compensator>(*m.nominal, mask);
+  m.online.reset();
+  if (mode == kCompensationDynamic) m.online = std::make_unique<OnlineDynamicCompensator>(*m.nominal, m.drives);
   m.compensator_mode = mode;
   reference_valid_ = false;
   outputs_valid_ &= ~kReferenceOutputs;
@@ -288,39 +296,64 @@ Status Instance::ensureReference(const char* function) {
   Models& m = *models_;
   JointVector q = gather(state_.values, role::q_desired);
   JointVector velocity = JointVector::Zero(table::kDof);
+  JointVector acceleration = JointVector::Zero(table::kDof);
+  const bool estimated = state_.has_last_step && state_.time > state_.last_step_time;
   if (state_.demo) {
     demoMove(*m.robot, state_.time - state_.start_time, q, velocity);
+    // The demo's acceleration by a central difference of its velocity (it is smooth; 1e-4 s is far below
+    // its 10 s period).
+    constexpr double kHalfSpan = 1e-4;
+    JointVector q_unused(table::kDof), before(table::kDof), after(table::kDof);
+    demoMove(*m.robot, state_.time - state_.start_time - kHalfSpan, q_unused, before);
+    demoMove(*m.robot, state_.time - state_.start_time + kHalfSpan, q_unused, after);
+    acceleration = (after - before) / (2 * kHalfSpan);
   } else if (state_.values[role::use_velocity_inputs] != 0.0) {
     velocity = gather(state_.values, role::qd_desired);
-  } else if (state_.has_last_step && state_.time > state_.last_step_time) {
+    acceleration = gather(state_.values, role::qdd_desired);
+  } else if (estimated) {
     velocity = (q - state_.last_q_desired) / (state_.time - state_.last_step_time);
+    acceleration = (velocity - state_.last_velocity) / (state_.time - state_.last_step_time);
   }
   planned_ = q;
+  planned_velocity_ = velocity;
+  const auto refused = [&](const char* what) {
+    char text[400];
+    std::snprintf(text, sizeof text, "at t = %.9g s: %s", state_.time, what);
+    return fail(Status::Discard, function, text);
+  };
+  FixedPointReport report;
+  report.converged = true;
   if (m.compensator_mode == 0) {
     reference_ = q;
+    reference_velocity_ = velocity;
+  } else if (m.compensator_mode == kCompensationDynamic) {
+    const Vector6 wrench = state_.values[role::compensate_wrench] != 0.0 ? wrenchOf(state_.values) : Vector6::Zero();
+    try {
+      report = m.online->compensate(state_.dynamic, state_.time, q, velocity, acceleration, wrench, reference_,
+                                    reference_velocity_, dynamic_after_);
+    } catch (const Error& error) {  // unreachable, or an input the filter refuses
+      return refused(error.what());
+    }
   } else {
     JointContext& ctx = m.compensation_ctx;
     ctx.q = q;
     ctx.velocity = velocity;
     ctx.time = state_.time;
     ctx.tool_wrench = state_.values[role::compensate_wrench] != 0.0 ? wrenchOf(state_.values) : Vector6::Zero();
-    FixedPointReport report;
     try {
       report = m.compensator->compensate(ctx, reference_);
     } catch (const UnreachableError& error) {
-      char text[400];
-      std::snprintf(text, sizeof text, "at t = %.9g s: %s", state_.time, error.what());
-      return fail(Status::Discard, function, text);
+      return refused(error.what());
     }
-    if (!report.converged) {
-      char text[160];
-      std::snprintf(text, sizeof text,
-                    "the compensation did not converge at t = %.9g s (residual %g rad after %d iterations)",
-                    state_.time, report.residual, report.iterations);
-      return fail(Status::Discard, function, text);
-    }
+    reference_velocity_ = velocity;
   }
-  reference_velocity_ = velocity;
+  if (!report.converged) {
+    char text[160];
+    std::snprintf(text, sizeof text,
+                  "the compensation did not converge at t = %.9g s (residual %g rad after %d iterations)", state_.time,
+                  report.residual, report.iterations);
+    return fail(Status::Discard, function, text);
+  }
   reference_valid_ = true;
   return Status::OK;
 }
@@ -507,6 +540,8 @@ Status Instance::doStep(const char* function, double current_time, double step, 
   }
   state_.has_last_step = true;
   state_.last_q_desired = gather(state_.values, role::q_desired);
+  state_.last_velocity = planned_velocity_;
+  if (m.compensator_mode == kCompensationDynamic) state_.dynamic = dynamic_after_;  // this step's sample is done
   state_.last_step_time = state_.time;
   state_.time = end;
   reference_valid_ = false;
@@ -677,6 +712,8 @@ Status Instance::set(const char* function, unsigned types, const std::uint32_t v
     if (state_.phase == kInitializationMode) state_.initialized = false;
     reference_valid_ = false;
     outputs_valid_ &= ~kReferenceOutputs;
+    // Another compensation mode: the dynamic mode's drive filter starts afresh from the next sample.
+    if (index == role::compensation) state_.dynamic.started = false;
     if (index == role::compensation && models_->built && !before_step) ensureCompensator();
   }
   return Status::OK;

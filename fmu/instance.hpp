@@ -14,6 +14,10 @@
 //      compensate_wrench else 0; mask = nominal.loadsAnd({"compliance"}) (mode 1, the paper's stiffness
 //      correction) or nominal.allEffects() (mode 2: every effect of the parameter file, the paper's
 //      compliance and transmission error for the shipped RX170, and what discovery added to a file);
+//      compensation = dynamic (3): OnlineDynamicCompensator(nominal, drives).compensate() from the state
+//      after the previous steps' samples, with q_desired, v and a = qdd_desired if use_velocity_inputs, else
+//      (v - v of the previous step) / (t - t of the previous step), 0 on the first step; it gives Q_ref and
+//      its velocity, which replaces v below; its state moves on only when the step succeeds;
 //   3. plant.setToolWrench(tool_wrench) if it differs from the wrench last applied;
 //   4. plant.setReference(Q_ref, v); plant.advance(t + h).
 // Initialisation (exitInitializationMode): plant.setToolWrench(tool_wrench); plant.reset(Q_ref, t0), Q_ref
@@ -146,10 +150,12 @@ private:
   std::unique_ptr<Models> models_;  // the loaded robot and parameter set, and what is built from them
   // Derived from state_, cached:
   bool reference_valid_ = false;
-  unsigned outputs_valid_ = 0;      // OutputGroup bits
-  JointVector reference_;           // Q_ref for the current inputs
-  JointVector reference_velocity_;  // v for the current inputs
-  JointVector planned_;             // Q_theo: the q_desired inputs, or the demo move
+  unsigned outputs_valid_ = 0;        // OutputGroup bits
+  JointVector reference_;             // Q_ref for the current inputs
+  JointVector reference_velocity_;    // v for the current inputs
+  JointVector planned_;               // Q_theo: the q_desired inputs, or the demo move
+  JointVector planned_velocity_;      // its velocity: the qd_desired inputs, an estimate, or the demo's
+  OnlineDynamicState dynamic_after_;  // compensation = dynamic: the filter with the current sample
 
   std::vector<std::unique_ptr<Snapshot>> states_;
 };

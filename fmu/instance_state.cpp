@@ -29,6 +29,10 @@ InstanceState InstanceState::atStart() {
   InstanceState state;
   state.values.assign(table::kCount, 0.0);
   for (int i = 0; i < table::kCount; ++i) state.values[i] = kVariables[i].start;
+  state.last_q_desired.setZero(table::kDof);
+  state.last_velocity.setZero(table::kDof);
+  OnlineDynamicState& d = state.dynamic;
+  for (JointVector* v : {&d.correction, &d.demand_at_start, &d.demand, &d.delta, &d.integral}) v->setZero(table::kDof);
   return state;
 }
 
@@ -37,7 +41,7 @@ namespace {
 // ---- serialisation -----------------------------------------------------------------------------
 
 constexpr char kMagic[8] = {'J', 'C', 'F', 'M', 'U', 'S', 'T', 'A'};
-constexpr std::uint32_t kStateFormat = 2;  // 2: with the reference source (demo move)
+constexpr std::uint32_t kStateFormat = 3;  // 2: with the reference source (demo move); 3: the dynamic mode
 
 std::uint64_t fnv1a(const unsigned char* bytes, std::size_t size) {
   std::uint64_t hash = 1469598103934665603ULL;
@@ -138,6 +142,12 @@ void writeState(const InstanceState& s, Writer& w) {
   w.put(static_cast<std::uint8_t>(s.has_last_step));
   w.put(s.last_q_desired);
   w.put(s.last_step_time);
+  w.put(s.last_velocity);
+  w.put(static_cast<std::uint8_t>(s.dynamic.started));
+  w.put(s.dynamic.time);
+  for (const JointVector* v :
+       {&s.dynamic.correction, &s.dynamic.demand_at_start, &s.dynamic.demand, &s.dynamic.delta, &s.dynamic.integral})
+    w.put(*v);
   for (int k = 0; k < 6; ++k) w.put(s.applied_wrench[k]);
   w.put(static_cast<std::uint8_t>(s.desired_inputs_set));
   w.put(static_cast<std::uint8_t>(s.demo));
@@ -215,6 +225,14 @@ InstanceState deserializeState(const unsigned char bytes[], std::size_t size) {
   s->has_last_step = r.flag("the last-step flag");
   r.vector(s->last_q_desired, table::kDof, "the last desired positions");
   s->last_step_time = r.finite("the last step time");
+  r.vector(s->last_velocity, table::kDof, "the last desired velocities");
+  s->dynamic.started = r.flag("the dynamic compensation's start flag");
+  s->dynamic.time = r.finite("the dynamic compensation's time");
+  r.vector(s->dynamic.correction, table::kDof, "the dynamic compensation's correction");
+  r.vector(s->dynamic.demand_at_start, table::kDof, "the dynamic compensation's initial demand");
+  r.vector(s->dynamic.demand, table::kDof, "the dynamic compensation's demand");
+  r.vector(s->dynamic.delta, table::kDof, "the dynamic compensation's drive offset");
+  r.vector(s->dynamic.integral, table::kDof, "the dynamic compensation's drive integral");
   for (int k = 0; k < 6; ++k) s->applied_wrench[k] = r.finite("the applied wrench");
   s->desired_inputs_set = r.flag("the desired-inputs flag");
   s->demo = r.flag("the demo flag");

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "model/common/types.hpp"
+#include "model/plant/dynamic_compensation.hpp"
 #include "model/plant/flexible_joint_plant.hpp"
 
 namespace jointcomp::fmu {
@@ -36,6 +37,9 @@ struct InstanceState {
   bool has_last_step = false;  // a step was done since initialisation: the velocity can be estimated
   JointVector last_q_desired;  // q_desired and time of that step
   double last_step_time = 0.0;
+  JointVector last_velocity;  // the desired velocity of that step (estimates the acceleration when not an input)
+  // compensation = dynamic: the drive inverse filter after the samples of the steps done (not the current one)
+  OnlineDynamicState dynamic;
   Vector6 applied_wrench = Vector6::Zero();  // what the plant was last given
   bool desired_inputs_set = false;           // the master set a q_desired or qd_desired input since instantiation
   bool demo = false;                         // the robot follows the built-in demo move (decided at initialisation)

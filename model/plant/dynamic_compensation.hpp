@@ -75,8 +75,8 @@ DynamicCompensationReport compensateDynamically(const JointErrorModel& nominal,
 // What the closed form run one sample at a time carries from one sample to the next: the drive inverse
 // filter's state and the correction at the last sample (whose change gives the stage-1 reference's velocity).
 struct OnlineDynamicState {
-  bool started = false;  // false until the first sample: that one sets the rest the filter starts from
-  double time = 0.0;     // s, of the last sample
+  bool started = false;         // false until the first sample: that one sets the rest the filter starts from
+  double time = 0.0;            // s, of the last sample
   JointVector correction;       // stage-1 reference minus planned position at the last sample
   JointVector demand_at_start;  // the drive filter's right side at the first sample (held by the integral)
   JointVector demand;           // its right side at the last sample

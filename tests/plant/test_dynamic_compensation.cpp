@@ -61,8 +61,9 @@ void compensateOnline(const ParameterSet& set, const JointTrajectory& planned,
   reference.resize(planned.time.size());
   velocity.resize(planned.time.size());
   for (std::size_t k = 0; k < planned.time.size(); ++k) {
-    const FixedPointReport report = online.compensate(state, planned.time[k], planned.q[k], planned.qd[k],
-                                                      acceleration[k], Vector6::Zero(), reference[k], velocity[k], state);
+    const FixedPointReport report =
+        online.compensate(state, planned.time[k], planned.q[k], planned.qd[k], acceleration[k], Vector6::Zero(),
+                          reference[k], velocity[k], state);
     ASSERT_TRUE(report.converged) << "sample " << k;
   }
 }
@@ -123,16 +124,15 @@ TEST(DynamicCompensation, TheOnlineClosedFormMatchesTheOfflineOneAndRemovesMostO
   for (std::size_t k = 0; k < planned.time.size(); ++k)
     difference = std::max(difference, (online[k] - offline[k]).cwiseAbs().maxCoeff());
   FlexibleJointPlant robot(set.model, set.drives, closed_form_only.plant);
-  const double online_error =
-      largestLinkError(runReference(robot, planned.time, online, online_velocity), planned.q);
+  const double online_error = largestLinkError(runReference(robot, planned.time, online, online_velocity), planned.q);
   std::vector<JointVector> static_reference;
   compensateTrajectory(set.model, set.model.allEffects(), planned.q, planned.qd, static_reference);
   const double static_error =
       largestLinkError(runReference(robot, planned.time, static_reference, planned.qd), planned.q);
-  std::printf("online vs offline closed form: references differ by %.3g rad (correction %.3g rad); link error "
-              "static %.3g, offline closed form %.3g, online %.3g rad\n",
-              difference, offline_report.max_correction_rad, static_error, offline_report.initial_error_rad,
-              online_error);
+  std::printf(
+      "online vs offline closed form: references differ by %.3g rad (correction %.3g rad); link error "
+      "static %.3g, offline closed form %.3g, online %.3g rad\n",
+      difference, offline_report.max_correction_rad, static_error, offline_report.initial_error_rad, online_error);
   EXPECT_LT(difference, 0.02 * offline_report.max_correction_rad);  // central versus backward differences
   EXPECT_LT(online_error, 0.2 * static_error);
   EXPECT_LT(online_error, 2.0 * offline_report.initial_error_rad);
@@ -161,8 +161,8 @@ TEST(DynamicCompensation, TheOnlineStateIsAValueAndSamplesMoveForward) {
   EXPECT_EQ(velocity, again_velocity);
   EXPECT_EQ(once.delta, twice.delta);
   EXPECT_NE(once.delta, state.delta) << "the drive filter moved during the move";
-  EXPECT_THROW(online.compensate(once, planned.time[k], planned.q[k], planned.qd[k], acceleration[k],
-                                 Vector6::Zero(), reference, velocity, twice),
+  EXPECT_THROW(online.compensate(once, planned.time[k], planned.q[k], planned.qd[k], acceleration[k], Vector6::Zero(),
+                                 reference, velocity, twice),
                InvalidArgument);
   JointVector not_finite = acceleration[k];
   not_finite[2] = std::nan("");
