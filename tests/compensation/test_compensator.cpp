@@ -9,6 +9,7 @@
 #include <limits>
 #include <map>
 #include <memory>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -89,6 +90,40 @@ Settled settleAll(const JointErrorModel& truth, EffectMask mask, const JointTraj
         std::max(result.max_tool_error, (toolPosition(robot, fk, ctx.q) - plan.tool_position[k]).norm());
   }
   return result;
+}
+
+// The plain fixed point Q_ref <- Q_theo - dQ(Q_theo, Q_ref) from Q_ref = Q_theo, written with the model's
+// generic calls (libm's sines, no Newton step, no anchors), until an iteration moves it by no more than
+// `tolerance` (1e-12: the compensator before its Newton steps, to the bit; 0: until it stops moving, the
+// point the compensator must land on).
+JointVector plainFixedPoint(const JointErrorModel& model, EffectMask mask, const JointVector& planned,
+                            double tolerance = 0.0) {
+  JointErrorWorkspace ws(model.robot());
+  JointContext ctx(model.robot().dof());
+  ctx.q = planned;
+  computeLoadTorque(model, mask, ws, ctx);
+  ctx.command = ctx.q;
+  for (int iteration = 0; iteration < 40; ++iteration) {
+    updateMotorAngles(model, ctx);
+    JointVector dq = JointVector::Zero(model.robot().dof());
+    addSelectedJointErrors(model, mask, ctx, dq);
+    const JointVector next = ctx.q - dq;
+    const double change = (next - ctx.command).cwiseAbs().maxCoeff();
+    ctx.command = next;
+    if (change <= tolerance) break;
+  }
+  return ctx.command;
+}
+
+// Joint values spread over the middle 80 % of each joint's range.
+JointVector randomPose(const Robot& robot, std::mt19937& rng) {
+  JointVector q(robot.dof());
+  for (int j = 0; j < robot.dof(); ++j) {
+    const Joint& joint = robot.joints[static_cast<std::size_t>(j)];
+    const double margin = 0.1 * (joint.upper - joint.lower);
+    q[j] = std::uniform_real_distribution<double>(joint.lower + margin, joint.upper - margin)(rng);
+  }
+  return q;
 }
 
 TEST(Compensator, ThePlanIsLongEnoughToMean) {
@@ -307,6 +342,87 @@ TEST(Compensator, AReferenceBeyondTheJointLimitsIsAnError) {
   EXPECT_NO_THROW(requireWithinLimits(model.robot(), at_limit));
   at_limit[1] = std::nextafter(at_limit[1], 10.0);
   EXPECT_THROW(requireWithinLimits(model.robot(), at_limit), UnreachableError);
+}
+
+// The Newton iteration, cold (compensate) and from the previous point's correction (compensateFrom, as
+// compensateTrajectory runs), lands on the plain fixed point to rounding, along the line and at random
+// poses; from the previous correction it needs fewer evaluations.
+TEST(Compensator, NewtonStepsLandOnThePlainFixedPoint) {
+  const JointErrorModel model = rx170Model();
+  const EffectMask mask = model.allEffects();
+  const JointTrajectory& plan = plannedLine();
+  Compensator cold(model, mask), along(model, mask);
+  JointContext cold_ctx(6), along_ctx(6);
+  JointVector cold_reference, along_reference, correction;
+  std::vector<JointVector> trajectory_references;
+  compensateTrajectory(model, mask, plan.q, plan.qd, trajectory_references);
+  double largest = 0.0, from_former = 0.0;
+  int cold_evaluations = 0, along_evaluations = 0, along_most = 0;
+  for (std::size_t k = 0; k < plan.size(); ++k) {
+    const JointVector plain = plainFixedPoint(model, mask, plan.q[k]);
+    from_former = std::max(from_former, (plainFixedPoint(model, mask, plan.q[k], 1e-12) - plain).cwiseAbs().maxCoeff());
+    cold_ctx.q = along_ctx.q = plan.q[k];
+    cold_ctx.velocity = along_ctx.velocity = plan.qd[k];
+    const FixedPointReport cold_report = cold.compensate(cold_ctx, cold_reference);
+    const FixedPointReport along_report = k == 0 ? along.compensate(along_ctx, along_reference)
+                                                 : along.compensateFrom(along_ctx, correction, along_reference);
+    ASSERT_TRUE(cold_report.converged && along_report.converged) << "point " << k;
+    correction = plan.q[k] - along_reference;
+    cold_evaluations += cold_report.iterations;
+    along_evaluations += along_report.iterations;
+    if (k > 0) along_most = std::max(along_most, along_report.iterations);
+    for (const JointVector* reference : {&cold_reference, &along_reference, &trajectory_references[k]}) {
+      largest = std::max(largest, (*reference - plain).cwiseAbs().maxCoeff());
+    }
+  }
+  std::mt19937 rng(31u);
+  for (int sample = 0; sample < 300; ++sample) {
+    const JointVector pose = randomPose(model.robot(), rng);
+    cold_ctx.q = pose;
+    cold_ctx.velocity.setZero();
+    ASSERT_TRUE(cold.compensate(cold_ctx, cold_reference).converged) << "sample " << sample;
+    largest = std::max(largest, (cold_reference - plainFixedPoint(model, mask, pose)).cwiseAbs().maxCoeff());
+  }
+  std::cout << "[ compensator ] Newton against the plain fixed point: within " << largest
+            << " rad (the former plain iteration to 1e-12: within " << from_former << " rad); evaluations per "
+            << "point " << static_cast<double>(cold_evaluations) / plan.size() << " cold, "
+            << static_cast<double>(along_evaluations) / plan.size() << " from the previous correction\n";
+  // Both stop when the map moves by <= 1e-12 rad and contract it by about 1e-2: well inside 1e-12 of it.
+  EXPECT_LT(largest, 1e-13);
+  EXPECT_LE(along_most, 2);
+  EXPECT_LT(along_evaluations, cold_evaluations);
+}
+
+// A guess far from the answer costs iterations, not accuracy; a guess that is not a number is an error.
+TEST(Compensator, AnyFiniteGuessGivesTheSameReference) {
+  const JointErrorModel model = rx170Model();
+  const EffectMask mask = model.allEffects();
+  Compensator compensator(model, mask);
+  JointContext ctx(6);
+  ctx.q = plannedLine().q[100];
+  JointVector reference, from_guess;
+  ASSERT_TRUE(compensator.compensate(ctx, reference).converged);
+  for (const double offset : {0.0, 1e-6, 1e-3, 0.05}) {
+    JointVector guess = ctx.q - reference;
+    guess.array() += offset;
+    const FixedPointReport report = compensator.compensateFrom(ctx, guess, from_guess);
+    ASSERT_TRUE(report.converged) << "offset " << offset;
+    EXPECT_LE(report.residual, 1e-12);
+    EXPECT_LT((from_guess - reference).cwiseAbs().maxCoeff(), 1e-13) << "offset " << offset;
+  }
+  // compensate() does not remember the calls between: the same point gives the same bits again.
+  JointVector again;
+  ASSERT_TRUE(compensator.compensate(ctx, again).converged);
+  EXPECT_EQ(again, reference);
+  JointVector guess = JointVector::Zero(6);
+  guess[2] = std::numeric_limits<double>::quiet_NaN();
+  try {
+    compensator.compensateFrom(ctx, guess, from_guess);
+    ADD_FAILURE() << "a NaN guess was accepted";
+  } catch (const InvalidArgument& error) {
+    EXPECT_THAT(error.what(), HasSubstr("correction guess[2]"));
+  }
+  EXPECT_THROW(compensator.compensateFrom(ctx, JointVector::Zero(5), from_guess), InvalidArgument);
 }
 
 }  // namespace
