@@ -15,6 +15,7 @@
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include "model/common/errors.hpp"
 #include "model/compensation/compensator.hpp"
@@ -22,6 +23,7 @@
 #include "model/compensation/joint_trajectory.hpp"
 #include "model/compensation/path.hpp"
 #include "model/effects/compliance.hpp"
+#include "model/effects/periodic_table.hpp"
 #include "model/effects/spring_balancer.hpp"
 #include "model/io/parameter_file.hpp"
 #include "model/robot/dynamics.hpp"
@@ -125,6 +127,23 @@ JointVector randomPose(const Robot& robot, std::mt19937& rng) {
   }
   return q;
 }
+
+// A command-dependent error that does not know its slope (Effect::addMotorSlope's false): the compensator
+// takes plain fixed-point steps for it.
+class SlopelessRipple : public Effect {
+public:
+  std::string type() const override { return "slopeless_ripple"; }
+  EffectRole role() const override { return EffectRole::JointError; }
+  bool dependsOnCommand() const override { return true; }
+  void addJointError(const Robot&, const JointContext& ctx, JointVector& dq) const override {
+    dq[1] += 3e-5 * std::sin(ctx.motor[1] / 3.0 + 0.3);
+  }
+  std::vector<std::string> parameterNames() const override { return {}; }
+  std::vector<double> parameters() const override { return {}; }
+  void setParameters(const std::vector<double>&) override {}
+  nlohmann::json toJson() const override { return nlohmann::json::object(); }
+  std::unique_ptr<Effect> clone() const override { return std::make_unique<SlopelessRipple>(*this); }
+};
 
 TEST(Compensator, ThePlanIsLongEnoughToMean) {
   ASSERT_GT(plannedLine().size(), 1000u);
@@ -423,6 +442,42 @@ TEST(Compensator, AnyFiniteGuessGivesTheSameReference) {
     EXPECT_THAT(error.what(), HasSubstr("correction guess[2]"));
   }
   EXPECT_THROW(compensator.compensateFrom(ctx, JointVector::Zero(5), from_guess), InvalidArgument);
+}
+
+// Command-dependent effects other than the harmonics go through the Effect interface: a periodic table
+// (with its slope: Newton steps) and an effect without a slope (plain steps) land on the plain fixed point.
+TEST(Compensator, OtherCommandEffectsLandOnThePlainFixedPoint) {
+  JointErrorModel with_table = rx170Model();
+  PeriodicTable table;
+  table.joint = 2;
+  table.stage = 1;
+  for (int k = 0; k < 12; ++k) table.coefficients_rad.push_back(2e-5 * std::sin(1.3 * k) + 1e-5 * (k % 3));
+  with_table.addEffect(
+      std::make_unique<PeriodicTableEffect>(with_table.robot(), with_table.gears(), std::vector<PeriodicTable>{table}));
+  JointErrorModel with_slopeless = rx170Model();
+  with_slopeless.addEffect(std::make_unique<SlopelessRipple>());
+  const JointTrajectory& plan = plannedLine();
+  for (const JointErrorModel* model : {&with_table, &with_slopeless}) {
+    const EffectMask mask = model->allEffects();
+    Compensator compensator(*model, mask);
+    JointContext ctx(6);
+    JointVector reference;
+    double largest = 0.0;
+    int most = 0;
+    for (std::size_t k = 0; k < plan.size(); k += 13) {
+      ctx.q = plan.q[k];
+      ctx.velocity = plan.qd[k];
+      const FixedPointReport report = compensator.compensate(ctx, reference);
+      ASSERT_TRUE(report.converged) << "point " << k;
+      most = std::max(most, report.iterations);
+      largest = std::max(largest, (reference - plainFixedPoint(*model, mask, plan.q[k])).cwiseAbs().maxCoeff());
+    }
+    const std::string name = model == &with_table ? "periodic table" : "slopeless ripple";
+    EXPECT_LT(largest, 1e-13) << name;
+    EXPECT_LE(most, 8) << name;
+    std::cout << "[ compensator ] with a " << name << ": at most " << most << " iterations, within " << largest
+              << " rad of the plain fixed point\n";
+  }
 }
 
 }  // namespace

@@ -225,8 +225,9 @@ TEST(TransmissionError, ParametersAreAmplitudesInRadiansAndPhases) {
 }
 
 // The compensator's evaluation: libm at the anchors, then the angle-addition formula at commands moved by
-// 1e-9 .. 1e-1 rad of motor angle (the largest moves some phases beyond kNearAnchor and re-anchors them),
-// against addJointError and addMotorSlope at each command.
+// 1e-9 .. 1e-1 rad of motor angle, which moves the phases by 1/3 to 0.8 times that: up to 1e-3 the short
+// Taylor series, 5e-2 the long one, 1e-1 re-anchors some (beyond kNearAnchor); against addJointError and
+// addMotorSlope at each command.
 TEST(TransmissionError, AnchoredValueAndSlopeMatchTheDirectSums) {
   const JointErrorModel model = effects_test::rx170Model();
   const Robot& robot = model.robot();
@@ -239,7 +240,7 @@ TEST(TransmissionError, AnchoredValueAndSlopeMatchTheDirectSums) {
   for (int sample = 0; sample < 40; ++sample) {
     JointContext ctx(robot.dof());
     for (int j = 0; j < robot.dof(); ++j) ctx.motor[j] = motor_angle(rng);
-    for (const double move : {0.0, 1e-9, 1e-6, 1e-3, 1e-2, 1e-1}) {
+    for (const double move : {0.0, 1e-9, 1e-6, 1e-3, 1e-2, 5e-2, 1e-1}) {
       JointContext moved = ctx;
       for (int j = 0; j < robot.dof(); ++j) moved.motor[j] += (j % 2 == 0 ? move : -move);
       const std::vector<TransmissionErrorEffect::Anchor> before = anchors;
