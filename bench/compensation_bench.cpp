@@ -68,6 +68,34 @@ void BM_Ours_CompensateSpiralPoint(benchmark::State& state) {
 }
 BENCHMARK(BM_Ours_CompensateSpiralPoint);
 
+// The same points in path order, each started from the previous point's correction (compensateFrom, as
+// compensateTrajectory does): the throughput of compensating a whole trajectory.
+void BM_Ours_CompensateSpiralPath(benchmark::State& state) {
+  const Fixture& f = fixture();
+  Compensator compensator(*f.model, f.model->allEffects(), FixedPointOptions{1e-12, 50});
+  JointContext ctx(6);
+  JointVector reference, correction = JointVector::Zero(6);
+  std::size_t k = 0;
+  int iterations = 0;
+  const jointcomp::bench::AllocationCounter allocations;  // must stay at 0 per call (issue 17)
+  for (auto _ : state) {
+    ctx.q = f.trajectory.q[k];
+    ctx.velocity = f.trajectory.qd[k];
+    // The path's first point has no predecessor (nor has the first after the wrap-around).
+    const FixedPointReport report =
+        k == 0 ? compensator.compensate(ctx, reference) : compensator.compensateFrom(ctx, correction, reference);
+    for (int j = 0; j < 6; ++j) correction[j] = ctx.q[j] - reference[j];
+    iterations += report.iterations;
+    benchmark::DoNotOptimize(reference.data());
+    if (++k == f.trajectory.size()) k = 0;
+  }
+  allocations.report(state);
+  state.SetItemsProcessed(state.iterations());
+  state.counters["fixed_point_iterations"] =
+      benchmark::Counter(static_cast<double>(iterations) / static_cast<double>(state.iterations()));
+}
+BENCHMARK(BM_Ours_CompensateSpiralPath);
+
 // The dynamic compensation (model/plant/dynamic_compensation.hpp) of the whole 30 s spiral at the paper's
 // feed rate and at ten times it, with the parameter file's drives: closed form and refinement against the
 // nominal plant, one core (target: under 1 s at the paper's feed rate).

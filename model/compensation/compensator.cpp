@@ -20,41 +20,104 @@ Compensator::Compensator(const JointErrorModel& model, EffectMask mask, FixedPoi
     }
     iterate_ = true;
     command_effects_.push_back(i);
+    if (const auto* transmission = dynamic_cast<const TransmissionErrorEffect*>(&model.effect(i))) {
+      transmission_errors_.push_back({transmission, anchors_.size()});
+      anchors_.resize(anchors_.size() + transmission->harmonics().size());
+    } else {
+      other_command_effects_.push_back(i);
+    }
+  }
+  // G's nonzero entries row by row (the diagonal and the few couplings of a 6 x 6 matrix).
+  const JointMatrix& g = model.gears().motorFromJoint();
+  gear_row_start_.push_back(0);
+  for (Eigen::Index i = 0; i < g.rows(); ++i) {
+    for (Eigen::Index j = 0; j < g.cols(); ++j) {
+      if (g(i, j) == 0.0) continue;
+      gear_columns_.push_back(static_cast<int>(j));
+      gear_values_.push_back(g(i, j));
+    }
+    gear_row_start_.push_back(static_cast<int>(gear_columns_.size()));
+  }
+}
+
+// The sums of GearTrain::motorAngles, column by column, without the zero terms (which add nothing but +-0)
+// and without Eigen's general matrix-vector dispatch, which costs more than the product.
+void Compensator::motorAngles(const JointVector& command, JointVector& motor) const {
+  const Eigen::Index n = static_cast<Eigen::Index>(gear_row_start_.size()) - 1;
+  motor.resize(n);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    double sum = 0.0;  // in a register: no store-to-load chain through motor
+    for (int e = gear_row_start_[i]; e < gear_row_start_[i + 1]; ++e)
+      sum += gear_values_[e] * command[gear_columns_[e]];
+    motor[i] = sum;
   }
 }
 
 namespace {
-// ctx.motor = G * ctx.command, the same sums as GearTrain::motorAngles (column by column) without
-// Eigen's general matrix-vector kernel, whose dispatch costs more than the 6 x 6 product.
-void motorAnglesOf(const JointMatrix& g, const JointVector& command, JointVector& motor) {
-  const Eigen::Index n = g.rows();
-  motor.resize(n);
-  for (Eigen::Index i = 0; i < n; ++i) {
-    double sum = 0.0;  // in a register: no store-to-load chain through motor
-    for (Eigen::Index j = 0; j < g.cols(); ++j) sum += g(i, j) * command[j];
-    motor[i] = sum;
-  }
-}
+// Newton steps only where the plain fixed point contracts, |d(error)/d(command)| <= this: there the
+// reference is unique and Newton only gets there sooner. Where the error turns faster than the command
+// (a wild transmission error), the plain step's divergence is reported as before, not one of the many
+// commands that would put the link there.
+constexpr double kLargestNewtonSlope = 0.5;
 }  // namespace
 
-FixedPointReport Compensator::compensate(JointContext& ctx, JointVector& reference) {
+void Compensator::prepare(JointContext& ctx) {
   const Robot& robot = model_.robot();
-  const JointMatrix& g = model_.gears().motorFromJoint();
   checkJointVector(robot, ctx.q, "planned q");
   computeLoadTorque(model_, mask_, ws_, ctx);
-  const Eigen::Index n = ctx.q.size();
   // Errors that do not read the command (compliance at ctx.q's load) are the same at every iteration.
-  // Summed first, in effect order, as addSelectedJointErrors would when they precede the others.
-  fixed_dq_.setZero(n);
-  dq_.resize(n);
+  fixed_dq_.setZero(ctx.q.size());
   for (const int i : fixed_effects_) model_.effect(i).addJointError(robot, ctx, fixed_dq_);
-  FixedPointReport report;
-  ctx.command = ctx.q;
+}
+
+FixedPointReport Compensator::compensate(JointContext& ctx, JointVector& reference) {
+  prepare(ctx);
+  ctx.command.resize(ctx.q.size());
+  for (Eigen::Index j = 0; j < ctx.q.size(); ++j) ctx.command[j] = ctx.q[j] - fixed_dq_[j];
+  anchors_set_ = true;
+  return iterate(ctx, reference, false);
+}
+
+FixedPointReport Compensator::compensateFrom(JointContext& ctx, const JointVector& correction_guess,
+                                             JointVector& reference) {
+  prepare(ctx);
+  checkJointVector(model_.robot(), correction_guess, "correction guess");
+  ctx.command.resize(ctx.q.size());
+  // Without command-dependent errors the answer is closed: the guess has nothing to add.
+  for (Eigen::Index j = 0; j < ctx.q.size(); ++j) {
+    ctx.command[j] = ctx.q[j] - (iterate_ ? correction_guess[j] : fixed_dq_[j]);
+  }
+  const bool continue_anchors = anchors_set_;
+  anchors_set_ = true;
+  return iterate(ctx, reference, continue_anchors);
+}
+
+FixedPointReport Compensator::iterate(JointContext& ctx, JointVector& reference, bool continue_anchors) {
+  const Robot& robot = model_.robot();
+  const JointMatrix& g = model_.gears().motorFromJoint();
+  const Eigen::Index n = ctx.q.size();
+  dq_.resize(n);
+  slope_.resize(n);
   reference.resize(n);
+  FixedPointReport report;
   for (report.iterations = 1; report.iterations <= options_.max_iterations; ++report.iterations) {
-    motorAnglesOf(g, ctx.command, ctx.motor);
-    for (Eigen::Index j = 0; j < n; ++j) dq_[j] = fixed_dq_[j];
-    for (const int i : command_effects_) model_.effect(i).addJointError(robot, ctx, dq_);
+    motorAngles(ctx.command, ctx.motor);
+    for (Eigen::Index j = 0; j < n; ++j) {
+      dq_[j] = fixed_dq_[j];
+      slope_[j] = 0.0;
+    }
+    // The harmonics' sines near their anchors without libm: later iterates are within a small angle of
+    // the first, and along a path (continue_anchors) the first is within one of the previous point's.
+    for (const Transmission& transmission : transmission_errors_) {
+      transmission.effect->addJointErrorAndMotorSlope(ctx, anchors_.data() + transmission.first_anchor,
+                                                      continue_anchors || report.iterations > 1, dq_, slope_);
+    }
+    bool slopes_known = true;
+    for (const int i : other_command_effects_) {
+      model_.effect(i).addJointError(robot, ctx, dq_);
+      slopes_known = model_.effect(i).addMotorSlope(robot, ctx, slope_) && slopes_known;
+    }
+    // The stopping test of the plain fixed point: how far its map Q_theo - dQ(command) moves the command.
     double residual = 0.0, non_finite = 0.0;
     bool finite = true;
     for (Eigen::Index j = 0; j < n; ++j) {
@@ -64,7 +127,6 @@ FixedPointReport Compensator::compensate(JointContext& ctx, JointVector& referen
       finite = finite && std::isfinite(change);
       residual = std::max(residual, change);
       reference[j] = next;
-      ctx.command[j] = next;  // element-wise, not a vector copy of just-stored scalars (store forwarding)
     }
     report.residual = finite ? residual : non_finite;
     if (!iterate_ || report.residual <= options_.tolerance) {
@@ -72,9 +134,18 @@ FixedPointReport Compensator::compensate(JointContext& ctx, JointVector& referen
       break;
     }
     if (!finite) break;
+    // Newton on each joint: the error of joint j moves with its command by slope_j * G_jj (through its own
+    // motor; a coupled motor's other terms are left to the iteration, which they slow only by their size).
+    for (Eigen::Index j = 0; j < n; ++j) {
+      const double error_per_command = slopes_known ? slope_[j] * g(j, j) : 0.0;
+      const double step = reference[j] - ctx.command[j];
+      // (not a number fails the test: the plain step)
+      ctx.command[j] += std::abs(error_per_command) <= kLargestNewtonSlope ? step / (1.0 + error_per_command) : step;
+    }
   }
   report.iterations = std::min(report.iterations, options_.max_iterations);
-  motorAnglesOf(g, ctx.command, ctx.motor);
+  for (Eigen::Index j = 0; j < n; ++j) ctx.command[j] = reference[j];  // element-wise: no store-forwarding stall
+  motorAngles(ctx.command, ctx.motor);
   if (report.converged) requireWithinLimits(robot, reference);
   return report;
 }

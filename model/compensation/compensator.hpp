@@ -2,12 +2,14 @@
 // Q_ref = Q_theo - dQ(Q_theo, Q_ref) (Olabi et al. 2012 with dQ = dQ_stiff + dQ_gear and any other effect).
 // Errors that depend on where the links are (compliance, from the load at Q_theo) are evaluated once;
 // errors that depend on the command (transmission error, through the motor angles) are iterated to the
-// fixed point, which converges fast because they vary slowly with the command.
+// fixed point by Newton steps on each joint (their slope with respect to the motor angle is known in closed
+// form), stopping when the fixed-point map moves the reference by no more than the tolerance.
 #pragma once
 
 #include <vector>
 
 #include "model/effects/joint_error_model.hpp"
+#include "model/effects/transmission_error.hpp"
 
 namespace jointcomp {
 
@@ -19,14 +21,30 @@ public:
   Compensator(const JointErrorModel& model, EffectMask mask, FixedPointOptions options = {});
 
   // Q_ref for the planned link positions ctx.q (ctx.velocity, time, wrench and payload as planned).
-  // Fills ctx.command and ctx.motor with the result. Allocates nothing. Throws UnreachableError when the
+  // Fills ctx.command and ctx.motor with the result; depends on nothing else (not on earlier calls).
+  // Allocates nothing. Throws UnreachableError when the
   // converged reference leaves a joint's limits (a result that cannot be commanded is no result).
   FixedPointReport compensate(JointContext& ctx, JointVector& reference);
+  // The same, starting from Q_theo - correction_guess (a guess of Q_theo - Q_ref) instead of from
+  // Q_theo less the command-independent errors. Along a dense path the previous point's correction is
+  // within a fraction of a microradian of this one's, and one Newton step then meets the tolerance: half
+  // the evaluations. The stopping test is the same, so the result is compensate()'s up to rounding. The
+  // harmonics' sines continue from those of the previous call where it was near, so the result depends
+  // on earlier calls at the rounding level (1e-19 rad in the error), not beyond.
+  FixedPointReport compensateFrom(JointContext& ctx, const JointVector& correction_guess, JointVector& reference);
 
   const JointErrorModel& model() const { return model_; }
   EffectMask mask() const { return mask_; }
 
 private:
+  // Load torque at ctx.q and the command-independent errors into fixed_dq_.
+  void prepare(JointContext& ctx);
+  // From the start in ctx.command to the fixed point; continue_anchors: the harmonics' anchors of the
+  // previous call are a valid start.
+  FixedPointReport iterate(JointContext& ctx, JointVector& reference, bool continue_anchors);
+  // motor = G * command.
+  void motorAngles(const JointVector& command, JointVector& motor) const;
+
   const JointErrorModel& model_;
   EffectMask mask_;
   FixedPointOptions options_;
@@ -34,7 +52,19 @@ private:
   JointErrorWorkspace ws_;
   // The selected error effects, split once: those that do not read the command are summed once per point.
   std::vector<int> fixed_effects_, command_effects_;
-  JointVector fixed_dq_, dq_;
+  // The command-dependent effects that are transmission errors, called directly for their value and slope
+  // together; the others (command_effects_ less these) through the Effect interface.
+  struct Transmission {
+    const TransmissionErrorEffect* effect;
+    std::size_t first_anchor;  // its harmonics' anchors in anchors_
+  };
+  std::vector<Transmission> transmission_errors_;
+  std::vector<TransmissionErrorEffect::Anchor> anchors_;
+  bool anchors_set_ = false;  // by an earlier call (each harmonic's sine and cosine at some phase, from libm)
+  std::vector<int> other_command_effects_;
+  JointVector fixed_dq_, dq_, slope_;
+  std::vector<int> gear_row_start_, gear_columns_;  // G's nonzero entries, row by row
+  std::vector<double> gear_values_;
 };
 
 struct TrajectoryCompensationReport {
@@ -43,8 +73,9 @@ struct TrajectoryCompensationReport {
   double max_correction = 0.0;  // rad, largest |Q_theo - Q_ref|
 };
 
-// Compensates every point of a joint trajectory (rows of q with their velocities); throws SolverError
-// naming the point when the iteration does not converge.
+// Compensates every point of a joint trajectory (rows of q with their velocities), each on its own
+// (Compensator::compensate), so that the trajectory's references are its points', bit for bit; throws
+// SolverError naming the point when the iteration does not converge.
 TrajectoryCompensationReport compensateTrajectory(const JointErrorModel& model, EffectMask mask,
                                                   const std::vector<JointVector>& planned,
                                                   const std::vector<JointVector>& velocities,

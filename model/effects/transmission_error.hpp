@@ -31,6 +31,19 @@ public:
   bool dependsOnCommand() const override { return true; }
   void addJointError(const Robot& robot, const JointContext& ctx, JointVector& dq) const override;
   bool addMotorSlope(const Robot& robot, const JointContext& ctx, JointVector& slope) const override;
+  // For the compensator's iterations, whose commands move by small angles: addJointError and
+  // addMotorSlope in one pass, keeping each harmonic's phase (argument of the sine) with its sine and cosine
+  // in `anchors` (harmonics().size() of them, caller-owned). With reuse_anchors false, libm's sin and cos
+  // at every harmonic (the anchors are set); with true, a harmonic whose phase stayed within kNearAnchor of
+  // its anchor gets its sine and cosine by the angle-addition formula with Taylor series of the difference
+  // (no libm call), the others are re-anchored. The same values as addJointError and addMotorSlope to
+  // rounding (a few 1e-20 rad).
+  struct Anchor {
+    double phase = 0.0, sin = 0.0, cos = 1.0;
+  };
+  static constexpr double kNearAnchor = 0.0625;  // rad of phase
+  void addJointErrorAndMotorSlope(const JointContext& ctx, Anchor* anchors, bool reuse_anchors, JointVector& dq,
+                                  JointVector& slope) const;
   std::vector<std::string> parameterNames() const override;
   std::vector<double> parameters() const override;
   void setParameters(const std::vector<double>& values) override;
@@ -45,6 +58,7 @@ private:
   std::vector<std::string> joint_names_;
   GearTrain gears_;
   std::vector<Harmonic> harmonics_;
+  std::vector<double> phase_per_motor_;  // per harmonic: d(phase)/d(motor angle), cycles over the ratio before
 };
 
 // Discovery: "harmonic", per joint a sine and a cosine column, a sin(k x) + b cos(k x), x the angle of

@@ -9,11 +9,13 @@
 #include <limits>
 #include <map>
 #include <memory>
+#include <random>
 #include <string>
 #include <vector>
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include "model/common/errors.hpp"
 #include "model/compensation/compensator.hpp"
@@ -21,7 +23,9 @@
 #include "model/compensation/joint_trajectory.hpp"
 #include "model/compensation/path.hpp"
 #include "model/effects/compliance.hpp"
+#include "model/effects/periodic_table.hpp"
 #include "model/effects/spring_balancer.hpp"
+#include "model/experiment/spiral_experiment.hpp"
 #include "model/io/parameter_file.hpp"
 #include "model/robot/dynamics.hpp"
 #include "model/robot/kinematics.hpp"
@@ -90,6 +94,57 @@ Settled settleAll(const JointErrorModel& truth, EffectMask mask, const JointTraj
   }
   return result;
 }
+
+// The plain fixed point Q_ref <- Q_theo - dQ(Q_theo, Q_ref) from Q_ref = Q_theo, written with the model's
+// generic calls (libm's sines, no Newton step, no anchors), until an iteration moves it by no more than
+// `tolerance` (1e-12: the compensator before its Newton steps, to the bit; 0: until it stops moving, the
+// point the compensator must land on).
+JointVector plainFixedPoint(const JointErrorModel& model, EffectMask mask, const JointVector& planned,
+                            double tolerance = 0.0) {
+  JointErrorWorkspace ws(model.robot());
+  JointContext ctx(model.robot().dof());
+  ctx.q = planned;
+  computeLoadTorque(model, mask, ws, ctx);
+  ctx.command = ctx.q;
+  for (int iteration = 0; iteration < 40; ++iteration) {
+    updateMotorAngles(model, ctx);
+    JointVector dq = JointVector::Zero(model.robot().dof());
+    addSelectedJointErrors(model, mask, ctx, dq);
+    const JointVector next = ctx.q - dq;
+    const double change = (next - ctx.command).cwiseAbs().maxCoeff();
+    ctx.command = next;
+    if (change <= tolerance) break;
+  }
+  return ctx.command;
+}
+
+// Joint values spread over the middle 80 % of each joint's range.
+JointVector randomPose(const Robot& robot, std::mt19937& rng) {
+  JointVector q(robot.dof());
+  for (int j = 0; j < robot.dof(); ++j) {
+    const Joint& joint = robot.joints[static_cast<std::size_t>(j)];
+    const double margin = 0.1 * (joint.upper - joint.lower);
+    q[j] = std::uniform_real_distribution<double>(joint.lower + margin, joint.upper - margin)(rng);
+  }
+  return q;
+}
+
+// A command-dependent error that does not know its slope (Effect::addMotorSlope's false): the compensator
+// takes plain fixed-point steps for it.
+class SlopelessRipple : public Effect {
+public:
+  std::string type() const override { return "slopeless_ripple"; }
+  EffectRole role() const override { return EffectRole::JointError; }
+  bool dependsOnCommand() const override { return true; }
+  void addJointError(const Robot&, const JointContext& ctx, JointVector& dq) const override {
+    dq[1] += 3e-5 * std::sin(ctx.motor[1] / 3.0 + 0.3);
+  }
+  std::vector<std::string> parameterNames() const override { return {}; }
+  std::vector<double> parameters() const override { return {}; }
+  void setParameters(const std::vector<double>&) override {}
+  nlohmann::json toJson() const override { return nlohmann::json::object(); }
+  std::unique_ptr<Effect> clone() const override { return std::make_unique<SlopelessRipple>(*this); }
+};
 
 TEST(Compensator, ThePlanIsLongEnoughToMean) {
   ASSERT_GT(plannedLine().size(), 1000u);
@@ -307,6 +362,133 @@ TEST(Compensator, AReferenceBeyondTheJointLimitsIsAnError) {
   EXPECT_NO_THROW(requireWithinLimits(model.robot(), at_limit));
   at_limit[1] = std::nextafter(at_limit[1], 10.0);
   EXPECT_THROW(requireWithinLimits(model.robot(), at_limit), UnreachableError);
+}
+
+// The Newton iteration, cold (compensate) and from the previous point's correction (compensateFrom),
+// and compensateTrajectory land on the plain fixed point to rounding, along the line, along the paper's
+// spiral and at random poses; from the previous correction they need fewer evaluations.
+TEST(Compensator, NewtonStepsLandOnThePlainFixedPoint) {
+  const JointErrorModel model = rx170Model();
+  const EffectMask mask = model.allEffects();
+  const SpiralExperimentSpec paper;
+  const JointTrajectory spiral = planSpiralTrajectory(*rx170(), paper.spiral, paper.feed_rate);
+  ASSERT_GT(spiral.size(), 5000u);
+  double largest = 0.0, from_former = 0.0;
+  for (const JointTrajectory* plan : {&plannedLine(), &spiral}) {
+    Compensator cold(model, mask), along(model, mask);
+    JointContext cold_ctx(6), along_ctx(6);
+    JointVector cold_reference, along_reference, correction;
+    std::vector<JointVector> trajectory_references;
+    compensateTrajectory(model, mask, plan->q, plan->qd, trajectory_references);
+    int cold_evaluations = 0, along_evaluations = 0, along_most = 0;
+    for (std::size_t k = 0; k < plan->size(); ++k) {
+      const JointVector plain = plainFixedPoint(model, mask, plan->q[k]);
+      from_former =
+          std::max(from_former, (plainFixedPoint(model, mask, plan->q[k], 1e-12) - plain).cwiseAbs().maxCoeff());
+      cold_ctx.q = along_ctx.q = plan->q[k];
+      cold_ctx.velocity = along_ctx.velocity = plan->qd[k];
+      const FixedPointReport cold_report = cold.compensate(cold_ctx, cold_reference);
+      const FixedPointReport along_report = k == 0 ? along.compensate(along_ctx, along_reference)
+                                                   : along.compensateFrom(along_ctx, correction, along_reference);
+      ASSERT_TRUE(cold_report.converged && along_report.converged) << "point " << k;
+      correction = plan->q[k] - along_reference;
+      cold_evaluations += cold_report.iterations;
+      along_evaluations += along_report.iterations;
+      if (k > 0) along_most = std::max(along_most, along_report.iterations);
+      for (const JointVector* reference : {&cold_reference, &along_reference, &trajectory_references[k]}) {
+        largest = std::max(largest, (*reference - plain).cwiseAbs().maxCoeff());
+      }
+    }
+    const char* name = plan == &spiral ? "spiral" : "line";
+    std::cout << "[ compensator ] " << name << ": evaluations per point "
+              << static_cast<double>(cold_evaluations) / plan->size() << " cold, "
+              << static_cast<double>(along_evaluations) / plan->size() << " from the previous correction\n";
+    EXPECT_LE(along_most, 2) << name;
+    EXPECT_LT(along_evaluations, cold_evaluations) << name;
+  }
+  std::mt19937 rng(31u);
+  Compensator compensator(model, mask);
+  JointContext ctx(6);
+  JointVector reference;
+  for (int sample = 0; sample < 300; ++sample) {
+    const JointVector pose = randomPose(model.robot(), rng);
+    ctx.q = pose;
+    ctx.velocity.setZero();
+    ASSERT_TRUE(compensator.compensate(ctx, reference).converged) << "sample " << sample;
+    largest = std::max(largest, (reference - plainFixedPoint(model, mask, pose)).cwiseAbs().maxCoeff());
+  }
+  std::cout << "[ compensator ] Newton against the plain fixed point: within " << largest
+            << " rad (the former plain iteration to 1e-12: within " << from_former << " rad)\n";
+  // Both stop when the map moves by <= 1e-12 rad and contract it by about 1e-2: well inside 1e-12 of it.
+  EXPECT_LT(largest, 1e-13);
+}
+
+// A guess far from the answer costs iterations, not accuracy; a guess that is not a number is an error.
+TEST(Compensator, AnyFiniteGuessGivesTheSameReference) {
+  const JointErrorModel model = rx170Model();
+  const EffectMask mask = model.allEffects();
+  Compensator compensator(model, mask);
+  JointContext ctx(6);
+  ctx.q = plannedLine().q[100];
+  JointVector reference, from_guess;
+  ASSERT_TRUE(compensator.compensate(ctx, reference).converged);
+  for (const double offset : {0.0, 1e-6, 1e-3, 0.05}) {
+    JointVector guess = ctx.q - reference;
+    guess.array() += offset;
+    const FixedPointReport report = compensator.compensateFrom(ctx, guess, from_guess);
+    ASSERT_TRUE(report.converged) << "offset " << offset;
+    EXPECT_LE(report.residual, 1e-12);
+    EXPECT_LT((from_guess - reference).cwiseAbs().maxCoeff(), 1e-13) << "offset " << offset;
+  }
+  // compensate() does not remember the calls between: the same point gives the same bits again.
+  JointVector again;
+  ASSERT_TRUE(compensator.compensate(ctx, again).converged);
+  EXPECT_EQ(again, reference);
+  JointVector guess = JointVector::Zero(6);
+  guess[2] = std::numeric_limits<double>::quiet_NaN();
+  try {
+    compensator.compensateFrom(ctx, guess, from_guess);
+    ADD_FAILURE() << "a NaN guess was accepted";
+  } catch (const InvalidArgument& error) {
+    EXPECT_THAT(error.what(), HasSubstr("correction guess[2]"));
+  }
+  EXPECT_THROW(compensator.compensateFrom(ctx, JointVector::Zero(5), from_guess), InvalidArgument);
+}
+
+// Command-dependent effects other than the harmonics go through the Effect interface: a periodic table
+// (with its slope: Newton steps) and an effect without a slope (plain steps) land on the plain fixed point.
+TEST(Compensator, OtherCommandEffectsLandOnThePlainFixedPoint) {
+  JointErrorModel with_table = rx170Model();
+  PeriodicTable table;
+  table.joint = 2;
+  table.stage = 1;
+  for (int k = 0; k < 12; ++k) table.coefficients_rad.push_back(2e-5 * std::sin(1.3 * k) + 1e-5 * (k % 3));
+  with_table.addEffect(
+      std::make_unique<PeriodicTableEffect>(with_table.robot(), with_table.gears(), std::vector<PeriodicTable>{table}));
+  JointErrorModel with_slopeless = rx170Model();
+  with_slopeless.addEffect(std::make_unique<SlopelessRipple>());
+  const JointTrajectory& plan = plannedLine();
+  for (const JointErrorModel* model : {&with_table, &with_slopeless}) {
+    const EffectMask mask = model->allEffects();
+    Compensator compensator(*model, mask);
+    JointContext ctx(6);
+    JointVector reference;
+    double largest = 0.0;
+    int most = 0;
+    for (std::size_t k = 0; k < plan.size(); k += 13) {
+      ctx.q = plan.q[k];
+      ctx.velocity = plan.qd[k];
+      const FixedPointReport report = compensator.compensate(ctx, reference);
+      ASSERT_TRUE(report.converged) << "point " << k;
+      most = std::max(most, report.iterations);
+      largest = std::max(largest, (reference - plainFixedPoint(*model, mask, plan.q[k])).cwiseAbs().maxCoeff());
+    }
+    const std::string name = model == &with_table ? "periodic table" : "slopeless ripple";
+    EXPECT_LT(largest, 1e-13) << name;
+    EXPECT_LE(most, 8) << name;
+    std::cout << "[ compensator ] with a " << name << ": at most " << most << " iterations, within " << largest
+              << " rad of the plain fixed point\n";
+  }
 }
 
 }  // namespace
