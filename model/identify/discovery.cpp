@@ -263,7 +263,8 @@ Linearised linearise(const JointErrorModel& model, const MeasurementCampaign& ca
   Linearised lin;
   std::set<int> free(cal.free.begin(), cal.free.end());
   // Column plan. kind 0: layout column; 1: a candidate's feature column times dm/dq_j; 2: a block of dof
-  // load-torque columns times -compliance_j dm/dq_j, summed over the joints.
+  // load-torque columns times -compliance_j dm/dq_j, summed over the joints; 3: a block of dof joint-error
+  // columns times dm/dq_j, summed over the joints.
   struct Source {
     int kind;
     int index;   // layout index (kind 0) or candidate
@@ -276,7 +277,7 @@ Linearised linearise(const JointErrorModel& model, const MeasurementCampaign& ca
     for (int k = 0; k < candidate.coefficients(n); ++k) {
       columns.push_back(static_cast<int>(plan.size()));
       if (also) also->push_back(static_cast<int>(plan.size()));
-      plan.push_back({candidate.through_compliance ? 2 : 1, c, k, candidate.joint});
+      plan.push_back({candidate.through_compliance ? 2 : candidate.joint_error_blocks ? 3 : 1, c, k, candidate.joint});
     }
   };
   for (int idx : cal.free) {
@@ -324,8 +325,12 @@ Linearised linearise(const JointErrorModel& model, const MeasurementCampaign& ca
         lin.X.block<3, 1>(3 * i, c) = w * values(i, s.column) * J.col(layout.offset(s.joint));
       else {
         Eigen::Vector3d column = Eigen::Vector3d::Zero();
-        for (int j = 0; j < n; ++j)
-          column -= cal.estimate.compliance[j] * values(i, s.column * n + j) * J.col(layout.offset(j));
+        for (int j = 0; j < n; ++j) {
+          const double value = values(i, s.column * n + j);
+          if (value == 0.0) continue;
+          const double per_joint = s.kind == 2 ? -cal.estimate.compliance[j] * value : value;
+          column += per_joint * J.col(layout.offset(j));
+        }
         lin.X.block<3, 1>(3 * i, c) = w * column;
       }
     }
