@@ -64,6 +64,9 @@ struct DiscoveryCandidate {
   Eigen::MatrixXd columns;
   bool through_compliance = false;
   bool joint_error_blocks = false;
+  // A quadratic prior on the coefficients, coefficients x coefficients (SI units; empty: none), e.g. a
+  // table's roughness. Discovery weighs it by a factor it chooses by cross-validation on the fitted data.
+  Eigen::MatrixXd prior;
 
   int coefficients(int dof) const {
     return through_compliance || joint_error_blocks ? static_cast<int>(columns.cols()) / dof

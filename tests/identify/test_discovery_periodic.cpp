@@ -4,11 +4,13 @@
 // held-out campaign.
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <string>
 #include <vector>
 
 #include <gtest/gtest.h>
 
+#include "model/common/errors.hpp"
 #include "model/effects/periodic_table.hpp"
 #include "model/identify/discovery.hpp"
 #include "tests/identify/identify_test_support.hpp"
@@ -58,6 +60,57 @@ TEST(DiscoveryPeriodic, FindsABumpShapedMotorErrorAndReportsItsSpectrum) {
   // Harmonics up to the default orders leave more of it.
   const DiscoveryResult harmonics_only = discover(truth, {"offset", "harmonic"});
   EXPECT_GT(harmonics_only.final_state.heldout[0].rms, 1.2 * r.final_state.heldout[0].rms);
+}
+
+// A smooth error (a raised cosine over a third of joint 2's motor revolution) measured by few noisy rows:
+// a 24-knot table fitted freely follows the noise between the rows; with its roughness prior, weighed by
+// cross-validation on the fitted data, it predicts the held-out campaign at least as well, and the step says
+// which weight was chosen. No prior (a largest weight of 0) is the caller's choice; a bad one is refused.
+JointErrorModel withSmoothHill(JointErrorModel model) {
+  std::vector<double> c(24, 0.0);
+  for (int k = 0; k < 8; ++k)
+    c[static_cast<std::size_t>(k + 4)] = 1.2e-4 * (1.0 - std::cos(2.0 * kPi * (k + 0.5) / 8.0));
+  PeriodicTable table;
+  table.joint = 1;
+  table.stage = 1;
+  table.coefficients_rad = c;
+  model.addEffect(
+      std::make_unique<PeriodicTableEffect>(model.robot(), model.gears(), std::vector<PeriodicTable>{table}));
+  return model;
+}
+
+DiscoveryResult discoverSmooth(double max_weight, std::uint64_t seed) {
+  const JointErrorModel truth = withSmoothHill(rx170Model());
+  DiscoveryOptions options;
+  options.types = {"periodic"};
+  options.max_steps = 2;
+  options.max_prior_weight = max_weight;
+  return discoverEffects(rx170Model(), {randomCampaign(truth, 100, seed)}, {randomCampaign(truth, 200, seed + 1)},
+                         options);
+}
+
+TEST(DiscoveryPeriodic, SmoothnessPriorChosenByCrossValidationDoesNotPredictWorse) {
+  const DiscoveryOptions defaults;
+  for (std::uint64_t seed : {83u, 85u}) {
+    const DiscoveryResult smooth = discoverSmooth(defaults.max_prior_weight, seed);
+    const DiscoveryResult free = discoverSmooth(0.0, seed);
+    ASSERT_FALSE(smooth.steps.empty()) << smooth.stop_reason;
+    ASSERT_TRUE(smooth.steps[0].report_fields.contains("prior_weight"));
+    const double weight = smooth.steps[0].report_fields["prior_weight"].get<double>();
+    EXPECT_GE(weight, 0.0);
+    EXPECT_LE(weight, defaults.max_prior_weight);
+    std::printf("[ prior ] seed %d: weight %g, held-out %.4f mm (free %.4f mm, floor %.4f mm)\n",
+                static_cast<int>(seed), weight, smooth.final_state.heldout[0].rms * 1e3,
+                free.steps.empty() ? free.initial.heldout[0].rms * 1e3 : free.final_state.heldout[0].rms * 1e3,
+                smooth.noise_floor * 1e3);
+    EXPECT_LE(smooth.final_state.heldout[0].rms, 1.01 * free.final_state.heldout[0].rms) << "seed " << seed;
+    EXPECT_LT(smooth.final_state.heldout[0].rms, 1.3 * smooth.noise_floor) << "seed " << seed;
+  }
+  for (const double bad : {-1.0, std::nan(""), HUGE_VAL}) {
+    DiscoveryOptions options;
+    options.max_prior_weight = bad;
+    EXPECT_THROW(discoverEffects(rx170Model(), {randomCampaign(rx170Model(), 60, 1)}, {}, options), InvalidArgument);
+  }
 }
 
 }  // namespace
