@@ -617,6 +617,14 @@ private:
     double prior_weight = 0.0;
   };
 
+  // A fit's error predicted where the fitted data are not: the time folds' and the joint-space parts' CV
+  // together (the parts, far apart in joint space, see how a table fares between the angles it fitted).
+  static double transferError(const Fit& fit) {
+    double space = 0.0;
+    for (double e : fit.cv_space) space += e;
+    return fit.cv + space;
+  }
+
   // The weights of a candidate's prior that cross-validation chooses from: 0 and five decades up to the most.
   std::vector<double> priorWeights() const {
     std::vector<double> weights = {0.0};
@@ -768,7 +776,7 @@ private:
         const std::string trial_hurt = trial_gains ? hurtFold(trial) : std::string();
         const bool passes = trial_gains && trial_hurt.empty();
         const bool passed = gains && hurt.empty();
-        if (!have || (passes && !passed) || (passes == passed && trial.cv < fit.cv)) {
+        if (!have || (passes && !passed) || (passes == passed && transferError(trial) < transferError(fit))) {
           fit = trial;
           weight = w;
           gains = trial_gains;
