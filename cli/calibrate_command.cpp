@@ -76,8 +76,12 @@ int runCalibrate(int argc, char** argv) {
   const std::string urdf_out = out + "/" + robot->name + "_calibrated.urdf";
   saveRobotUrdf(*run.calibrated_robot, urdf_out,
                 "  " + robot->name + " after kinematic calibration by jointcomp calibrate\n  nominal: " + urdf +
-                    "\n  campaign: " + campaign_path +
-                    "\n  Joint placements corrected; joint offsets and compliance are in the parameter file.");
+                    "\n  campaign: " + campaign_path + "\n  Joint placements corrected; " +
+                    (run.compliance_left_out.empty()
+                         ? std::string("joint offsets and compliance are in the parameter file.")
+                         : "joint offsets are in the parameter file, with the compliance of all joints but " +
+                               std::to_string(run.compliance_left_out.size()) +
+                               ", which it writes as rigid (summary.txt says which and why)."));
   const std::string params_out = out + "/parameters.json";
   saveParameterFile(run.calibrated, params_out, setup.parameters.drives);  // the prior's drives, if any
 

@@ -6,7 +6,8 @@
 // A candidate either brings feature columns, the joint error of its joint per unit coefficient (so the
 // predicted measurement moves by dm/dq_j times the column), or, for a load (through_compliance), blocks of
 // one column per joint: the load torque of every joint per unit coefficient, which moves the joints
-// through their current compliances. It may also free parameters that the kinematic calibration owns
+// through their current compliances, or (joint_error_blocks) the joint error of every joint per unit
+// coefficient. It may also free parameters that the kinematic calibration owns
 // (a joint's offset, compliance or placement), alone or beside its columns.
 #pragma once
 
@@ -58,12 +59,18 @@ struct DiscoveryCandidate {
   nlohmann::ordered_json report_fields = nlohmann::ordered_json::object();
   std::vector<CalibrationParameter> releases;
   // rows x coefficients; through_compliance: rows x (coefficients * dof), block k holding the load torque
-  // of every joint per unit of coefficient k.
+  // of every joint per unit of coefficient k; joint_error_blocks: the same layout, block k holding the
+  // joint error of every joint per unit of coefficient k (an effect that moves several joints at once).
   Eigen::MatrixXd columns;
   bool through_compliance = false;
+  bool joint_error_blocks = false;
+  // A quadratic prior on the coefficients, coefficients x coefficients (SI units; empty: none), e.g. a
+  // table's roughness. Discovery weighs it by a factor it chooses by cross-validation on the fitted data.
+  Eigen::MatrixXd prior;
 
   int coefficients(int dof) const {
-    return through_compliance ? static_cast<int>(columns.cols()) / dof : static_cast<int>(columns.cols());
+    return through_compliance || joint_error_blocks ? static_cast<int>(columns.cols()) / dof
+                                                    : static_cast<int>(columns.cols());
   }
   std::string label() const;  // "backlash joint 3", "harmonic joint 2 motor order 1", "payload (tool)"
 };

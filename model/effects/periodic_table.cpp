@@ -258,6 +258,19 @@ void PeriodicTableDiscovery::offer(const DiscoveryData& data, int joint,
           if (column >= 0) candidate.columns(i, column) += w.weight[k];
         }
       }
+      // Smoothness prior: the table's periodic second differences, over every knot (those not visited
+      // stay at zero, so the prior on the fitted ones is the full one's principal part).
+      Eigen::MatrixXd second = Eigen::MatrixXd::Zero(knots, knots);
+      for (int k = 0; k < knots; ++k) {
+        second(k, k) = -2.0;
+        second(k, (k + 1) % knots) = 1.0;
+        second(k, (k + knots - 1) % knots) = 1.0;
+      }
+      const Eigen::MatrixXd roughness = second.transpose() * second;
+      candidate.prior.resize(columns, columns);
+      for (int a = 0; a < columns; ++a)
+        for (int b = 0; b < columns; ++b)
+          candidate.prior(a, b) = roughness(kept[static_cast<std::size_t>(a)], kept[static_cast<std::size_t>(b)]);
       candidates.push_back(std::move(candidate));
     }
   }

@@ -8,6 +8,7 @@
 #include "model/effects/hysteresis.hpp"
 #include "model/effects/joint_offset.hpp"
 #include "model/effects/joint_placement.hpp"
+#include "model/effects/link_bending.hpp"
 #include "model/effects/nonlinear_compliance.hpp"
 #include "model/effects/payload.hpp"
 #include "model/effects/periodic_table.hpp"
@@ -37,6 +38,7 @@ EffectRegistry makeBuiltin() {
   registry.addEffectType(HysteresisEffect::kType, &HysteresisEffect::fromJson);
   registry.addEffectType(PayloadEffect::kType, &PayloadEffect::fromJson);
   registry.addEffectType(PeriodicTableEffect::kType, &PeriodicTableEffect::fromJson);
+  registry.addEffectType(LinkBendingEffect::kType, &LinkBendingEffect::fromJson);
   // Discovery: the calibration's own parameters first, then the effects in the order they join a model.
   registry.addDiscoveryFamily(std::make_shared<JointOffsetDiscovery>());
   registry.addDiscoveryFamily(std::make_shared<ComplianceDiscovery>());
@@ -46,6 +48,7 @@ EffectRegistry makeBuiltin() {
   registry.addDiscoveryFamily(std::make_shared<HysteresisDiscovery>());
   registry.addDiscoveryFamily(std::make_shared<PayloadDiscovery>());
   registry.addDiscoveryFamily(std::make_shared<NonlinearComplianceDiscovery>());
+  registry.addDiscoveryFamily(std::make_shared<LinkBendingDiscovery>());
   registry.addDiscoveryFamily(std::make_shared<ThermalDriftDiscovery>());
   registry.addDiscoveryFamily(std::make_shared<HarmonicDiscovery>());
   registry.addDiscoveryFamily(std::make_shared<PeriodicTableDiscovery>());

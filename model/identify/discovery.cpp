@@ -20,6 +20,7 @@ struct Active {
   int candidate = 0;
   Eigen::VectorXd theta;
   Eigen::VectorXd sigma;
+  double prior_weight = 0.0;  // the weight of the candidate's prior cross-validation chose (0: none)
 };
 
 const EffectRegistry& registryOf(const DiscoveryOptions& options) {
@@ -263,7 +264,8 @@ Linearised linearise(const JointErrorModel& model, const MeasurementCampaign& ca
   Linearised lin;
   std::set<int> free(cal.free.begin(), cal.free.end());
   // Column plan. kind 0: layout column; 1: a candidate's feature column times dm/dq_j; 2: a block of dof
-  // load-torque columns times -compliance_j dm/dq_j, summed over the joints.
+  // load-torque columns times -compliance_j dm/dq_j, summed over the joints; 3: a block of dof joint-error
+  // columns times dm/dq_j, summed over the joints.
   struct Source {
     int kind;
     int index;   // layout index (kind 0) or candidate
@@ -276,7 +278,7 @@ Linearised linearise(const JointErrorModel& model, const MeasurementCampaign& ca
     for (int k = 0; k < candidate.coefficients(n); ++k) {
       columns.push_back(static_cast<int>(plan.size()));
       if (also) also->push_back(static_cast<int>(plan.size()));
-      plan.push_back({candidate.through_compliance ? 2 : 1, c, k, candidate.joint});
+      plan.push_back({candidate.through_compliance ? 2 : candidate.joint_error_blocks ? 3 : 1, c, k, candidate.joint});
     }
   };
   for (int idx : cal.free) {
@@ -324,8 +326,12 @@ Linearised linearise(const JointErrorModel& model, const MeasurementCampaign& ca
         lin.X.block<3, 1>(3 * i, c) = w * values(i, s.column) * J.col(layout.offset(s.joint));
       else {
         Eigen::Vector3d column = Eigen::Vector3d::Zero();
-        for (int j = 0; j < n; ++j)
-          column -= cal.estimate.compliance[j] * values(i, s.column * n + j) * J.col(layout.offset(j));
+        for (int j = 0; j < n; ++j) {
+          const double value = values(i, s.column * n + j);
+          if (value == 0.0) continue;
+          const double per_joint = s.kind == 2 ? -cal.estimate.compliance[j] * value : value;
+          column += per_joint * J.col(layout.offset(j));
+        }
         lin.X.block<3, 1>(3 * i, c) = w * column;
       }
     }
@@ -380,27 +386,76 @@ Eigen::VectorXd solve(const Eigen::MatrixXd& g, const Eigen::VectorXd& b, int* r
   return qr.solve(b);
 }
 
-Fit fitColumns(const Linearised& lin, const std::vector<int>& s, bool need_inverse) {
+// A quadratic prior on some of a fit's columns, in the fit's scaled units: the fit minimises
+// |r + X d|^2 + (t + d)^T P (t + d), t the coefficients those columns already hold.
+struct Penalty {
+  Eigen::MatrixXd matrix;  // |s| x |s|; empty: none
+  Eigen::VectorXd held;    // P t
+};
+
+Fit fitColumns(const Linearised& lin, const std::vector<int>& s, bool need_inverse, const Penalty& penalty = {}) {
   Fit fit;
+  const bool penalised = penalty.matrix.size() > 0;
   const Eigen::MatrixXd g = sub(lin.gram_total, s);
   const Eigen::VectorXd b = sub(lin.xr_total, s);
-  fit.d = -solve(g, b, &fit.rank);
+  const Eigen::MatrixXd prior = penalised ? penalty.matrix : Eigen::MatrixXd::Zero(g.rows(), g.cols());
+  const Eigen::VectorXd held = penalised ? penalty.held : Eigen::VectorXd::Zero(b.size());
+  fit.d = -solve(g + prior, b + held, &fit.rank);
   fit.rss = std::max(0.0, lin.rr_total + 2.0 * fit.d.dot(b) + fit.d.dot(g * fit.d));
   for (std::size_t fo = 0; fo < lin.gram.size(); ++fo) {
     const Eigen::MatrixXd gf = sub(lin.gram[fo], s);
     const Eigen::VectorXd bf = sub(lin.xr[fo], s);
-    const Eigen::VectorXd d = -solve(g - gf, b - bf, nullptr);
+    const Eigen::VectorXd d = -solve(g - gf + prior, b - bf + held, nullptr);
     fit.cv_fold.push_back(std::max(0.0, lin.rr[fo] + 2.0 * d.dot(bf) + d.dot(gf * d)));
     fit.cv += fit.cv_fold.back();
   }
   for (std::size_t p = 0; p < lin.space_gram.size(); ++p) {
     const Eigen::MatrixXd gp = sub(lin.space_gram[p], s);
     const Eigen::VectorXd bp = sub(lin.space_xr[p], s);
-    const Eigen::VectorXd d = -solve(g - gp, b - bp, nullptr);
+    const Eigen::VectorXd d = -solve(g - gp + prior, b - bp + held, nullptr);
     fit.cv_space.push_back(std::max(0.0, lin.space_rr[p] + 2.0 * d.dot(bp) + d.dot(gp * d)));
   }
-  if (need_inverse) fit.inverse = g.completeOrthogonalDecomposition().pseudoInverse();
+  if (need_inverse) fit.inverse = (g + prior).completeOrthogonalDecomposition().pseudoInverse();
   return fit;
+}
+
+// Adds a candidate's prior to `penalty` for the fit of columns `s`: weight times its prior, in the scaled
+// units of the candidate's feature columns `columns`, normalised so that weight 1 weighs like the data of
+// one column (unit norm); `theta` the coefficients those columns already hold (SI).
+void addPrior(const Linearised& lin, const std::vector<int>& s, const std::vector<int>& columns,
+              const Eigen::MatrixXd& prior, double weight, const Eigen::VectorXd& theta, Penalty& penalty) {
+  if (weight <= 0.0 || prior.size() == 0) return;
+  if (penalty.matrix.size() == 0) {
+    penalty.matrix = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(s.size()), static_cast<Eigen::Index>(s.size()));
+    penalty.held = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(s.size()));
+  }
+  const int k = static_cast<int>(prior.rows());
+  std::vector<int> position(static_cast<std::size_t>(k), -1);
+  for (int a = 0; a < k; ++a) {
+    const auto at = std::find(s.begin(), s.end(), columns[static_cast<std::size_t>(a)]);
+    if (at != s.end()) position[static_cast<std::size_t>(a)] = static_cast<int>(at - s.begin());
+  }
+  Eigen::MatrixXd scaled(k, k);
+  Eigen::VectorXd held_scaled(k);
+  for (int a = 0; a < k; ++a) {
+    held_scaled[a] = theta.size() == k ? theta[a] * lin.scale[columns[static_cast<std::size_t>(a)]] : 0.0;
+    for (int b = 0; b < k; ++b)
+      scaled(a, b) = prior(a, b) / (lin.scale[columns[static_cast<std::size_t>(a)]] *
+                                    lin.scale[columns[static_cast<std::size_t>(b)]]);
+  }
+  const double trace = scaled.trace();
+  if (!(trace > 0.0)) return;
+  scaled *= weight * k / trace;
+  const Eigen::VectorXd held = scaled * held_scaled;
+  for (int a = 0; a < k; ++a) {
+    const int pa = position[static_cast<std::size_t>(a)];
+    if (pa < 0) continue;
+    penalty.held[pa] += held[a];
+    for (int b = 0; b < k; ++b) {
+      const int pb = position[static_cast<std::size_t>(b)];
+      if (pb >= 0) penalty.matrix(pa, pb) += scaled(a, b);
+    }
+  }
 }
 
 std::vector<std::string> fixedNames(const std::vector<std::string>& names, const std::set<int>& released,
@@ -559,7 +614,35 @@ private:
     int tried = 0;
     std::string runner_up;
     std::string rejected;  // the best candidate that gained overall but did not transfer, and why
+    double prior_weight = 0.0;
   };
+
+  // A fit's error predicted where the fitted data are not: the time folds' and the joint-space parts' CV
+  // together (the parts, far apart in joint space, see how a table fares between the angles it fitted).
+  static double transferError(const Fit& fit) {
+    double space = 0.0;
+    for (double e : fit.cv_space) space += e;
+    return fit.cv + space;
+  }
+
+  // The weights of a candidate's prior that cross-validation chooses from: 0 and five decades up to the most.
+  std::vector<double> priorWeights() const {
+    std::vector<double> weights = {0.0};
+    for (int k = 4; k >= 0 && options_.max_prior_weight > 0.0; --k)
+      weights.push_back(options_.max_prior_weight * std::pow(10.0, -k));
+    return weights;
+  }
+
+  // The accepted candidates' priors for a fit of the columns `s`, at the coefficients they hold.
+  Penalty activePenalty(const std::vector<int>& s) const {
+    Penalty penalty;
+    for (std::size_t k = 0; k < active_.size() && k < lin_.active_of.size(); ++k) {
+      const Active& a = active_[k];
+      addPrior(lin_, s, lin_.active_of[k], features_.candidates[static_cast<std::size_t>(a.candidate)].prior,
+               a.prior_weight, a.theta, penalty);
+    }
+    return penalty;
+  }
   static constexpr double kFoldHurt = 0.01;  // a fold's CV error may rise by 1 % at most
 
   // The joint angles the fitted rows visited, and how far each held-out campaign goes beyond them.
@@ -665,20 +748,47 @@ private:
       Fit fit;
       double dbic;
       int added;
+      double prior_weight;
     };
     std::vector<Passing> passing;
     for (std::size_t c = 0; c < features_.candidates.size(); ++c) {
       if (!offered_[c] || lin_.candidate_columns[c].empty()) continue;
+      const DiscoveryCandidate& candidate = features_.candidates[c];
       std::vector<int> s = current_;
       s.insert(s.end(), lin_.candidate_columns[c].begin(), lin_.candidate_columns[c].end());
-      Fit fit = fitColumns(lin_, s, false);
+      // A candidate with a prior is fitted at each of its weights; cross-validation on the fitted data
+      // picks the weight (the best one that transfers, else the best one).
+      const std::vector<int> own(lin_.candidate_columns[c].begin(),
+                                 lin_.candidate_columns[c].begin() + candidate.coefficients(prior_.robot().dof()));
+      Fit fit;
+      double weight = 0.0;
+      bool gains = false;
+      std::string hurt;
+      bool have = false;
+      for (const double w : candidate.prior.size() > 0 ? priorWeights() : std::vector<double>{0.0}) {
+        Penalty penalty = activePenalty(s);
+        addPrior(lin_, s, own, candidate.prior, w, Eigen::VectorXd(), penalty);
+        Fit trial = fitColumns(lin_, s, false, penalty);
+        const int trial_added = trial.rank - base_fit_.rank;
+        if (trial_added <= 0 || trial.rss <= 0.0 || base_fit_.rss <= 0.0) continue;
+        const double trial_dbic = residuals_ * std::log(trial.rss / base_fit_.rss) + trial_added * log_n + penalty_m;
+        const bool trial_gains = trial.cv < base_fit_.cv * (1.0 - options_.min_cv_gain) && trial_dbic < 0.0;
+        const std::string trial_hurt = trial_gains ? hurtFold(trial) : std::string();
+        const bool passes = trial_gains && trial_hurt.empty();
+        const bool passed = gains && hurt.empty();
+        if (!have || (passes && !passed) || (passes == passed && transferError(trial) < transferError(fit))) {
+          fit = trial;
+          weight = w;
+          gains = trial_gains;
+          hurt = trial_hurt;
+          have = true;
+        }
+      }
+      if (!have) continue;
       const int added = fit.rank - base_fit_.rank;
-      if (added <= 0 || fit.rss <= 0.0 || base_fit_.rss <= 0.0) continue;
       const double dbic = residuals_ * std::log(fit.rss / base_fit_.rss) + added * log_n + penalty_m;
-      const bool gains = fit.cv < base_fit_.cv * (1.0 - options_.min_cv_gain) && dbic < 0.0;
-      const std::string hurt = gains ? hurtFold(fit) : std::string();
       if (gains && hurt.empty()) {
-        passing.push_back({static_cast<int>(c), fit, dbic, added});
+        passing.push_back({static_cast<int>(c), fit, dbic, added, weight});
         continue;
       }
       if (gains && fit.cv < rejected_cv) {
@@ -702,6 +812,7 @@ private:
     if (!chosen) return choice;
     choice.index = chosen->index;
     choice.fit = chosen->fit;
+    choice.prior_weight = chosen->prior_weight;
     choice.dbic = chosen->dbic;
     for (const Passing& p : passing) {
       if (&p != chosen && p.fit.cv < runner_cv) {
@@ -761,7 +872,8 @@ private:
       for (int k = 0; k < a.theta.size(); ++k, ++pos)
         a.theta[k] += choice.fit.d[static_cast<int>(pos)] / lin_.scale[s[pos]];
     }
-    Active fresh{choice.index, Eigen::VectorXd::Zero(coefficients), Eigen::VectorXd::Zero(coefficients)};
+    Active fresh{choice.index, Eigen::VectorXd::Zero(coefficients), Eigen::VectorXd::Zero(coefficients),
+                 choice.prior_weight};
     for (int k = 0; k < coefficients; ++k, ++pos)
       fresh.theta[k] = choice.fit.d[static_cast<int>(pos)] / lin_.scale[s[pos]];
     active_.push_back(fresh);
@@ -778,7 +890,7 @@ private:
       lin_ = linearise(model_, campaign_, cal_, features_, active_, none, options_.folds, false);
       std::vector<int> s = lin_.base_columns;
       s.insert(s.end(), lin_.active_columns.begin(), lin_.active_columns.end());
-      const Fit fit = fitColumns(lin_, s, false);
+      const Fit fit = fitColumns(lin_, s, false, activePenalty(s));
       std::size_t pos = lin_.base_columns.size();
       for (Active& a : active_) {
         for (int k = 0; k < a.theta.size(); ++k, ++pos) a.theta[k] += fit.d[static_cast<int>(pos)] / lin_.scale[s[pos]];
@@ -789,7 +901,7 @@ private:
     lin_ = linearise(model_, campaign_, cal_, features_, active_, offered_, options_.folds, false);
     current_ = lin_.base_columns;
     current_.insert(current_.end(), lin_.active_columns.begin(), lin_.active_columns.end());
-    base_fit_ = fitColumns(lin_, current_, true);
+    base_fit_ = fitColumns(lin_, current_, true, activePenalty(current_));
     // Uncertainties of the effects' parameters: sigma^2 (X^T X)^-1, unscaled.
     const double sigma2 = base_fit_.rss / std::max(1, residuals_ - base_fit_.rank);
     std::size_t pos = lin_.base_columns.size();
@@ -835,6 +947,7 @@ private:
     record.cycles = chosen.cycles;
     record.detail = chosen.detail;
     record.report_fields = chosen.report_fields;
+    if (chosen.prior.size() > 0) record.report_fields["prior_weight"] = choice.prior_weight;
     record.cv_rms_before = std::sqrt(base_fit_.cv / residuals_);
     record.cv_rms_after = std::sqrt(choice.fit.cv / residuals_);
     record.delta_bic = choice.dbic;
@@ -910,6 +1023,10 @@ private:
 DiscoveryResult discoverEffects(const JointErrorModel& prior, const std::vector<MeasurementCampaign>& fitted,
                                 const std::vector<MeasurementCampaign>& heldout, const DiscoveryOptions& options) {
   if (options.folds < 2) throw InvalidArgument("discover: folds must be at least 2");
+  if (!std::isfinite(options.max_prior_weight) || options.max_prior_weight < 0.0) {
+    throw InvalidArgument("discover: max_prior_weight is " + std::to_string(options.max_prior_weight) +
+                          "; it must be finite and >= 0 (0: no prior)");
+  }
   return DiscoveryRun(prior, fitted, heldout, options).run();
 }
 

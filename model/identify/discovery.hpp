@@ -49,11 +49,14 @@ struct DiscoveryOptions {
   int folds = 5;
   int max_steps = 8;
   int max_harmonic_order = 4;
-  double min_cv_gain = 0.02;                 // relative drop of the CV error a candidate must bring
-  double noise_floor = 0.0;                  // m, 3-D RMS; 0: sqrt(3) times the campaigns' position_noise
-  int refit_iterations = 2;                  // joint refits after each accepted step
-  double velocity_scale = 1e-3;              // rad/s, backlash smooth sign
-  std::vector<std::string> types;            // candidate types to try; empty: all
+  double min_cv_gain = 0.02;       // relative drop of the CV error a candidate must bring
+  double noise_floor = 0.0;        // m, 3-D RMS; 0: sqrt(3) times the campaigns' position_noise
+  int refit_iterations = 2;        // joint refits after each accepted step
+  double velocity_scale = 1e-3;    // rad/s, backlash smooth sign
+  std::vector<std::string> types;  // candidate types to try; empty: all
+  // The largest weight of a candidate's prior (a periodic table's roughness), relative to the data of one
+  // column; cross-validation on the fitted data chooses among 0 and five decades up to it. 0: no prior.
+  double max_prior_weight = 10.0;
   const EffectRegistry* registry = nullptr;  // whose discovery families compete; null: the built-in one
 };
 

@@ -89,6 +89,16 @@ for r in rows:
     assert abs(norm - float(r["after_mm"])) < 1e-6 * max(1.0, norm), r
 PY
 test -s "$work/calibrate/rx170_calibrated.urdf" || fail "calibrate wrote no URDF"
+# The URDF's note says what the parameter file holds of the compliance, as report.json does.
+"$python" - "$work/calibrate/rx170_calibrated.urdf" "$work/calibrate/report.json" <<'PY'
+import json, sys
+note = open(sys.argv[1]).read()
+left_out = json.load(open(sys.argv[2]))["compliance_left_out"]
+if left_out:
+    assert "all joints but %d, which it writes as rigid" % len(left_out) in note, note[:400]
+else:
+    assert "joint offsets and compliance are in the parameter file" in note, note[:400]
+PY
 # Each identified parameter's value is printed in the unit its name says, then in the unit people read:
 # target.z_m 0.15 m = 150 mm, not "target.z_m 150 mm".
 "$python" - "$work/calibrate/summary.txt" "$work/calibrate/report.json" <<'PY'

@@ -65,8 +65,10 @@ TEST(DiscoveryIpaUr10, NeverMakesTheHeldOutSeriesWorse) {
   EXPECT_LT(r.initial.heldout[0].rms, 0.47e-3);
   for (const DiscoveryStep& s : r.steps) EXPECT_LE(s.after.heldout[0].rms, r.initial.heldout[0].rms * 1.005);
   EXPECT_LE(r.final_state.heldout[0].rms, r.initial.heldout[0].rms * 1.005);
-  // What was rejected is named with the part of the data it hurt.
-  EXPECT_THAT(r.rejected_at_stop, ::testing::HasSubstr("on joint-space part"));
+  // What was rejected is named with the part of the data it hurt (with the tables' smoothness prior the
+  // best rejected one, joint 2's table, hurts a time block by a few per cent; without it a joint-space part
+  // by half).
+  EXPECT_THAT(r.rejected_at_stop, ::testing::ContainsRegex("on (time block|joint-space part) [0-9]+ of [0-9]+"));
   // Series B reaches its goals with several joint configurations, many of them never visited by A's grid.
   ASSERT_EQ(r.heldout_coverage.size(), 1u);
   EXPECT_TRUE(r.heldout_coverage[0].flagged);
