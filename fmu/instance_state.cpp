@@ -37,7 +37,7 @@ namespace {
 // ---- serialisation -----------------------------------------------------------------------------
 
 constexpr char kMagic[8] = {'J', 'C', 'F', 'M', 'U', 'S', 'T', 'A'};
-constexpr std::uint32_t kStateFormat = 2;  // 2: with the reference source (demo move)
+constexpr std::uint32_t kStateFormat = 3;  // 2: with the reference source (demo move); 3: the reference's blend
 
 std::uint64_t fnv1a(const unsigned char* bytes, std::size_t size) {
   std::uint64_t hash = 1469598103934665603ULL;
@@ -131,6 +131,12 @@ void writeState(const InstanceState& s, Writer& w) {
     w.put(p.feedforward);
     w.put(p.feedforward_rate);
     w.put(p.reference_time);
+    w.put(p.blend_offset);
+    w.put(p.blend_offset_velocity);
+    w.put(p.blend_offset_acceleration);
+    w.put(p.feedforward_offset);
+    w.put(p.feedforward_offset_rate);
+    w.put(p.blend_duration);
     for (int k = 0; k < 6; ++k) w.put(p.tool_wrench[k]);
     w.put(p.payload_mass);
     for (int k = 0; k < 3; ++k) w.put(p.payload_com[k]);
@@ -208,6 +214,13 @@ InstanceState deserializeState(const unsigned char bytes[], std::size_t size) {
     r.vector(p.feedforward, n, "the plant's feed-forward");
     r.vector(p.feedforward_rate, n, "the plant's feed-forward rate");
     p.reference_time = r.finite("the plant's reference time");
+    r.vector(p.blend_offset, n, "the plant's reference blend offset");
+    r.vector(p.blend_offset_velocity, n, "the plant's reference blend offset velocity");
+    r.vector(p.blend_offset_acceleration, n, "the plant's reference blend offset acceleration");
+    r.vector(p.feedforward_offset, n, "the plant's feed-forward blend offset");
+    r.vector(p.feedforward_offset_rate, n, "the plant's feed-forward blend offset rate");
+    p.blend_duration = r.finite("the plant's reference blend duration");
+    if (p.blend_duration < 0.0) throw Error("the plant's reference blend duration is negative");
     for (int k = 0; k < 6; ++k) p.tool_wrench[k] = r.finite("the plant's tool wrench");
     p.payload_mass = r.finite("the plant's payload mass");
     for (int k = 0; k < 3; ++k) p.payload_com[k] = r.finite("the plant's payload centre");
