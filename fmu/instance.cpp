@@ -293,7 +293,19 @@ Status Instance::ensureReference(const char* function) {
   } else if (state_.values[role::use_velocity_inputs] != 0.0) {
     velocity = gather(state_.values, role::qd_desired);
   } else if (state_.has_last_step && state_.time > state_.last_step_time) {
-    velocity = (q - state_.last_q_desired) / (state_.time - state_.last_step_time);
+    const double last = state_.time - state_.last_step_time;
+    if (state_.has_earlier_step && state_.last_step_time > state_.earlier_step_time) {
+      // The slope now of the parabola through the last three communication points: the extrapolation
+      // then misses the next input by the path's third-order term, where the difference quotient (the
+      // velocity half a step ago) misses it by its second-order one; at 10 ms steps the plant's CVODE
+      // took about 1.5 times fewer steps on the spiral (bench/fmu_bench).
+      const double earlier = state_.last_step_time - state_.earlier_step_time;
+      const double both = last + earlier;
+      velocity = q * ((2.0 * last + earlier) / (last * both)) - state_.last_q_desired * (both / (last * earlier)) +
+                 state_.earlier_q_desired * (last / (earlier * both));
+    } else {
+      velocity = (q - state_.last_q_desired) / last;
+    }
   }
   planned_ = q;
   if (m.compensator_mode == 0) {
@@ -330,6 +342,7 @@ void Instance::ensureInitialized() {
   if (state_.initialized) return;
   state_.time = state_.start_time;
   state_.has_last_step = false;
+  state_.has_earlier_step = false;
   const double source = state_.values[role::reference];
   state_.demo = source == kReferenceDemo || (source == kReferenceAuto && !state_.desired_inputs_set);
   reference_valid_ = false;
@@ -437,6 +450,7 @@ Status Instance::exitInitializationMode(const char* function) {
     return fail(Status::Error, function, std::string("cannot initialise: ") + error.what());
   }
   state_.has_last_step = false;
+  state_.has_earlier_step = false;
   state_.phase = kStepMode;
   return Status::OK;
 }
@@ -505,6 +519,9 @@ Status Instance::doStep(const char* function, double current_time, double step, 
   } catch (const PlantLimitError& error) {
     return discard(error.what());
   }
+  state_.has_earlier_step = state_.has_last_step;
+  state_.earlier_q_desired = state_.last_q_desired;
+  state_.earlier_step_time = state_.last_step_time;
   state_.has_last_step = true;
   state_.last_q_desired = gather(state_.values, role::q_desired);
   state_.last_step_time = state_.time;
@@ -734,6 +751,7 @@ Status Instance::getState(const char* function, Snapshot** state) {
   s = state_;
   if (s.initialized) s.plant = models_->plant->saveState();
   if (!s.has_last_step) s.last_q_desired = JointVector::Zero(table::kDof);  // not used: written as zeros
+  if (!s.has_earlier_step) s.earlier_q_desired = JointVector::Zero(table::kDof);
   *state = target;
   return Status::OK;
 }

@@ -37,7 +37,8 @@ namespace {
 // ---- serialisation -----------------------------------------------------------------------------
 
 constexpr char kMagic[8] = {'J', 'C', 'F', 'M', 'U', 'S', 'T', 'A'};
-constexpr std::uint32_t kStateFormat = 3;  // 2: with the reference source (demo move); 3: the reference's blend
+// 2: with the reference source (demo move); 3: the plant's reference blend and the step before the last
+constexpr std::uint32_t kStateFormat = 3;
 
 std::uint64_t fnv1a(const unsigned char* bytes, std::size_t size) {
   std::uint64_t hash = 1469598103934665603ULL;
@@ -144,6 +145,9 @@ void writeState(const InstanceState& s, Writer& w) {
   w.put(static_cast<std::uint8_t>(s.has_last_step));
   w.put(s.last_q_desired);
   w.put(s.last_step_time);
+  w.put(static_cast<std::uint8_t>(s.has_earlier_step));
+  w.put(s.earlier_q_desired);
+  w.put(s.earlier_step_time);
   for (int k = 0; k < 6; ++k) w.put(s.applied_wrench[k]);
   w.put(static_cast<std::uint8_t>(s.desired_inputs_set));
   w.put(static_cast<std::uint8_t>(s.demo));
@@ -228,6 +232,9 @@ InstanceState deserializeState(const unsigned char bytes[], std::size_t size) {
   s->has_last_step = r.flag("the last-step flag");
   r.vector(s->last_q_desired, table::kDof, "the last desired positions");
   s->last_step_time = r.finite("the last step time");
+  s->has_earlier_step = r.flag("the earlier-step flag");
+  r.vector(s->earlier_q_desired, table::kDof, "the earlier desired positions");
+  s->earlier_step_time = r.finite("the earlier step time");
   for (int k = 0; k < 6; ++k) s->applied_wrench[k] = r.finite("the applied wrench");
   s->desired_inputs_set = r.flag("the desired-inputs flag");
   s->demo = r.flag("the demo flag");

@@ -36,6 +36,9 @@ struct InstanceState {
   bool has_last_step = false;  // a step was done since initialisation: the velocity can be estimated
   JointVector last_q_desired;  // q_desired and time of that step
   double last_step_time = 0.0;
+  bool has_earlier_step = false;  // and a step before that one: the velocity is estimated to second order
+  JointVector earlier_q_desired;  // q_desired and time of that earlier step
+  double earlier_step_time = 0.0;
   Vector6 applied_wrench = Vector6::Zero();  // what the plant was last given
   bool desired_inputs_set = false;           // the master set a q_desired or qd_desired input since instantiation
   bool demo = false;                         // the robot follows the built-in demo move (decided at initialisation)
