@@ -5,6 +5,7 @@
 #include <cstdarg>
 #include <cstdio>
 #include <cstring>
+#include <vector>
 
 #include "fmu/demo_move.hpp"
 #include "fmu/integrator_options.hpp"
@@ -548,11 +549,16 @@ Status Instance::reset(const char*) {
 // Values.
 
 int Instance::indexOf(std::uint32_t vr) {
-  const table::Variable* begin = kVariables;
-  const table::Variable* end = kVariables + table::kCount;
-  const table::Variable* found =
-      std::lower_bound(begin, end, vr, [](const table::Variable& v, std::uint32_t key) { return v.vr < key; });
-  return found != end && found->vr == vr ? static_cast<int>(found - begin) : -1;
+  // Every get and set looks its value references up (twice): a table by value reference, built once,
+  // instead of a binary search (1.7 % of a 1 ms step's instructions through the FMU).
+  static const std::vector<int> index_by_vr = [] {
+    std::uint32_t largest = 0;
+    for (int i = 0; i < table::kCount; ++i) largest = std::max(largest, kVariables[i].vr);
+    std::vector<int> table(static_cast<std::size_t>(largest) + 1, -1);
+    for (int i = 0; i < table::kCount; ++i) table[kVariables[i].vr] = i;
+    return table;
+  }();
+  return vr < index_by_vr.size() ? index_by_vr[vr] : -1;
 }
 
 Status Instance::checkValue(const char* function, int index, double value) {
