@@ -35,10 +35,15 @@ struct StructuredLinearSolver {
 
   int n = 0;
   Reduced reduced;
+  // The rows of qd and pd in I - gamma J, in the columns of q, p and z, read once per setup: every Newton
+  // iteration's solve needs them.
+  using Coupling = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::ColMajor, 2 * kMaxJoints, kMaxJoints>;
+  Coupling by_position, by_motor, by_integral;
   Eigen::PartialPivLU<Reduced> lu;
   ReducedVector rhs, solution;
   const double* jacobian = nullptr;  // of the last setup, column-major, 5n x 5n; CVODE keeps it unchanged
   double gamma = 0.0;                // until the next setup
+  bool layout_checked = false;       // for this Jacobian (the layout does not depend on gamma)
   // Per joint: q = b_q + position_gain qd, p = b_p + motor_gain pd, and the integral row
   // integral_by_p p + integral_by_pd pd + integral_self z = b_z, so z = (b_z - integral_by_p b_p) / integral_self
   // + integral_by_pd_reduced pd.
@@ -49,6 +54,9 @@ struct StructuredLinearSolver {
   explicit StructuredLinearSolver(int dof)
       : n(dof),
         reduced(2 * dof, 2 * dof),
+        by_position(2 * dof, dof),
+        by_motor(2 * dof, dof),
+        by_integral(2 * dof, dof),
         lu(2 * dof),
         rhs(2 * dof),
         solution(2 * dof),
@@ -72,7 +80,7 @@ struct StructuredLinearSolver {
     const int size = 5 * n;
     for (int k = 0; k < n; ++k) {
       const int q = k, qd = n + k, p = 2 * n + k, pd = 3 * n + k, z = 4 * n + k;
-      for (int c = 0; c < size; ++c) {
+      for (int c = 0; c < size && !layout_checked; ++c) {
         const bool q_row_ok = c == qd || at(q, c) == (c == q ? 1.0 : 0.0);
         const bool p_row_ok = c == pd || at(p, c) == (c == p ? 1.0 : 0.0);
         const bool z_row_ok = c == p || c == pd || c == z || at(z, c) == 0.0;
@@ -86,12 +94,16 @@ struct StructuredLinearSolver {
       if (integral_self[k] == 0.0) return last_flag = SUNLS_LUFACT_FAIL;
       integral_by_pd_reduced[k] = -(integral_by_p[k] * motor_gain[k] + integral_by_pd[k]) / integral_self[k];
     }
+    layout_checked = true;
     for (int i = 0; i < 2 * n; ++i) {
       const int row = i < n ? n + i : 2 * n + i;  // the rows of qd, then those of pd
       for (int k = 0; k < n; ++k) {
-        reduced(i, k) = at(row, n + k) + at(row, k) * position_gain[k];
+        by_position(i, k) = at(row, k);
+        by_motor(i, k) = at(row, 2 * n + k);
+        by_integral(i, k) = at(row, 4 * n + k);
+        reduced(i, k) = at(row, n + k) + by_position(i, k) * position_gain[k];
         reduced(i, n + k) =
-            at(row, 3 * n + k) + at(row, 2 * n + k) * motor_gain[k] + at(row, 4 * n + k) * integral_by_pd_reduced[k];
+            at(row, 3 * n + k) + by_motor(i, k) * motor_gain[k] + by_integral(i, k) * integral_by_pd_reduced[k];
       }
     }
     lu.compute(reduced);
@@ -110,7 +122,7 @@ struct StructuredLinearSolver {
       const int row = i < n ? n + i : 2 * n + i;
       double value = b[row];
       for (int k = 0; k < n; ++k) {
-        value -= at(row, k) * b[k] + at(row, 2 * n + k) * b[2 * n + k] + at(row, 4 * n + k) * integral_offset[k];
+        value -= by_position(i, k) * b[k] + by_motor(i, k) * b[2 * n + k] + by_integral(i, k) * integral_offset[k];
       }
       rhs[i] = value;
     }
@@ -850,6 +862,7 @@ int FlexibleJointPlant::prepareNewtonSystem(double t, const double* y, bool jaco
     }
     ++s.jacobian_evaluations;
     *jacobian_current = SUNTRUE;
+    s.structured->layout_checked = false;
   }
   s.structured->jacobian = s.saved_jacobian.data();
   s.structured->gamma = gamma;
