@@ -8,6 +8,9 @@
 //                                experiment CVODE's steps, rhs_evaluations (those of its difference-quotient
 //                                Jacobians included), jacobian_rhs (those alone), jacobian_evaluations,
 //                                newton_iterations and lu_setups (factorisations of I - gamma J).
+//   BM_Ours_PlantSpiralSimulation  the simulation alone on CPU time (the three runs replayed from the
+//                                references of one experiment); real_time_factor_cpu: motion seconds
+//                                simulated per CPU second. Issue 17's target: at least 1000.
 //   BM_Ours_PlantSpiral/1, /0    the same with SUNDIALS' dense LU instead of the structured Newton solver
 //                                (/1), and also with CVODE's difference-quotient Jacobians (/0: the plant
 //                                before issue 17); compare them in one run, e.g. with
@@ -44,6 +47,7 @@
 #include <kdl_parser/kdl_parser.hpp>
 
 #include "bench/support/allocation_counting.hpp"
+#include "model/effects/perturbation.hpp"
 #include "model/experiment/spiral_experiment.hpp"
 #include "model/io/parameter_file.hpp"
 #include "model/plant/flexible_joint_plant.hpp"
@@ -194,6 +198,41 @@ void BM_Ours_PlantSpiral(benchmark::State& state) {
   state.counters["rhs_per_motion_s"] = static_cast<double>(total.rhs_evaluations) / motion;
 }
 BENCHMARK(BM_Ours_PlantSpiral)->Arg(0)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(3);
+
+// The simulation alone, on CPU time: the three runs' references of one experiment (computed before timing)
+// replayed on a plant of the experiment's truth, as runSpiralExperiment drives it. Before timing, the
+// replay must reproduce the experiment's link positions bit for bit (exit 2 otherwise).
+void BM_Ours_PlantSpiralSimulation(benchmark::State& state) {
+  Fixture& f = fixture();
+  SpiralExperimentSpec spec;
+  spec.drives = f.drives;
+  static const SpiralExperimentResult experiment = runSpiralExperiment(*f.model, spec);
+  const JointErrorModel truth = perturbedModel(*f.model, spec.truth);
+  FlexibleJointPlant plant(truth, f.drives, spec.plant);
+  const JointTrajectory& planned = experiment.planned;
+  const std::size_t count = planned.size();
+  auto replay = [&](int r, bool compare) {
+    const SpiralRun& run = experiment.runs[r];
+    plant.reset(run.reference[0], planned.time[0]);
+    for (std::size_t k = 0; k < count; ++k) {
+      plant.setReference(run.reference[k], planned.qd[k]);
+      if (compare && plant.linkPositions() != run.actual[k]) {
+        fail("the replay of run " + std::to_string(r) + " differs from the experiment at sample " + std::to_string(k));
+      }
+      if (k + 1 < count) plant.advance(planned.time[k + 1]);
+    }
+  };
+  for (int r = 0; r < 3; ++r) replay(r, true);
+  double motion = 0.0;
+  for (auto _ : state) {
+    for (int r = 0; r < 3; ++r) replay(r, false);
+    benchmark::DoNotOptimize(plant.state());
+    motion += 3.0 * (planned.time.back() - planned.time.front());
+  }
+  // Motion seconds per CPU second (a rate over the benchmark's CPU time).
+  state.counters["real_time_factor_cpu"] = benchmark::Counter(motion, benchmark::Counter::kIsRate);
+}
+BENCHMARK(BM_Ours_PlantSpiralSimulation)->Unit(benchmark::kMillisecond)->MinTime(2.0);
 
 // ---------------------------------------------------------------------------------------------------
 // One right-hand side against forward dynamics.

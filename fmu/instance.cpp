@@ -5,6 +5,7 @@
 #include <cstdarg>
 #include <cstdio>
 #include <cstring>
+#include <vector>
 
 #include "fmu/demo_move.hpp"
 #include "fmu/integrator_options.hpp"
@@ -311,11 +312,25 @@ Status Instance::ensureReference(const char* function) {
     velocity = gather(state_.values, role::qd_desired);
     acceleration = gather(state_.values, role::qdd_desired);
   } else if (estimated) {
-    velocity = (q - state_.last_q_desired) / (state_.time - state_.last_step_time);
-    acceleration = (velocity - state_.last_velocity) / (state_.time - state_.last_step_time);
+    const double last = state_.time - state_.last_step_time;
+    if (state_.has_earlier_step && state_.last_step_time > state_.earlier_step_time) {
+      // The slope now of the parabola through the last three communication points: the extrapolation
+      // then misses the next input by the path's third-order term, where the difference quotient (the
+      // velocity half a step ago) misses it by its second-order one; at 10 ms steps the plant's CVODE
+      // took about 1.5 times fewer steps on the spiral (bench/fmu_bench). Its curvature is the
+      // acceleration the dynamic mode needs.
+      const double earlier = state_.last_step_time - state_.earlier_step_time;
+      const double both = last + earlier;
+      velocity = q * ((2.0 * last + earlier) / (last * both)) - state_.last_q_desired * (both / (last * earlier)) +
+                 state_.earlier_q_desired * (last / (earlier * both));
+      acceleration =
+          ((q - state_.last_q_desired) / last - (state_.last_q_desired - state_.earlier_q_desired) / earlier) *
+          (2.0 / both);
+    } else {
+      velocity = (q - state_.last_q_desired) / last;
+    }
   }
   planned_ = q;
-  planned_velocity_ = velocity;
   const auto refused = [&](const char* what) {
     char text[400];
     std::snprintf(text, sizeof text, "at t = %.9g s: %s", state_.time, what);
@@ -363,6 +378,7 @@ void Instance::ensureInitialized() {
   if (state_.initialized) return;
   state_.time = state_.start_time;
   state_.has_last_step = false;
+  state_.has_earlier_step = false;
   const double source = state_.values[role::reference];
   state_.demo = source == kReferenceDemo || (source == kReferenceAuto && !state_.desired_inputs_set);
   reference_valid_ = false;
@@ -470,6 +486,7 @@ Status Instance::exitInitializationMode(const char* function) {
     return fail(Status::Error, function, std::string("cannot initialise: ") + error.what());
   }
   state_.has_last_step = false;
+  state_.has_earlier_step = false;
   state_.phase = kStepMode;
   return Status::OK;
 }
@@ -538,9 +555,11 @@ Status Instance::doStep(const char* function, double current_time, double step, 
   } catch (const PlantLimitError& error) {
     return discard(error.what());
   }
+  state_.has_earlier_step = state_.has_last_step;
+  state_.earlier_q_desired = state_.last_q_desired;
+  state_.earlier_step_time = state_.last_step_time;
   state_.has_last_step = true;
   state_.last_q_desired = gather(state_.values, role::q_desired);
-  state_.last_velocity = planned_velocity_;
   if (m.compensator_mode == kCompensationDynamic) state_.dynamic = dynamic_after_;  // this step's sample is done
   state_.last_step_time = state_.time;
   state_.time = end;
@@ -566,11 +585,16 @@ Status Instance::reset(const char*) {
 // Values.
 
 int Instance::indexOf(std::uint32_t vr) {
-  const table::Variable* begin = kVariables;
-  const table::Variable* end = kVariables + table::kCount;
-  const table::Variable* found =
-      std::lower_bound(begin, end, vr, [](const table::Variable& v, std::uint32_t key) { return v.vr < key; });
-  return found != end && found->vr == vr ? static_cast<int>(found - begin) : -1;
+  // Every get and set looks its value references up (twice): a table by value reference, built once,
+  // instead of a binary search (1.7 % of a 1 ms step's instructions through the FMU).
+  static const std::vector<int> index_by_vr = [] {
+    std::uint32_t largest = 0;
+    for (int i = 0; i < table::kCount; ++i) largest = std::max(largest, kVariables[i].vr);
+    std::vector<int> table(static_cast<std::size_t>(largest) + 1, -1);
+    for (int i = 0; i < table::kCount; ++i) table[kVariables[i].vr] = i;
+    return table;
+  }();
+  return vr < index_by_vr.size() ? index_by_vr[vr] : -1;
 }
 
 Status Instance::checkValue(const char* function, int index, double value) {
@@ -771,6 +795,7 @@ Status Instance::getState(const char* function, Snapshot** state) {
   s = state_;
   if (s.initialized) s.plant = models_->plant->saveState();
   if (!s.has_last_step) s.last_q_desired = JointVector::Zero(table::kDof);  // not used: written as zeros
+  if (!s.has_earlier_step) s.earlier_q_desired = JointVector::Zero(table::kDof);
   *state = target;
   return Status::OK;
 }

@@ -7,8 +7,8 @@
 // What one communication step does (the C++ sequence a test can replay on FlexibleJointPlant and
 // Compensator directly, bit for bit):
 //   at time t (the importer's currentCommunicationPoint) with inputs q_desired, qd_desired, tool_wrench:
-//   1. v = qd_desired if use_velocity_inputs, else (q_desired - q_desired of the previous step) / (t - t of
-//      the previous step), and 0 on the first step after initialisation;
+//   1. v = qd_desired if use_velocity_inputs, else the slope at t of the parabola through q_desired at the
+//      last three communication points (after the first step the change over that step; 0 on the first);
 //   2. Q_ref = q_desired when compensation is none, else Compensator(nominal, mask).compensate() with
 //      ctx.q = q_desired, ctx.velocity = v, ctx.time = t, ctx.tool_wrench = tool_wrench if
 //      compensate_wrench else 0; mask = nominal.loadsAnd({"compliance"}) (mode 1, the paper's stiffness
@@ -16,7 +16,8 @@
 //      compliance and transmission error for the shipped RX170, and what discovery added to a file);
 //      compensation = dynamic (3): OnlineDynamicCompensator(nominal, drives).compensate() from the state
 //      after the previous steps' samples, with q_desired, v and a = qdd_desired if use_velocity_inputs, else
-//      (v - v of the previous step) / (t - t of the previous step), 0 on the first step; it gives Q_ref and
+//      the second derivative of the parabola through q_desired at the last three communication points (0
+//      before there are three); it gives Q_ref and
 //      its velocity, which replaces v below; its state moves on only when the step succeeds;
 //   3. plant.setToolWrench(tool_wrench) if it differs from the wrench last applied;
 //   4. plant.setReference(Q_ref, v); plant.advance(t + h).
@@ -154,7 +155,6 @@ private:
   JointVector reference_;             // Q_ref for the current inputs
   JointVector reference_velocity_;    // v for the current inputs
   JointVector planned_;               // Q_theo: the q_desired inputs, or the demo move
-  JointVector planned_velocity_;      // its velocity: the qd_desired inputs, an estimate, or the demo's
   OnlineDynamicState dynamic_after_;  // compensation = dynamic: the filter with the current sample
 
   std::vector<std::unique_ptr<Snapshot>> states_;

@@ -30,7 +30,6 @@ InstanceState InstanceState::atStart() {
   state.values.assign(table::kCount, 0.0);
   for (int i = 0; i < table::kCount; ++i) state.values[i] = kVariables[i].start;
   state.last_q_desired.setZero(table::kDof);
-  state.last_velocity.setZero(table::kDof);
   OnlineDynamicState& d = state.dynamic;
   for (JointVector* v : {&d.correction, &d.demand_at_start, &d.demand, &d.delta, &d.integral}) v->setZero(table::kDof);
   return state;
@@ -41,7 +40,9 @@ namespace {
 // ---- serialisation -----------------------------------------------------------------------------
 
 constexpr char kMagic[8] = {'J', 'C', 'F', 'M', 'U', 'S', 'T', 'A'};
-constexpr std::uint32_t kStateFormat = 3;  // 2: with the reference source (demo move); 3: the dynamic mode
+// 2: with the reference source (demo move); 3: the plant's reference blend, the step before the last and
+// the dynamic mode's drive filter
+constexpr std::uint32_t kStateFormat = 3;
 
 std::uint64_t fnv1a(const unsigned char* bytes, std::size_t size) {
   std::uint64_t hash = 1469598103934665603ULL;
@@ -135,6 +136,12 @@ void writeState(const InstanceState& s, Writer& w) {
     w.put(p.feedforward);
     w.put(p.feedforward_rate);
     w.put(p.reference_time);
+    w.put(p.blend_offset);
+    w.put(p.blend_offset_velocity);
+    w.put(p.blend_offset_acceleration);
+    w.put(p.feedforward_offset);
+    w.put(p.feedforward_offset_rate);
+    w.put(p.blend_duration);
     for (int k = 0; k < 6; ++k) w.put(p.tool_wrench[k]);
     w.put(p.payload_mass);
     for (int k = 0; k < 3; ++k) w.put(p.payload_com[k]);
@@ -142,7 +149,9 @@ void writeState(const InstanceState& s, Writer& w) {
   w.put(static_cast<std::uint8_t>(s.has_last_step));
   w.put(s.last_q_desired);
   w.put(s.last_step_time);
-  w.put(s.last_velocity);
+  w.put(static_cast<std::uint8_t>(s.has_earlier_step));
+  w.put(s.earlier_q_desired);
+  w.put(s.earlier_step_time);
   w.put(static_cast<std::uint8_t>(s.dynamic.started));
   w.put(s.dynamic.time);
   for (const JointVector* v :
@@ -218,6 +227,13 @@ InstanceState deserializeState(const unsigned char bytes[], std::size_t size) {
     r.vector(p.feedforward, n, "the plant's feed-forward");
     r.vector(p.feedforward_rate, n, "the plant's feed-forward rate");
     p.reference_time = r.finite("the plant's reference time");
+    r.vector(p.blend_offset, n, "the plant's reference blend offset");
+    r.vector(p.blend_offset_velocity, n, "the plant's reference blend offset velocity");
+    r.vector(p.blend_offset_acceleration, n, "the plant's reference blend offset acceleration");
+    r.vector(p.feedforward_offset, n, "the plant's feed-forward blend offset");
+    r.vector(p.feedforward_offset_rate, n, "the plant's feed-forward blend offset rate");
+    p.blend_duration = r.finite("the plant's reference blend duration");
+    if (p.blend_duration < 0.0) throw Error("the plant's reference blend duration is negative");
     for (int k = 0; k < 6; ++k) p.tool_wrench[k] = r.finite("the plant's tool wrench");
     p.payload_mass = r.finite("the plant's payload mass");
     for (int k = 0; k < 3; ++k) p.payload_com[k] = r.finite("the plant's payload centre");
@@ -225,7 +241,9 @@ InstanceState deserializeState(const unsigned char bytes[], std::size_t size) {
   s->has_last_step = r.flag("the last-step flag");
   r.vector(s->last_q_desired, table::kDof, "the last desired positions");
   s->last_step_time = r.finite("the last step time");
-  r.vector(s->last_velocity, table::kDof, "the last desired velocities");
+  s->has_earlier_step = r.flag("the earlier-step flag");
+  r.vector(s->earlier_q_desired, table::kDof, "the earlier desired positions");
+  s->earlier_step_time = r.finite("the earlier step time");
   s->dynamic.started = r.flag("the dynamic compensation's start flag");
   s->dynamic.time = r.finite("the dynamic compensation's time");
   r.vector(s->dynamic.correction, table::kDof, "the dynamic compensation's correction");

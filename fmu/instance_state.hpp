@@ -37,7 +37,9 @@ struct InstanceState {
   bool has_last_step = false;  // a step was done since initialisation: the velocity can be estimated
   JointVector last_q_desired;  // q_desired and time of that step
   double last_step_time = 0.0;
-  JointVector last_velocity;  // the desired velocity of that step (estimates the acceleration when not an input)
+  bool has_earlier_step = false;  // and a step before that one: the velocity is estimated to second order
+  JointVector earlier_q_desired;  // q_desired and time of that earlier step
+  double earlier_step_time = 0.0;
   // compensation = dynamic: the drive inverse filter after the samples of the steps done (not the current one)
   OnlineDynamicState dynamic;
   Vector6 applied_wrench = Vector6::Zero();  // what the plant was last given

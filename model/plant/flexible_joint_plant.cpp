@@ -15,6 +15,7 @@
 #include "model/common/errors.hpp"
 #include "model/effects/compliance.hpp"
 #include "model/effects/spring_balancer.hpp"
+#include "model/plant/plant_vector_operations.hpp"
 #include "model/robot/dynamics.hpp"
 #include "model/robot/kinematics.hpp"
 
@@ -23,8 +24,10 @@ namespace jointcomp {
 // Solves CVODE's Newton systems (I - gamma J) x = b for the plant's layout y = [q, qd, p, pd, z]: the rows
 // of q and p are the identity and -gamma on their own velocity, those of z are diagonal in p, pd and z, so
 // q, p and z are eliminated and a 2n x 2n system in (qd, pd) remains, one 12 x 12 LU for the RX170 instead
-// of 30 x 30 (the Schur complement further onto 6 would save little more). Setup checks that layout and
-// fails unrecoverably on a matrix without it.
+// of 30 x 30 (the Schur complement further onto 6 would save little more). It reads I - gamma J from the
+// Jacobian and gamma (CVODE's linear-system function hands them over) with the arithmetic of SUNDIALS'
+// SUNMatScaleAddI, so it never forms the dense 30 x 30 matrix (Debian's SUNDIALS copies and scales it
+// unoptimised). Setup checks the layout and fails unrecoverably on a matrix without it.
 struct StructuredLinearSolver {
   using Reduced =
       Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::ColMajor, 2 * kMaxJoints, 2 * kMaxJoints>;
@@ -32,8 +35,15 @@ struct StructuredLinearSolver {
 
   int n = 0;
   Reduced reduced;
+  // The rows of qd and pd in I - gamma J, in the columns of q, p and z, read once per setup: every Newton
+  // iteration's solve needs them.
+  using Coupling = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::ColMajor, 2 * kMaxJoints, kMaxJoints>;
+  Coupling by_position, by_motor, by_integral;
   Eigen::PartialPivLU<Reduced> lu;
   ReducedVector rhs, solution;
+  const double* jacobian = nullptr;  // of the last setup, column-major, 5n x 5n; CVODE keeps it unchanged
+  double gamma = 0.0;                // until the next setup
+  bool layout_checked = false;       // for this Jacobian (the layout does not depend on gamma)
   // Per joint: q = b_q + position_gain qd, p = b_p + motor_gain pd, and the integral row
   // integral_by_p p + integral_by_pd pd + integral_self z = b_z, so z = (b_z - integral_by_p b_p) / integral_self
   // + integral_by_pd_reduced pd.
@@ -44,6 +54,9 @@ struct StructuredLinearSolver {
   explicit StructuredLinearSolver(int dof)
       : n(dof),
         reduced(2 * dof, 2 * dof),
+        by_position(2 * dof, dof),
+        by_motor(2 * dof, dof),
+        by_integral(2 * dof, dof),
         lu(2 * dof),
         rhs(2 * dof),
         solution(2 * dof),
@@ -55,12 +68,19 @@ struct StructuredLinearSolver {
         integral_by_pd_reduced(dof),
         integral_offset(dof) {}
 
-  int setup(const double* matrix) {
+  // The entry (row, column) of I - gamma J: -gamma J, plus one on the diagonal, as SUNMatScaleAddI forms it.
+  double at(int row, int column) const {
+    const double scaled = -gamma * jacobian[static_cast<std::size_t>(column) * (5 * n) + row];
+    return row == column ? scaled + 1.0 : scaled;
+  }
+
+  int setup(const double* jacobian_values, double newton_gamma) {
+    jacobian = jacobian_values;
+    gamma = newton_gamma;
     const int size = 5 * n;
-    auto at = [&](int row, int column) { return matrix[static_cast<std::size_t>(column) * size + row]; };
     for (int k = 0; k < n; ++k) {
       const int q = k, qd = n + k, p = 2 * n + k, pd = 3 * n + k, z = 4 * n + k;
-      for (int c = 0; c < size; ++c) {
+      for (int c = 0; c < size && !layout_checked; ++c) {
         const bool q_row_ok = c == qd || at(q, c) == (c == q ? 1.0 : 0.0);
         const bool p_row_ok = c == pd || at(p, c) == (c == p ? 1.0 : 0.0);
         const bool z_row_ok = c == p || c == pd || c == z || at(z, c) == 0.0;
@@ -74,12 +94,16 @@ struct StructuredLinearSolver {
       if (integral_self[k] == 0.0) return last_flag = SUNLS_LUFACT_FAIL;
       integral_by_pd_reduced[k] = -(integral_by_p[k] * motor_gain[k] + integral_by_pd[k]) / integral_self[k];
     }
+    layout_checked = true;
     for (int i = 0; i < 2 * n; ++i) {
       const int row = i < n ? n + i : 2 * n + i;  // the rows of qd, then those of pd
       for (int k = 0; k < n; ++k) {
-        reduced(i, k) = at(row, n + k) + at(row, k) * position_gain[k];
+        by_position(i, k) = at(row, k);
+        by_motor(i, k) = at(row, 2 * n + k);
+        by_integral(i, k) = at(row, 4 * n + k);
+        reduced(i, k) = at(row, n + k) + by_position(i, k) * position_gain[k];
         reduced(i, n + k) =
-            at(row, 3 * n + k) + at(row, 2 * n + k) * motor_gain[k] + at(row, 4 * n + k) * integral_by_pd_reduced[k];
+            at(row, 3 * n + k) + by_motor(i, k) * motor_gain[k] + by_integral(i, k) * integral_by_pd_reduced[k];
       }
     }
     lu.compute(reduced);
@@ -91,16 +115,14 @@ struct StructuredLinearSolver {
   }
 
   // x and b may be the same vector: every value of b is read before x is written where it was.
-  int solve(const double* matrix, double* x, const double* b) {
-    const int size = 5 * n;
-    auto at = [&](int row, int column) { return matrix[static_cast<std::size_t>(column) * size + row]; };
+  int solve(double* x, const double* b) {
     for (int k = 0; k < n; ++k)
       integral_offset[k] = (b[4 * n + k] - integral_by_p[k] * b[2 * n + k]) / integral_self[k];
     for (int i = 0; i < 2 * n; ++i) {
       const int row = i < n ? n + i : 2 * n + i;
       double value = b[row];
       for (int k = 0; k < n; ++k) {
-        value -= at(row, k) * b[k] + at(row, 2 * n + k) * b[2 * n + k] + at(row, 4 * n + k) * integral_offset[k];
+        value -= by_position(i, k) * b[k] + by_motor(i, k) * b[2 * n + k] + by_integral(i, k) * integral_offset[k];
       }
       rhs[i] = value;
     }
@@ -126,6 +148,8 @@ struct FlexibleJointPlant::Solver {
   SUNLinearSolver linear_solver = nullptr;
   void* cvode = nullptr;
   std::unique_ptr<StructuredLinearSolver> structured;  // the content of linear_solver when it is ours
+  std::vector<double> saved_jacobian;                  // the structured solver's Jacobian, kept across setups
+  long jacobian_evaluations = 0;                       // of saved_jacobian (CVODE counts only its own)
   std::string last_error;                              // CVODE's own message for the last failure
   std::string rhs_error;                               // why our right-hand side refused, if it did
   PlantStatistics before_restart;                      // counts of earlier integrator runs (a restart zeroes CVODE's)
@@ -145,6 +169,8 @@ namespace {
 int plantRightHandSide(realtype t, N_Vector y, N_Vector ydot, void* user_data);
 int plantJacobian(realtype t, N_Vector y, N_Vector fy, SUNMatrix jacobian, void* user_data, N_Vector, N_Vector,
                   N_Vector);
+int plantLinearSystem(realtype t, N_Vector y, N_Vector fy, SUNMatrix matrix, booleantype jacobian_ok,
+                      booleantype* jacobian_current, realtype gamma, void* user_data, N_Vector, N_Vector, N_Vector);
 
 // CVODE's name of a return flag. SUNDIALS 6 allocates the name for the caller, who must free it.
 std::string flagName(long flag) {
@@ -172,9 +198,14 @@ SUNLinearSolver newStructuredSolver(StructuredLinearSolver& content, SUNContext 
   solver->ops->gettype = [](SUNLinearSolver) { return SUNLINEARSOLVER_DIRECT; };
   solver->ops->getid = [](SUNLinearSolver) { return SUNLINEARSOLVER_CUSTOM; };
   solver->ops->initialize = [](SUNLinearSolver) { return SUNLS_SUCCESS; };
-  solver->ops->setup = [](SUNLinearSolver s, SUNMatrix a) { return structuredOf(s).setup(SUNDenseMatrix_Data(a)); };
-  solver->ops->solve = [](SUNLinearSolver s, SUNMatrix a, N_Vector x, N_Vector b, realtype) {
-    return structuredOf(s).solve(SUNDenseMatrix_Data(a), N_VGetArrayPointer(x), N_VGetArrayPointer(b));
+  // The Jacobian and gamma come from plantLinearSystem(), called by CVODE just before each setup; the
+  // matrix CVODE passes is left unused.
+  solver->ops->setup = [](SUNLinearSolver s, SUNMatrix) {
+    StructuredLinearSolver& structured = structuredOf(s);
+    return structured.setup(structured.jacobian, structured.gamma);
+  };
+  solver->ops->solve = [](SUNLinearSolver s, SUNMatrix, N_Vector x, N_Vector b, realtype) {
+    return structuredOf(s).solve(N_VGetArrayPointer(x), N_VGetArrayPointer(b));
   };
   solver->ops->lastflag = [](SUNLinearSolver s) { return static_cast<sunindextype>(structuredOf(s).last_flag); };
   solver->ops->free = [](SUNLinearSolver s) {
@@ -301,6 +332,7 @@ FlexibleJointPlant::FlexibleJointPlant(const JointErrorModel& truth, std::vector
   s.y = N_VNew_Serial(stateSize(), s.context);
   s.jacobian = SUNDenseMatrix(stateSize(), stateSize(), s.context);
   if (!s.y || !s.jacobian) throw SolverError("plant: SUNDIALS could not allocate the state");
+  useFastVectorOperations(s.y);  // before CVODE clones its own vectors from it
   if (analytic_slope_ && options_.analytic_jacobian && options_.structured_linear_solver) {
     s.structured = std::make_unique<StructuredLinearSolver>(n_);
     s.linear_solver = newStructuredSolver(*s.structured, s.context);
@@ -315,6 +347,7 @@ FlexibleJointPlant::FlexibleJointPlant(const JointErrorModel& truth, std::vector
   check(CVodeSetUserData(s.cvode, this), "CVodeSetUserData");
   s.absolute_tolerances = N_VNew_Serial(stateSize(), s.context);
   if (!s.absolute_tolerances) throw SolverError("plant: SUNDIALS could not allocate the tolerances");
+  useFastVectorOperations(s.absolute_tolerances);
   double* tolerances = N_VGetArrayPointer(s.absolute_tolerances);
   for (int i = 0; i < stateSize(); ++i) {
     const bool velocity = (i >= n_ && i < 2 * n_) || (i >= 3 * n_ && i < 4 * n_);
@@ -322,7 +355,12 @@ FlexibleJointPlant::FlexibleJointPlant(const JointErrorModel& truth, std::vector
   }
   check(CVodeSVtolerances(s.cvode, options_.relative_tolerance, s.absolute_tolerances), "CVodeSVtolerances");
   check(CVodeSetLinearSolver(s.cvode, s.linear_solver, s.jacobian), "CVodeSetLinearSolver");
-  if (analytic_slope_ && options_.analytic_jacobian) check(CVodeSetJacFn(s.cvode, plantJacobian), "CVodeSetJacFn");
+  if (s.structured) {
+    s.saved_jacobian.assign(static_cast<std::size_t>(stateSize()) * stateSize(), 0.0);
+    check(CVodeSetLinSysFn(s.cvode, plantLinearSystem), "CVodeSetLinSysFn");
+  } else if (analytic_slope_ && options_.analytic_jacobian) {
+    check(CVodeSetJacFn(s.cvode, plantJacobian), "CVodeSetJacFn");
+  }
   check(CVodeSetMaxNumSteps(s.cvode, options_.max_steps_per_advance), "CVodeSetMaxNumSteps");
   if (options_.max_order < 1 || options_.max_order > 5) throw InvalidArgument("plant: max_order must be 1 to 5");
   check(CVodeSetMaxOrd(s.cvode, options_.max_order), "CVodeSetMaxOrd");
@@ -360,6 +398,12 @@ void FlexibleJointPlant::reset(const JointVector& command, double start_time) {
   reference_time_ = start_time;
   staticFeedforward(command, feedforward_);
   feedforward_rate_.setZero(n_);
+  blend_offset_.setZero(n_);
+  blend_offset_velocity_.setZero(n_);
+  blend_offset_acceleration_.setZero(n_);
+  feedforward_offset_.setZero(n_);
+  feedforward_offset_rate_.setZero(n_);
+  blend_duration_ = 0.0;
   double* y = N_VGetArrayPointer(solver_->y);
   for (int j = 0; j < n_; ++j) {
     y[j] = q[j];
@@ -381,6 +425,17 @@ void FlexibleJointPlant::setReference(const JointVector& position, const JointVe
   // static-load feed-forward with its rate along the motion, so that the controller's output is nearly
   // continuous across updates and the integrator is not knocked back to small steps at each one.
   const double since_last = time_ - reference_time_;
+  // The reference as it runs now, before the update: the blend starts from it.
+  JointVector before_value(n_), before_velocity(n_), before_acceleration(n_), before_feedforward(n_),
+      before_feedforward_rate(n_);
+  for (int j = 0; j < n_ && options_.smooth_reference; ++j) {
+    const ReferencePoint before = referencePoint(j, time_);
+    before_value[j] = before.value;
+    before_velocity[j] = before.velocity;
+    before_acceleration[j] = before.acceleration;
+    before_feedforward[j] = before.feedforward;
+    before_feedforward_rate[j] = before.feedforward_rate;
+  }
   if (since_last > 0.0) {
     reference_acceleration_ = (velocity - reference_velocity_) / since_last;
   } else {
@@ -394,6 +449,26 @@ void FlexibleJointPlant::setReference(const JointVector& position, const JointVe
   JointVector ahead;
   staticFeedforward(position + velocity * kRateStep, ahead);
   feedforward_rate_ = (ahead - feedforward_) / kRateStep;
+  // The new extrapolation takes over from the old one over the interval the last update took (the next
+  // one is expected as long); a second update at the same time keeps the blend's duration.
+  if (!options_.smooth_reference) {
+    blend_duration_ = 0.0;
+  } else if (since_last > 0.0) {
+    blend_duration_ = since_last;
+  }
+  if (blend_duration_ > 0.0) {
+    blend_offset_ = before_value - reference_;
+    blend_offset_velocity_ = before_velocity - reference_velocity_;
+    blend_offset_acceleration_ = before_acceleration - reference_acceleration_;
+    feedforward_offset_ = before_feedforward - feedforward_;
+    feedforward_offset_rate_ = before_feedforward_rate - feedforward_rate_;
+  } else {
+    blend_offset_.setZero(n_);
+    blend_offset_velocity_.setZero(n_);
+    blend_offset_acceleration_.setZero(n_);
+    feedforward_offset_.setZero(n_);
+    feedforward_offset_rate_.setZero(n_);
+  }
 }
 
 void FlexibleJointPlant::setToolWrench(const Vector6& wrench) {
@@ -413,7 +488,54 @@ void FlexibleJointPlant::setPayload(double mass, const Eigen::Vector3d& com_in_t
 
 double FlexibleJointPlant::referenceAt(int joint, double t) const {
   const double dt = t - reference_time_;
+  if (blend_duration_ > 0.0 && dt < blend_duration_) return referencePoint(joint, t).value;
   return reference_[joint] + reference_velocity_[joint] * dt + 0.5 * reference_acceleration_[joint] * dt * dt;
+}
+
+void FlexibleJointPlant::referenceAt(double t, JointVector& position, JointVector& velocity,
+                                     JointVector& acceleration) const {
+  position.resize(n_);
+  velocity.resize(n_);
+  acceleration.resize(n_);
+  for (int j = 0; j < n_; ++j) {
+    const ReferencePoint point = referencePoint(j, t);
+    position[j] = point.value;
+    velocity[j] = point.velocity;
+    acceleration[j] = point.acceleration;
+  }
+}
+
+// The new extrapolation plus (1 - s) times the old one's offset from it, with s = 10 u^3 - 15 u^4 + 6 u^5 of
+// u = (t - t_update) / duration: s, s' and s'' vanish at the update (where the offset's Taylor polynomial
+// equals the old reference to second order) and s = 1, s' = s'' = 0 from u = 1 on.
+FlexibleJointPlant::ReferencePoint FlexibleJointPlant::referencePoint(int j, double t) const {
+  const double dt = t - reference_time_;
+  ReferencePoint point;
+  point.value = reference_[j] + reference_velocity_[j] * dt + 0.5 * reference_acceleration_[j] * dt * dt;
+  point.velocity = reference_velocity_[j] + reference_acceleration_[j] * dt;
+  point.acceleration = reference_acceleration_[j];
+  point.feedforward = feedforward_[j] + feedforward_rate_[j] * dt;
+  point.feedforward_rate = feedforward_rate_[j];
+  point.feedforward_blend = 0.0;
+  if (blend_duration_ > 0.0 && dt < blend_duration_) {
+    const double u = std::max(0.0, dt / blend_duration_);
+    const double per_duration = 1.0 / blend_duration_;
+    const double weight = 1.0 - u * u * u * (10.0 + u * (-15.0 + 6.0 * u));
+    const double weight_rate = -30.0 * u * u * (1.0 - u) * (1.0 - u) * per_duration;
+    const double weight_acceleration = -60.0 * u * (1.0 - u) * (1.0 - 2.0 * u) * per_duration * per_duration;
+    const double offset =
+        blend_offset_[j] + blend_offset_velocity_[j] * dt + 0.5 * blend_offset_acceleration_[j] * dt * dt;
+    const double offset_rate = blend_offset_velocity_[j] + blend_offset_acceleration_[j] * dt;
+    const double feedforward_offset = feedforward_offset_[j] + feedforward_offset_rate_[j] * dt;
+    point.value += weight * offset;
+    point.velocity += weight_rate * offset + weight * offset_rate;
+    point.acceleration +=
+        weight_acceleration * offset + 2.0 * weight_rate * offset_rate + weight * blend_offset_acceleration_[j];
+    point.feedforward_blend = weight * feedforward_offset;
+    point.feedforward += point.feedforward_blend;
+    point.feedforward_rate += weight_rate * feedforward_offset + weight * feedforward_offset_rate_[j];
+  }
+  return point;
 }
 
 void FlexibleJointPlant::computeMotorTorques(double t, const JointVector& p, const JointVector& pd,
@@ -428,14 +550,27 @@ void FlexibleJointPlant::computeMotorTorques(double t, const JointVector& p, con
     }
     const DriveParameters& d = drives_[j];
     const double dt = t - reference_time_;
-    const double wanted = referenceAt(j, t);
-    const double wanted_velocity = reference_velocity_[j] + reference_acceleration_[j] * dt;
+    // Outside a blend (always without smooth_reference) the extrapolation alone, spelled out: this is
+    // every right-hand side's path, and referencePoint() computes much more.
+    double wanted, wanted_velocity, feedforward_blend = 0.0;
+    if (blend_duration_ > 0.0 && dt < blend_duration_) {
+      const ReferencePoint reference = referencePoint(j, t);
+      wanted = reference.value;
+      wanted_velocity = reference.velocity;
+      feedforward_blend = reference.feedforward_blend;
+    } else {
+      wanted = reference_[j] + reference_velocity_[j] * dt + 0.5 * reference_acceleration_[j] * dt * dt;
+      wanted_velocity = reference_velocity_[j] + reference_acceleration_[j] * dt;
+    }
     // Feed-forward of the static load at the reference and of the friction at the reference velocity,
     // as industrial drives do: the feedback then only corrects what the drive does not know.
     const double friction = d.viscous_friction_nms_per_rad * wanted_velocity +
                             d.coulomb_friction_nm * std::tanh(wanted_velocity / d.coulomb_velocity_scale_rad_per_s);
+    // The feed-forward as the new extrapolation plus the blend's part (zero without one), in this order so
+    // that a plant without smooth_reference computes what it did before issue 17, bit for bit.
     const double value = d.kp_nm_per_rad * (wanted - p[j]) + d.kd_nms_per_rad * (wanted_velocity - pd[j]) +
-                         d.ki_nm_per_rad_s * integral[j] + feedforward_[j] + feedforward_rate_[j] * dt + friction;
+                         d.ki_nm_per_rad_s * integral[j] + feedforward_[j] + feedforward_rate_[j] * dt +
+                         feedforward_blend + friction;
     const double limit = truth_.robot().joints[j].effort_limit;
     const double clamped = limit > 0.0 ? std::max(-limit, std::min(limit, value)) : value;
     torque[j] = clamped;
@@ -673,12 +808,9 @@ void FlexibleJointPlant::solveNewtonSystem(double t, const double* y, double gam
   const int size = stateSize();
   std::vector<double> matrix(static_cast<std::size_t>(size) * size);
   jacobian(t, y, matrix.data());
-  Eigen::Map<Eigen::MatrixXd> newton(matrix.data(), size, size);
-  newton *= -gamma;
-  newton.diagonal().array() += 1.0;
   StructuredLinearSolver solver(n_);
-  if (solver.setup(matrix.data()) != SUNLS_SUCCESS) throw SolverError("plant: the Newton system is singular");
-  solver.solve(matrix.data(), x, b);
+  if (solver.setup(matrix.data(), gamma) != SUNLS_SUCCESS) throw SolverError("plant: the Newton system is singular");
+  solver.solve(x, b);
 }
 
 namespace {
@@ -708,7 +840,34 @@ int plantJacobian(realtype t, N_Vector y, N_Vector, SUNMatrix jacobian, void* us
   return 0;
 }
 
+// CVODE's linear-system function for the structured solver: the plant's Jacobian when CVODE asks for a
+// fresh one (jacobian_ok false), otherwise the saved one, and gamma, handed to the solver's setup.
+int plantLinearSystem(realtype t, N_Vector y, N_Vector, SUNMatrix, booleantype jacobian_ok,
+                      booleantype* jacobian_current, realtype gamma, void* user_data, N_Vector, N_Vector, N_Vector) {
+  auto* plant = static_cast<FlexibleJointPlant*>(user_data);
+  return plant->prepareNewtonSystem(t, N_VGetArrayPointer(y), jacobian_ok != SUNFALSE, gamma, jacobian_current);
+}
+
 }  // namespace
+
+int FlexibleJointPlant::prepareNewtonSystem(double t, const double* y, bool jacobian_ok, double gamma,
+                                            int* jacobian_current) {
+  Solver& s = *solver_;
+  *jacobian_current = SUNFALSE;
+  if (!jacobian_ok || s.jacobian_evaluations == 0) {
+    try {
+      jacobian(t, y, s.saved_jacobian.data());  // throws on an entry that is not finite
+    } catch (const std::exception&) {
+      return 1;  // recoverable, as for the right-hand side: CVODE retries smaller and reports if it cannot
+    }
+    ++s.jacobian_evaluations;
+    *jacobian_current = SUNTRUE;
+    s.structured->layout_checked = false;
+  }
+  s.structured->jacobian = s.saved_jacobian.data();
+  s.structured->gamma = gamma;
+  return 0;
+}
 
 void FlexibleJointPlant::advance(double end_time) {
   if (!std::isfinite(end_time) || !(end_time > time_)) {
@@ -747,7 +906,8 @@ void FlexibleJointPlant::advance(double end_time) {
   statistics_.steps = s.before_restart.steps + steps;
   statistics_.rhs_evaluations = s.before_restart.rhs_evaluations + rhs + rhs_for_jacobians;
   statistics_.jacobian_rhs_evaluations = s.before_restart.jacobian_rhs_evaluations + rhs_for_jacobians;
-  statistics_.jacobian_evaluations = s.before_restart.jacobian_evaluations + jacobians;
+  statistics_.jacobian_evaluations =
+      s.structured ? s.jacobian_evaluations : s.before_restart.jacobian_evaluations + jacobians;
   statistics_.nonlinear_iterations = s.before_restart.nonlinear_iterations + newton_iterations;
   statistics_.linear_solver_setups = s.before_restart.linear_solver_setups + setups;
   statistics_.error_test_failures = s.before_restart.error_test_failures + error_failures;
@@ -872,6 +1032,12 @@ PlantState FlexibleJointPlant::saveState() {
   state.feedforward = feedforward_;
   state.feedforward_rate = feedforward_rate_;
   state.reference_time = reference_time_;
+  state.blend_offset = blend_offset_;
+  state.blend_offset_velocity = blend_offset_velocity_;
+  state.blend_offset_acceleration = blend_offset_acceleration_;
+  state.feedforward_offset = feedforward_offset_;
+  state.feedforward_offset_rate = feedforward_offset_rate_;
+  state.blend_duration = blend_duration_;
   state.tool_wrench = ctx_.tool_wrench;
   state.payload_mass = ctx_.payload_mass;
   state.payload_com = ctx_.payload_com;
@@ -885,10 +1051,24 @@ void FlexibleJointPlant::restoreState(const PlantState& state) {
       state.feedforward.size() != n_ || state.feedforward_rate.size() != n_) {
     throw InvalidArgument("plant: the saved state is for a plant of another size");
   }
+  // A state without a blend may leave its parts empty (the C API's snapshots do: their plants never blend).
+  const JointVector* blend_parts[] = {&state.blend_offset, &state.blend_offset_velocity,
+                                      &state.blend_offset_acceleration, &state.feedforward_offset,
+                                      &state.feedforward_offset_rate};
+  const bool without_blend = state.blend_duration == 0.0;
+  for (const JointVector* part : blend_parts) {
+    if (part->size() != n_ && !(without_blend && part->size() == 0)) {
+      throw InvalidArgument("plant: the saved state's reference blend is for a plant of another size");
+    }
+    if (!part->allFinite()) throw InvalidArgument("plant: the saved state's reference blend is not finite");
+  }
   for (double v : state.y) {
     if (!std::isfinite(v)) throw InvalidArgument("plant: the saved state holds a value that is not finite");
   }
   if (!std::isfinite(state.time)) throw InvalidArgument("plant: the saved state's time is not finite");
+  if (!std::isfinite(state.blend_duration) || state.blend_duration < 0.0) {
+    throw InvalidArgument("plant: the saved state's blend duration is not finite and non-negative");
+  }
   time_ = state.time;
   std::copy(state.y.begin(), state.y.end(), N_VGetArrayPointer(solver_->y));
   reference_ = state.reference;
@@ -897,6 +1077,16 @@ void FlexibleJointPlant::restoreState(const PlantState& state) {
   feedforward_ = state.feedforward;
   feedforward_rate_ = state.feedforward_rate;
   reference_time_ = state.reference_time;
+  JointVector* blend_targets[] = {&blend_offset_, &blend_offset_velocity_, &blend_offset_acceleration_,
+                                  &feedforward_offset_, &feedforward_offset_rate_};
+  for (int i = 0; i < 5; ++i) {
+    if (blend_parts[i]->size() == n_) {
+      *blend_targets[i] = *blend_parts[i];
+    } else {
+      blend_targets[i]->setZero(n_);
+    }
+  }
+  blend_duration_ = state.blend_duration;
   ctx_.tool_wrench = state.tool_wrench;
   ctx_.payload_mass = state.payload_mass;
   ctx_.payload_com = state.payload_com;

@@ -53,6 +53,13 @@ struct PlantOptions {
   // With that Jacobian, solve CVODE's Newton systems by eliminating the link and motor positions and the
   // integrals (a 2n x 2n LU instead of 5n x 5n); false: SUNDIALS' dense LU (kept to compare against).
   bool structured_linear_solver = true;
+  // The reference across an update: true blends the old extrapolation into the new one over the interval
+  // since the previous update (a quintic smoothstep), so that the controller's reference is C2 and its
+  // feed-forward C1 at every update; false: the reference jumps to the new extrapolation at each update.
+  // Off by default: on the paper's spiral (4 ms updates) the blend's high-order shape inside each interval
+  // tripled CVODE's steps (24,072 -> 68,688), while the jumps, at the step boundaries CVodeSetStopTime
+  // makes, cost none; and it moved Table II's Rz of run 2 by 0.15 um (model/plant/README.md).
+  bool smooth_reference = false;
   bool control = true;         // false: no motor torque at all (free response)
   bool motors_locked = false;  // true: motor positions held where they are (static tests)
 };
@@ -76,6 +83,11 @@ struct PlantState {
   std::vector<double> y;
   JointVector reference, reference_velocity, reference_acceleration, feedforward, feedforward_rate;
   double reference_time = 0.0;
+  // The blend from the previous extrapolation (smooth_reference): its offset from the new one at the update
+  // (value, rate, acceleration; feed-forward value and rate) and the blend's duration (0: none).
+  JointVector blend_offset, blend_offset_velocity, blend_offset_acceleration, feedforward_offset,
+      feedforward_offset_rate;
+  double blend_duration = 0.0;
   Vector6 tool_wrench = Vector6::Zero();
   double payload_mass = 0.0;
   Eigen::Vector3d payload_com = Eigen::Vector3d::Zero();
@@ -98,6 +110,8 @@ public:
   void reset(const JointVector& command, double start_time = 0.0);
   // The controller follows `position` from now on, extrapolated with `velocity` until the next update.
   void setReference(const JointVector& position, const JointVector& velocity);
+  // The reference the controller follows at t (>= the last update): position, velocity, acceleration.
+  void referenceAt(double t, JointVector& position, JointVector& velocity, JointVector& acceleration) const;
   void setToolWrench(const Vector6& wrench);
   void setPayload(double mass, const Eigen::Vector3d& com_in_tool);
   // The watchdog's limits (PlantOptions), changeable at any time; throws InvalidArgument naming a value
@@ -136,6 +150,10 @@ public:
   // Solves (I - gamma jacobian(t, y)) x = b as CVODE's Newton iterations do with structured_linear_solver;
   // exposed for tests. Throws SolverError when the system is singular.
   void solveNewtonSystem(double t, const double* y, double gamma, const double* b, double* x);
+  // CVODE's linear-system function with structured_linear_solver: evaluates the Jacobian into the solver's
+  // copy unless CVODE may reuse the last one, and hands gamma over; 0, or 1 (recoverable) when the
+  // Jacobian is not finite. Not for other callers.
+  int prepareNewtonSystem(double t, const double* y, bool jacobian_ok, double gamma, int* jacobian_current);
 
   const JointErrorModel& model() const { return truth_; }
   const PlantOptions& options() const { return options_; }
@@ -147,6 +165,13 @@ private:
   void computeMotorTorques(double t, const JointVector& p, const JointVector& pd, const JointVector& integral,
                            JointVector& torque, JointVector* clamped_excess = nullptr) const;
   double referenceAt(int joint, double t) const;
+  // The controller's reference of `joint` at t: value, rate and acceleration, and its static feed-forward
+  // torque and that torque's rate (the rates feed the blend of the next update); feedforward_blend is the
+  // blend's part of the feed-forward.
+  struct ReferencePoint {
+    double value, velocity, acceleration, feedforward, feedforward_rate, feedforward_blend;
+  };
+  ReferencePoint referencePoint(int joint, double t) const;
   void checkWatchdog();
   void transmissionError(const JointVector& p, const JointVector& q, JointVector& error);
   void transmissionTorques(const JointVector& p, const JointVector& pd, const JointVector& q, const JointVector& qd,
@@ -173,6 +198,9 @@ private:
   std::string tripped_;  // why the watchdog stopped the run; empty while it runs
   JointVector reference_, reference_velocity_, reference_acceleration_, feedforward_, feedforward_rate_;
   double reference_time_ = 0.0;
+  JointVector blend_offset_, blend_offset_velocity_, blend_offset_acceleration_, feedforward_offset_,
+      feedforward_offset_rate_;
+  double blend_duration_ = 0.0;
   JointContext ctx_;
   JointErrorWorkspace ws_;
   PlantStatistics statistics_;

@@ -667,6 +667,15 @@ Record run(Master& m, std::size_t from, std::size_t to, bool varying) {
   return record;
 }
 
+// The FMU's estimate of the desired velocity from q_desired at the last three communication points
+// (fmu/instance.cpp), written out again: the slope now of the parabola through them.
+JointVector parabolaSlope(const JointVector& q, double t, const JointVector& last_q, double last_t,
+                          const JointVector& earlier_q, double earlier_t) {
+  const double last = t - last_t, earlier = last_t - earlier_t, both = last + earlier;
+  return q * ((2.0 * last + earlier) / (last * both)) - last_q * (both / (last * earlier)) +
+         earlier_q * (last / (earlier * both));
+}
+
 // The same sequence on the plant and the compensator directly (fmu/instance.hpp, steps 1-4).
 Record runDirectly(long mode, const JointErrorModel& truth, std::size_t to, bool varying) {
   const Spiral& s = spiral();
@@ -692,21 +701,28 @@ Record runDirectly(long mode, const JointErrorModel& truth, std::size_t to, bool
   plant.reset(reference(s.q[0], JointVector::Zero(kDof), s.time[0]), s.time[0]);
   Record record;
   const std::vector<int> pattern = stepPattern(varying);
-  bool has_last = false;
-  JointVector last_q;
-  double last_t = 0.0;
+  bool has_last = false, has_earlier = false;
+  JointVector last_q, earlier_q;
+  double last_t = 0.0, earlier_t = 0.0;
   std::size_t k = 0;
   for (std::size_t i = 0; k + 1 < std::min(to, s.time.size()); ++i) {
     const std::size_t next = std::min(k + pattern[i % pattern.size()], s.time.size() - 1);
     const double t = s.time[k];
-    const JointVector v =
-        has_last ? JointVector((s.q[k] - last_q) / (t - last_t)) : JointVector(JointVector::Zero(kDof));
+    JointVector v = JointVector::Zero(kDof);
+    if (has_earlier) {
+      v = parabolaSlope(s.q[k], t, last_q, last_t, earlier_q, earlier_t);
+    } else if (has_last) {
+      v = (s.q[k] - last_q) / (t - last_t);
+    }
     const JointVector ref = reference(s.q[k], v, t);
     plant.setReference(ref, v);
     plant.advance(t + (s.time[next] - t));
     record.q_link.push_back(values(plant.linkPositions()));
     record.q_ref.push_back(values(ref));
     record.sample.push_back(next);
+    has_earlier = has_last;
+    earlier_q = last_q;
+    earlier_t = last_t;
     has_last = true;
     last_q = s.q[k];
     last_t = t;
@@ -797,8 +813,12 @@ TEST_P(FmuTest, RegressionThroughTheFmuEqualsTheCApi) {
     JointVector last_q = s.q[0];
     for (std::size_t k = 0; k + 1 < end; ++k) {
       const double t = s.time[k];
-      const JointVector v =
-          k > 0 ? JointVector((s.q[k] - last_q) / (t - s.time[k - 1])) : JointVector(JointVector::Zero(kDof));
+      JointVector v = JointVector::Zero(kDof);
+      if (k > 1) {
+        v = parabolaSlope(s.q[k], t, s.q[k - 1], s.time[k - 1], s.q[k - 2], s.time[k - 2]);
+      } else if (k > 0) {
+        v = (s.q[k] - last_q) / (t - s.time[k - 1]);
+      }
       const JointVector ref = reference(s.q[k], v);
       ASSERT_EQ(jc_plant_set_reference(plant, ref.data(), kDof, v.data(), kDof), JC_OK) << jc_last_error();
       ASSERT_EQ(jc_plant_advance(plant, s.time[k + 1]), JC_OK) << jc_last_error();

@@ -1,0 +1,100 @@
+// The plant's CVODE vector operations (model/plant/plant_vector_operations.*) against SUNDIALS' serial
+// vector: every case of N_VLinearSum (a and b of 1, -1, equal, opposite, other; in place into x or y),
+// scale, constant, abs, inverse, min and the weighted RMS norm must give the same doubles, bit for bit, so
+// that the plant's runs (and its stored regressions) do not move.
+#include <cmath>
+#include <cstring>
+#include <random>
+#include <vector>
+
+#include <gtest/gtest.h>
+#include <nvector/nvector_serial.h>
+#include <sundials/sundials_context.h>
+
+#include "model/plant/plant_vector_operations.hpp"
+
+namespace jointcomp {
+namespace {
+
+constexpr sunindextype kLength = 30;
+
+struct Vectors {
+  Vectors() {
+    SUNContext_Create(nullptr, &context);
+    for (N_Vector* v : {&x, &y, &z}) *v = N_VNew_Serial(kLength, context);
+  }
+  ~Vectors() {
+    for (N_Vector v : {x, y, z}) N_VDestroy(v);
+    SUNContext_Free(&context);
+  }
+  SUNContext context = nullptr;
+  N_Vector x = nullptr, y = nullptr, z = nullptr;
+};
+
+void fill(N_Vector v, std::mt19937_64& random) {
+  std::uniform_real_distribution<double> value(-3.0, 3.0);
+  for (sunindextype i = 0; i < kLength; ++i) NV_Ith_S(v, i) = value(random) * std::pow(10.0, value(random));
+}
+
+bool sameBits(N_Vector a, N_Vector b) { return std::memcmp(NV_DATA_S(a), NV_DATA_S(b), sizeof(double) * kLength) == 0; }
+
+TEST(PlantVectorOperations, EqualSundialsSerialBitForBit) {
+  Vectors serial, fast;
+  for (N_Vector v : {fast.x, fast.y, fast.z}) useFastVectorOperations(v);
+  ASSERT_NE(fast.x->ops->nvlinearsum, serial.x->ops->nvlinearsum);  // the operations were replaced
+  std::mt19937_64 random(17);
+  const double coefficients[] = {1.0, -1.0, 0.0, 0.37, -2.5, 2.5, -0.37};
+  int cases = 0;
+  for (double a : coefficients) {
+    for (double b : coefficients) {
+      for (int target = 0; target < 3; ++target) {  // into z, in place into x, in place into y
+        fill(serial.x, random);
+        fill(serial.y, random);
+        fill(serial.z, random);
+        N_VScale_Serial(1.0, serial.x, fast.x);
+        N_VScale_Serial(1.0, serial.y, fast.y);
+        N_VScale_Serial(1.0, serial.z, fast.z);
+        N_Vector serial_out = target == 0 ? serial.z : target == 1 ? serial.x : serial.y;
+        N_Vector fast_out = target == 0 ? fast.z : target == 1 ? fast.x : fast.y;
+        N_VLinearSum_Serial(a, serial.x, b, serial.y, serial_out);
+        N_VLinearSum(a, fast.x, b, fast.y, fast_out);
+        EXPECT_TRUE(sameBits(serial_out, fast_out)) << "a = " << a << ", b = " << b << ", target " << target;
+        ++cases;
+      }
+    }
+  }
+  EXPECT_EQ(cases, 147);
+  for (double c : coefficients) {
+    fill(serial.x, random);
+    N_VScale_Serial(1.0, serial.x, fast.x);
+    N_VScale_Serial(c, serial.x, serial.z);
+    N_VScale(c, fast.x, fast.z);
+    EXPECT_TRUE(sameBits(serial.z, fast.z)) << "scale by " << c;
+    N_VScale_Serial(c, serial.x, serial.x);  // in place
+    N_VScale(c, fast.x, fast.x);
+    EXPECT_TRUE(sameBits(serial.x, fast.x)) << "scale in place by " << c;
+    N_VConst_Serial(c, serial.z);
+    N_VConst(c, fast.z);
+    EXPECT_TRUE(sameBits(serial.z, fast.z)) << "constant " << c;
+  }
+  fill(serial.x, random);
+  fill(serial.y, random);
+  N_VScale_Serial(1.0, serial.x, fast.x);
+  N_VScale_Serial(1.0, serial.y, fast.y);
+  N_VAbs_Serial(serial.x, serial.z);
+  N_VAbs(fast.x, fast.z);
+  EXPECT_TRUE(sameBits(serial.z, fast.z)) << "abs";
+  N_VInv_Serial(serial.x, serial.z);
+  N_VInv(fast.x, fast.z);
+  EXPECT_TRUE(sameBits(serial.z, fast.z)) << "inverse";
+  EXPECT_EQ(N_VMin_Serial(serial.x), N_VMin(fast.x));
+  const double serial_norm = N_VWrmsNorm_Serial(serial.x, serial.y);
+  const double fast_norm = N_VWrmsNorm(fast.x, fast.y);
+  EXPECT_EQ(std::memcmp(&serial_norm, &fast_norm, sizeof(double)), 0) << serial_norm << " vs " << fast_norm;
+  N_VConst_Serial(0.0, serial.x);
+  N_VConst(0.0, fast.x);
+  EXPECT_EQ(N_VWrmsNorm_Serial(serial.x, serial.y), N_VWrmsNorm(fast.x, fast.y));
+}
+
+}  // namespace
+}  // namespace jointcomp
