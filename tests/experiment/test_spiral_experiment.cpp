@@ -139,16 +139,23 @@ TEST(SpiralExperiment, UnreachableSpiralNamesThePathSample) {
   }
 }
 
-// The fourth run at ten times the paper's speed, on the plant with model != truth: the dynamic correction
-// removes what the static one leaves of the drives' lag and the links' inertia (README's table).
-TEST(SpiralExperiment, TheDynamicCorrectionFollowsTheSpiralAtTenTimesThePapersSpeed) {
-  const ParameterSet set = loadParameterSet(std::string(JOINTCOMP_DATA_DIR) + "/params/rx170.json", rx170());
+// The plant's experiment at ten times the paper's feed rate (acceleration and jerk scaled with it, as
+// `jointcomp paper --feed-rate` does), with the fourth run.
+SpiralExperimentSpec tenTimesThePapersSpeedWithTheDynamicRun(const ParameterSet& set) {
   SpiralExperimentSpec spec;
   spec.drives = set.drives;
   spec.dynamic_correction = true;
   spec.feed_rate.speed *= 10.0;
   spec.feed_rate.acceleration *= 10.0;
   spec.feed_rate.jerk *= 10.0;
+  return spec;
+}
+
+// The fourth run at ten times the paper's speed, on the plant with model != truth: the dynamic correction
+// removes what the static one leaves of the drives' lag and the links' inertia (README's table).
+TEST(SpiralExperiment, TheDynamicCorrectionFollowsTheSpiralAtTenTimesThePapersSpeed) {
+  const ParameterSet set = loadParameterSet(std::string(JOINTCOMP_DATA_DIR) + "/params/rx170.json", rx170());
+  const SpiralExperimentSpec spec = tenTimesThePapersSpeedWithTheDynamicRun(set);
   const SpiralExperimentResult result = runSpiralExperiment(set.model, spec);
   ASSERT_EQ(result.runs.size(), 4u);
   const AccuracyMetrics& static_run = result.runs[2].metrics;
@@ -168,12 +175,7 @@ TEST(SpiralExperiment, TheDynamicCorrectionFollowsTheSpiralAtTenTimesThePapersSp
 // which the static correction leaves at the paper's speed too.)
 TEST(SpiralExperiment, WithTheModelEqualToTheRobotTheDynamicCorrectionHalvesRaAndRzAtTenTimesTheSpeed) {
   const ParameterSet set = loadParameterSet(std::string(JOINTCOMP_DATA_DIR) + "/params/rx170.json", rx170());
-  SpiralExperimentSpec spec;
-  spec.drives = set.drives;
-  spec.dynamic_correction = true;
-  spec.feed_rate.speed *= 10.0;
-  spec.feed_rate.acceleration *= 10.0;
-  spec.feed_rate.jerk *= 10.0;
+  const SpiralExperimentSpec spec = tenTimesThePapersSpeedWithTheDynamicRun(set);
   const SpiralExperimentResult result = runSpiralExperiment(set.model, set.model, spec);
   ASSERT_EQ(result.runs.size(), 4u);
   const AccuracyMetrics& static_run = result.runs[2].metrics;
