@@ -68,8 +68,9 @@ void BM_Ours_CompensateSpiralPoint(benchmark::State& state) {
 }
 BENCHMARK(BM_Ours_CompensateSpiralPoint);
 
-// The same points in path order, each started from the previous point's correction (compensateFrom, as
-// compensateTrajectory does): the throughput of compensating a whole trajectory.
+// The same points in path order, each started from the previous point's correction (compensateFrom; a
+// caller's own loop over a path may, compensateTrajectory keeps compensate() per point so that its references
+// equal its points' bit for bit): the throughput of compensating a whole trajectory in order.
 void BM_Ours_CompensateSpiralPath(benchmark::State& state) {
   const Fixture& f = fixture();
   Compensator compensator(*f.model, f.model->allEffects(), FixedPointOptions{1e-12, 50});

@@ -347,4 +347,26 @@ void writeCampaignFile(const MeasurementCampaign& campaign, const std::string& p
   writeFileAtomically(path, campaignToText(campaign));
 }
 
+MeasurementCampaign campaignRows(const MeasurementCampaign& campaign, const std::function<bool(std::size_t)>& keep) {
+  MeasurementCampaign out = campaign;
+  out.time.clear();
+  out.command.clear();
+  out.position.clear();
+  out.measured_angles.clear();
+  out.temperature.clear();
+  out.wrench.clear();
+  out.payload.clear();
+  for (std::size_t k = 0; k < campaign.size(); ++k) {
+    if (!keep(k)) continue;
+    out.time.push_back(campaign.time[k]);
+    out.command.push_back(campaign.command[k]);
+    if (k < campaign.position.size()) out.position.push_back(campaign.position[k]);
+    if (k < campaign.measured_angles.size()) out.measured_angles.push_back(campaign.measured_angles[k]);
+    if (k < campaign.temperature.size()) out.temperature.push_back(campaign.temperature[k]);
+    if (k < campaign.wrench.size()) out.wrench.push_back(campaign.wrench[k]);
+    if (k < campaign.payload.size()) out.payload.push_back(campaign.payload[k]);
+  }
+  return out;
+}
+
 }  // namespace jointcomp

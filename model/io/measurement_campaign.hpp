@@ -4,6 +4,7 @@
 // (an empty cell) is NaN inside.
 #pragma once
 
+#include <functional>
 #include <map>
 #include <string>
 #include <vector>
@@ -45,6 +46,10 @@ struct MeasurementCampaign {
 // with the wrong number of cells. It never drops a row.
 MeasurementCampaign readCampaignFile(const std::string& path);
 MeasurementCampaign parseCampaign(const std::string& text, const std::string& source_name);
+
+// The campaign with only the rows `keep` says true for (given the row's index), in their order, with every
+// column and the campaign's metadata: a subset to fit or hold out.
+MeasurementCampaign campaignRows(const MeasurementCampaign& campaign, const std::function<bool(std::size_t)>& keep);
 
 // Writes the campaign in the format (degrees and millimetres), whole or not at all.
 std::string campaignToText(const MeasurementCampaign& campaign);

@@ -107,19 +107,7 @@ TEST(Discovery, NullCampaignAddsNothing) {
 TEST(Discovery, FlagsAHeldOutCampaignBeyondTheFittedAngles) {
   // Fitted only where joint 1 is below -0.3 rad; the held-out campaign goes everywhere.
   const MeasurementCampaign all = randomCampaign(rx170Model(), 600, 12);
-  MeasurementCampaign fit = all;
-  fit.time.clear();
-  fit.command.clear();
-  fit.position.clear();
-  for (std::size_t k = 0; k < all.size(); ++k) {
-    if (all.command[k][0] >= -0.3) continue;
-    fit.time.push_back(all.time[k]);
-    fit.command.push_back(all.command[k]);
-    fit.position.push_back(all.position[k]);
-  }
-  fit.temperature.assign(fit.size(), std::nan(""));
-  fit.wrench.assign(fit.size(), Vector6::Zero());
-  fit.payload.assign(fit.size(), 0.0);
+  const MeasurementCampaign fit = campaignRows(all, [&](std::size_t k) { return all.command[k][0] < -0.3; });
   const MeasurementCampaign held = randomCampaign(rx170Model(), 120, 13);
   int beyond = 0;
   for (const JointVector& q : held.command) beyond += q[0] > -0.3 + kCoverageHalfWidth;

@@ -19,24 +19,7 @@ namespace {
 std::string ipa(const std::string& file) { return test::sharedFile("data/ipa-ur10/" + file); }
 
 MeasurementCampaign everyNth(const MeasurementCampaign& c, std::size_t step) {
-  MeasurementCampaign out = c;
-  out.time.clear();
-  out.command.clear();
-  out.position.clear();
-  out.temperature.clear();
-  out.wrench.clear();
-  out.payload.clear();
-  out.measured_angles.clear();
-  for (std::size_t k = 0; k < c.size(); k += step) {
-    out.time.push_back(c.time[k]);
-    out.command.push_back(c.command[k]);
-    out.position.push_back(c.position[k]);
-    out.temperature.push_back(c.temperature[k]);
-    out.wrench.push_back(c.wrench[k]);
-    out.payload.push_back(c.payload[k]);
-    if (c.has_measured_angles) out.measured_angles.push_back(c.measured_angles[k]);
-  }
-  return out;
+  return campaignRows(c, [step](std::size_t k) { return k % step == 0; });
 }
 
 TEST(DiscoveryIpaUr10, NeverMakesTheHeldOutSeriesWorse) {

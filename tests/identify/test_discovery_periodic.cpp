@@ -118,26 +118,10 @@ TEST(DiscoveryPeriodic, SmoothnessPriorChosenByCrossValidationDoesNotPredictWors
 // A campaign that visits joint 2 only near a few angles, as a grid does (the IPA UR10's Series A): the rows of
 // `campaign` whose joint-2 angle lies within `half_width` of a multiple of `spacing`.
 MeasurementCampaign onAGridOfJoint2(const MeasurementCampaign& campaign, double spacing, double half_width) {
-  MeasurementCampaign out = campaign;
-  out.time.clear();
-  out.command.clear();
-  out.position.clear();
-  out.temperature.clear();
-  out.wrench.clear();
-  out.payload.clear();
-  out.measured_angles.clear();
-  for (std::size_t k = 0; k < campaign.size(); ++k) {
+  return campaignRows(campaign, [&](std::size_t k) {
     const double q = campaign.command[k][1];
-    if (std::abs(q - spacing * std::round(q / spacing)) > half_width) continue;
-    out.time.push_back(campaign.time[k]);
-    out.command.push_back(campaign.command[k]);
-    out.position.push_back(campaign.position[k]);
-    out.temperature.push_back(campaign.temperature[k]);
-    out.wrench.push_back(campaign.wrench[k]);
-    out.payload.push_back(campaign.payload[k]);
-    if (campaign.has_measured_angles) out.measured_angles.push_back(campaign.measured_angles[k]);
-  }
-  return out;
+    return std::abs(q - spacing * std::round(q / spacing)) <= half_width;
+  });
 }
 
 TEST(DiscoveryPeriodic, SmoothnessPriorBridgesTheGapsOfAGrid) {

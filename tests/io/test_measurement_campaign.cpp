@@ -141,6 +141,31 @@ TEST(MeasurementCampaign, WriteReadRoundTripWithin1e12) {
   }
 }
 
+// campaignRows: a subset and its complement hold every row once, in order, each with all its columns, and
+// both keep the campaign's metadata and validate; the odd rows of the even rows' complement round-trip.
+TEST(MeasurementCampaign, RowsAndTheirComplementPartitionTheCampaign) {
+  const MeasurementCampaign c = randomCampaign();
+  const auto even = [](std::size_t k) { return k % 2 == 0; };
+  const MeasurementCampaign kept = campaignRows(c, even);
+  const MeasurementCampaign rest = campaignRows(c, [&](std::size_t k) { return !even(k); });
+  ASSERT_EQ(kept.size() + rest.size(), c.size());
+  EXPECT_NO_THROW(kept.validate());
+  EXPECT_NO_THROW(rest.validate());
+  EXPECT_EQ(kept.metadata, c.metadata);
+  EXPECT_EQ(kept.target_in_flange, c.target_in_flange);
+  for (std::size_t k = 0; k < c.size(); ++k) {
+    const MeasurementCampaign& part = even(k) ? kept : rest;
+    const std::size_t i = k / 2;
+    EXPECT_EQ(part.time[i], c.time[k]);
+    EXPECT_EQ(part.command[i], c.command[k]);
+    EXPECT_EQ(part.payload[i], c.payload[k]);
+    EXPECT_EQ(part.wrench[i], c.wrench[k]);
+    EXPECT_TRUE(part.position[i].isApprox(c.position[k]) || (part.position[i].hasNaN() && c.position[k].hasNaN()));
+    EXPECT_EQ(std::isnan(part.temperature[i]), std::isnan(c.temperature[k]));
+  }
+  EXPECT_EQ(campaignRows(c, [](std::size_t) { return false; }).size(), 0u);
+}
+
 TEST(MeasurementCampaign, InconsistentCampaignIsNotWritten) {
   MeasurementCampaign c = randomCampaign();
   c.payload.pop_back();
