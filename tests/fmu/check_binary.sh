@@ -29,12 +29,12 @@ if [ "$newest_allowed" != any ] &&
   echo "needs GLIBC $newest, more than $newest_allowed"
   status=1
 fi
-if [ "$newest_allowed" != any ] && objdump -T "$binary" | grep -q -E 'GLIBCXX_|CXXABI_'; then
+if [ "$newest_allowed" != any ] && objdump -T "$binary" | grep -c -E 'GLIBCXX_|CXXABI_' >/dev/null; then
   echo "needs libstdc++ symbols:"
   objdump -T "$binary" | grep -E 'GLIBCXX_|CXXABI_' | head
   status=1
 fi
-if readelf -d "$binary" | grep -q -E 'R(UN)?PATH'; then echo "the binary has an RPATH/RUNPATH"; status=1; fi
+if readelf -d "$binary" | grep -c -E 'R(UN)?PATH' >/dev/null; then echo "the binary has an RPATH/RUNPATH"; status=1; fi
 
 exported=$(nm -D --defined-only "$binary" | awk '{print $3}' | sort)
 # Declarations may span lines (the return type on a line of its own): read the header as one line.

@@ -25,9 +25,9 @@ echo "== without a library it says how to give one"
 if message=$(cd "$work" && env -u JOINTCOMP_LIBRARY -u LD_LIBRARY_PATH "$work/venv/bin/python" -c 'import jointcomp' 2>&1); then
   # Only when a libjointcomp is installed system-wide (ldconfig) may this succeed.
   echo "$message"
-  ldconfig -p | grep -q libjointcomp || { echo "imported without any library to load"; exit 1; }
+  ldconfig -p | grep -c libjointcomp >/dev/null || { echo "imported without any library to load"; exit 1; }
 else
-  echo "$message" | grep -q "set JOINTCOMP_LIBRARY" || { echo "unclear failure: $message"; exit 1; }
+  echo "$message" | grep -c "set JOINTCOMP_LIBRARY" >/dev/null || { echo "unclear failure: $message"; exit 1; }
 fi
 
 echo "== with JOINTCOMP_LIBRARY it loads, has __version__ and computes a batch"
