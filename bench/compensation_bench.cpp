@@ -45,19 +45,22 @@ const Fixture& fixture() {
   return instance;
 }
 
-void BM_Ours_CompensateSpiralPoint(benchmark::State& state) {
+// Compensates the spiral's points in path order, one per benchmark iteration, with `compensate_point`
+// (compensator, ctx, index, reference) -> FixedPointReport; counts allocations (0 per call, issue 17) and
+// the fixed-point iterations per point.
+template <typename CompensatePoint>
+void compensateSpiralPoints(benchmark::State& state, CompensatePoint compensate_point) {
   const Fixture& f = fixture();
   Compensator compensator(*f.model, f.model->allEffects(), FixedPointOptions{1e-12, 50});
   JointContext ctx(6);
   JointVector reference;
   std::size_t k = 0;
   int iterations = 0;
-  const jointcomp::bench::AllocationCounter allocations;  // must stay at 0 per call (issue 17)
+  const jointcomp::bench::AllocationCounter allocations;
   for (auto _ : state) {
     ctx.q = f.trajectory.q[k];
     ctx.velocity = f.trajectory.qd[k];
-    const FixedPointReport report = compensator.compensate(ctx, reference);
-    iterations += report.iterations;
+    iterations += compensate_point(compensator, ctx, k, reference).iterations;
     benchmark::DoNotOptimize(reference.data());
     if (++k == f.trajectory.size()) k = 0;
   }
@@ -66,34 +69,28 @@ void BM_Ours_CompensateSpiralPoint(benchmark::State& state) {
   state.counters["fixed_point_iterations"] =
       benchmark::Counter(static_cast<double>(iterations) / static_cast<double>(state.iterations()));
 }
+
+// Each point on its own (compensate, as compensateTrajectory and the C API do).
+void BM_Ours_CompensateSpiralPoint(benchmark::State& state) {
+  compensateSpiralPoints(state, [](Compensator& compensator, JointContext& ctx, std::size_t, JointVector& reference) {
+    return compensator.compensate(ctx, reference);
+  });
+}
 BENCHMARK(BM_Ours_CompensateSpiralPoint);
 
 // The same points in path order, each started from the previous point's correction (compensateFrom; a
 // caller's own loop over a path may, compensateTrajectory keeps compensate() per point so that its references
 // equal its points' bit for bit): the throughput of compensating a whole trajectory in order.
 void BM_Ours_CompensateSpiralPath(benchmark::State& state) {
-  const Fixture& f = fixture();
-  Compensator compensator(*f.model, f.model->allEffects(), FixedPointOptions{1e-12, 50});
-  JointContext ctx(6);
-  JointVector reference, correction = JointVector::Zero(6);
-  std::size_t k = 0;
-  int iterations = 0;
-  const jointcomp::bench::AllocationCounter allocations;  // must stay at 0 per call (issue 17)
-  for (auto _ : state) {
-    ctx.q = f.trajectory.q[k];
-    ctx.velocity = f.trajectory.qd[k];
-    // The path's first point has no predecessor (nor has the first after the wrap-around).
-    const FixedPointReport report =
-        k == 0 ? compensator.compensate(ctx, reference) : compensator.compensateFrom(ctx, correction, reference);
-    for (int j = 0; j < 6; ++j) correction[j] = ctx.q[j] - reference[j];
-    iterations += report.iterations;
-    benchmark::DoNotOptimize(reference.data());
-    if (++k == f.trajectory.size()) k = 0;
-  }
-  allocations.report(state);
-  state.SetItemsProcessed(state.iterations());
-  state.counters["fixed_point_iterations"] =
-      benchmark::Counter(static_cast<double>(iterations) / static_cast<double>(state.iterations()));
+  JointVector correction = JointVector::Zero(6);
+  compensateSpiralPoints(
+      state, [&correction](Compensator& compensator, JointContext& ctx, std::size_t k, JointVector& reference) {
+        // The path's first point has no predecessor (nor has the first after the wrap-around).
+        const FixedPointReport report =
+            k == 0 ? compensator.compensate(ctx, reference) : compensator.compensateFrom(ctx, correction, reference);
+        for (int j = 0; j < 6; ++j) correction[j] = ctx.q[j] - reference[j];
+        return report;
+      });
 }
 BENCHMARK(BM_Ours_CompensateSpiralPath);
 

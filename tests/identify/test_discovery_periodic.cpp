@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -22,16 +23,21 @@ using namespace identify_test;
 
 // The RX170 with a narrow bump of joint 2's motor: two knots of 24 raised by 1.5e-4 rad, once per motor
 // revolution, a shape whose spectrum spreads over many orders (no three harmonics hold it).
-JointErrorModel withBump(JointErrorModel model) {
-  std::vector<double> c(24, 0.0);
-  c[5] = c[6] = 1.5e-4;
+// `model` with a table of joint 2 over the angle of `stage` (1: the motor) holding `coefficients`.
+JointErrorModel withJoint2Table(JointErrorModel model, int stage, const std::vector<double>& coefficients) {
   PeriodicTable table;
   table.joint = 1;
-  table.stage = 1;
-  table.coefficients_rad = c;
+  table.stage = stage;
+  table.coefficients_rad = coefficients;
   model.addEffect(
       std::make_unique<PeriodicTableEffect>(model.robot(), model.gears(), std::vector<PeriodicTable>{table}));
   return model;
+}
+
+JointErrorModel withBump(JointErrorModel model) {
+  std::vector<double> c(24, 0.0);
+  c[5] = c[6] = 1.5e-4;
+  return withJoint2Table(std::move(model), 1, c);
 }
 
 DiscoveryResult discover(const JointErrorModel& truth, const std::vector<std::string>& types) {
@@ -70,13 +76,7 @@ JointErrorModel withSmoothHill(JointErrorModel model) {
   std::vector<double> c(24, 0.0);
   for (int k = 0; k < 8; ++k)
     c[static_cast<std::size_t>(k + 4)] = 1.2e-4 * (1.0 - std::cos(2.0 * kPi * (k + 0.5) / 8.0));
-  PeriodicTable table;
-  table.joint = 1;
-  table.stage = 1;
-  table.coefficients_rad = c;
-  model.addEffect(
-      std::make_unique<PeriodicTableEffect>(model.robot(), model.gears(), std::vector<PeriodicTable>{table}));
-  return model;
+  return withJoint2Table(std::move(model), 1, c);
 }
 
 DiscoveryResult discoverSmooth(double max_weight, std::uint64_t seed) {
@@ -125,15 +125,10 @@ MeasurementCampaign onAGridOfJoint2(const MeasurementCampaign& campaign, double 
 }
 
 TEST(DiscoveryPeriodic, SmoothnessPriorBridgesTheGapsOfAGrid) {
-  JointErrorModel truth = rx170Model();
   std::vector<double> c(24, 0.0);
   for (int k = 0; k < 24; ++k) c[static_cast<std::size_t>(k)] = 1e-4 * std::sin(2.0 * kPi * 2.0 * k / 24.0 + 0.4);
-  PeriodicTable table;
-  table.joint = 1;
-  table.stage = truth.gears().stageCount(1) + 1;  // the output: its angle is the joint's, which the grid holds
-  table.coefficients_rad = c;
-  truth.addEffect(
-      std::make_unique<PeriodicTableEffect>(truth.robot(), truth.gears(), std::vector<PeriodicTable>{table}));
+  // Over the output (the stage after the last): its angle is the joint's, which the grid holds.
+  const JointErrorModel truth = withJoint2Table(rx170Model(), rx170Model().gears().stageCount(1) + 1, c);
   for (std::uint64_t seed : {91u, 93u}) {
     const MeasurementCampaign fit = onAGridOfJoint2(randomCampaign(truth, 3000, seed), 30.0 * kDegree, 1.5 * kDegree);
     const MeasurementCampaign held = randomCampaign(truth, 300, seed + 1);
