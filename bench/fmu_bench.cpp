@@ -349,8 +349,15 @@ void BM_DirectSpiral(benchmark::State& state) {
   }
   reportRates(state, steps, step_ms * kStep);
   const PlantStatistics statistics = plant->statistics();  // of the last run (up to where it got)
-  state.counters["cvode_steps_per_communication_step"] =
-      static_cast<double>(statistics.steps) / static_cast<double>(std::max<std::size_t>(k, 1));
+  const double communication_steps = static_cast<double>(std::max<std::size_t>(k, 1));
+  state.counters["cvode_steps_per_communication_step"] = static_cast<double>(statistics.steps) / communication_steps;
+  state.counters["rhs_per_communication_step"] = static_cast<double>(statistics.rhs_evaluations) / communication_steps;
+  state.counters["newton_iterations_per_communication_step"] =
+      static_cast<double>(statistics.nonlinear_iterations) / communication_steps;
+  state.counters["setups_per_communication_step"] =
+      static_cast<double>(statistics.linear_solver_setups) / communication_steps;
+  state.counters["jacobians_per_communication_step"] =
+      static_cast<double>(statistics.jacobian_evaluations) / communication_steps;
 }
 BENCHMARK(BM_DirectSpiral)
     ->ArgNames({"smooth", "step_ms"})
