@@ -155,6 +155,7 @@ struct Linearised {
   std::vector<std::vector<int>> active_of;          // per active, its columns
   std::vector<std::vector<double>> joint_residual;  // per joint, per row (pinv mapping)
   std::vector<double> residual_norm;                // per row, |measured - predicted| (m), with the mapping
+  std::vector<Eigen::Vector3d> residual;            // per row, measured - predicted (m), with the mapping
   std::vector<std::vector<double>> joint_lever;     // per joint, per row, |dm/dq_j| (m/rad), with the mapping
 };
 
@@ -307,6 +308,7 @@ Linearised linearise(const JointErrorModel& model, const MeasurementCampaign& ca
   if (map_joints) {
     lin.joint_residual.assign(static_cast<std::size_t>(n), std::vector<double>(static_cast<std::size_t>(rows)));
     lin.residual_norm.resize(static_cast<std::size_t>(rows));
+    lin.residual.resize(static_cast<std::size_t>(rows));
     lin.joint_lever.assign(static_cast<std::size_t>(n), std::vector<double>(static_cast<std::size_t>(rows)));
   }
   Eigen::MatrixXd J;
@@ -342,6 +344,7 @@ Linearised linearise(const JointErrorModel& model, const MeasurementCampaign& ca
       const Eigen::VectorXd dq = Jq.completeOrthogonalDecomposition().solve(-(m - data.measured[i]));
       for (int j = 0; j < n; ++j) lin.joint_residual[static_cast<std::size_t>(j)][static_cast<std::size_t>(i)] = dq[j];
       lin.residual_norm[static_cast<std::size_t>(i)] = (m - data.measured[i]).norm();
+      lin.residual[static_cast<std::size_t>(i)] = data.measured[i] - m;
       for (int j = 0; j < n; ++j)
         lin.joint_lever[static_cast<std::size_t>(j)][static_cast<std::size_t>(i)] = Jq.col(j).norm();
     }
@@ -983,8 +986,8 @@ private:
                      options_.folds, true);
     result_.joint_residual_rms_final = jointRms(lin_);
     // Where what is left lies (reported when it is well above the noise floor).
-    const ResidualRows rows{lin_.joint_residual, lin_.joint_lever,   data_.command,
-                            data_.motor,         lin_.residual_norm, lin_.fold};
+    const ResidualRows rows{lin_.joint_residual, lin_.joint_lever, data_.command, data_.motor,
+                            lin_.residual_norm,  lin_.fold,        lin_.residual, data_.time};
     result_.unexplained = analyseUnexplained(prior_.robot(), rows, cal_.after.rms, result_.noise_floor);
     result_.final_state = state_;
     result_.fitted_rows = cal_.used_rows;

@@ -4,7 +4,10 @@
 #include <cmath>
 #include <cstdio>
 #include <numeric>
+#include <string>
 #include <tuple>
+
+#include "model/common/errors.hpp"
 
 namespace jointcomp {
 
@@ -51,15 +54,133 @@ std::string summaryOf(const Robot& robot, const UnexplainedResidual& u, double f
   }
   if (named == 0) s += "none stands out of its joint's spectrum";
   s += "; over time: ";
-  if (u.block_rms.empty()) return s + "not known.";
-  const auto [low, high] = std::minmax_element(u.block_rms.begin(), u.block_rms.end());
-  std::snprintf(text, sizeof(text), "%.4f to %.4f mm RMS per block of consecutive rows (%zu blocks), %s.", *low * 1e3,
-                *high * 1e3, u.block_rms.size(),
-                *high > 1.5 * *low ? "uneven: it changes with time or with where each block went" : "even");
-  return s + text;
+  if (u.block_rms.empty()) {
+    s += "not known.";
+  } else {
+    const auto [low, high] = std::minmax_element(u.block_rms.begin(), u.block_rms.end());
+    std::snprintf(text, sizeof(text), "%.4f to %.4f mm RMS per block of consecutive rows (%zu blocks), %s.", *low * 1e3,
+                  *high * 1e3, u.block_rms.size(),
+                  *high > 1.5 * *low ? "uneven: it changes with time or with where each block went" : "even");
+    s += text;
+  }
+  const PosePredictability& p = u.pose;
+  if (!p.computed) return s;
+  std::snprintf(text, sizeof(text),
+                " As a function of the pose: the mean of the %d nearest poses measured at least %.0f s apart (%.3f rad "
+                "away) leaves %.4f of %.4f mm, ",
+                p.neighbours, p.min_gap_s, p.median_distance_other_times, p.left_other_times_rms * 1e3,
+                p.residual_rms * 1e3);
+  s += text;
+  if (p.median_distance_other_times > kPoseSparseDistance) {
+    s += "but the campaign's poses lie too far apart to tell whether it is a function of the pose";
+  } else {
+    std::snprintf(text, sizeof(text), "so at least %.0f %% of its variance is a function of the pose at this sampling",
+                  100.0 * p.smooth_share);
+    s += text;
+  }
+  std::snprintf(text, sizeof(text), "; the nearest at any time (%.3f rad away) leave %.4f mm",
+                p.median_distance_any_time, p.left_any_time_rms * 1e3);
+  s += text;
+  if (p.left_any_time_rms < 0.75 * p.left_other_times_rms)
+    s += ": rows close in time agree, rows far apart do not, so the rest changes between visits or over poses closer "
+         "than the campaign samples";
+  return s + ".";
+}
+
+// The mean distance (rad) to the k nearest candidates of `i` and the mean of their residuals; false when fewer
+// than k candidates pass `admit`.
+template <class Admit>
+bool nearestMean(const std::vector<JointVector>& q, const std::vector<Eigen::Vector3d>& residual, std::size_t i, int k,
+                 Admit admit, std::vector<std::pair<double, std::size_t>>& best, double& distance,
+                 Eigen::Vector3d& mean) {
+  best.clear();
+  for (std::size_t j = 0; j < q.size(); ++j) {
+    if (j == i || !admit(j)) continue;
+    const double d2 = (q[j] - q[i]).squaredNorm();
+    if (static_cast<int>(best.size()) == k && d2 >= best.back().first) continue;
+    if (static_cast<int>(best.size()) < k)
+      best.emplace_back(d2, j);
+    else
+      best.back() = {d2, j};
+    // Keep the k best sorted: one insertion step.
+    for (std::size_t m = best.size() - 1; m > 0 && best[m].first < best[m - 1].first; --m)
+      std::swap(best[m], best[m - 1]);
+  }
+  if (static_cast<int>(best.size()) < k) return false;
+  distance = 0.0;
+  mean.setZero();
+  for (const auto& [d2, j] : best) {
+    distance += std::sqrt(d2);
+    mean += residual[j];
+  }
+  distance /= k;
+  mean /= k;
+  return true;
+}
+
+double median(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  const auto middle = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
+  std::nth_element(v.begin(), middle, v.end());
+  return *middle;
 }
 
 }  // namespace
+
+PosePredictability posePredictability(const std::vector<JointVector>& q, const std::vector<Eigen::Vector3d>& residual,
+                                      const std::vector<double>& time, int neighbours, double min_gap_s,
+                                      int max_scored_rows) {
+  if (residual.size() != q.size() || time.size() != q.size())
+    throw InvalidArgument("posePredictability: " + std::to_string(q.size()) + " joint vectors, " +
+                          std::to_string(residual.size()) + " residuals and " + std::to_string(time.size()) +
+                          " times; they must be as many");
+  if (neighbours < 1 || !(min_gap_s >= 0.0) || max_scored_rows < 1)
+    throw InvalidArgument("posePredictability: neighbours and max_scored_rows must be at least 1 and min_gap_s >= 0");
+  for (std::size_t i = 0; i < q.size(); ++i) {
+    if (!q[i].allFinite() || !residual[i].allFinite() || !std::isfinite(time[i]) ||
+        (i > 0 && q[i].size() != q[0].size()))
+      throw InvalidArgument("posePredictability: row " + std::to_string(i) +
+                            " has a non-finite value or a joint vector of another size");
+  }
+  PosePredictability p;
+  p.neighbours = neighbours;
+  p.min_gap_s = min_gap_s;
+  const std::size_t n = q.size();
+  if (n < static_cast<std::size_t>(neighbours) + 2) return p;
+  const std::size_t stride =
+      (n + static_cast<std::size_t>(max_scored_rows) - 1) / static_cast<std::size_t>(max_scored_rows);
+  std::vector<std::pair<double, std::size_t>> best;
+  best.reserve(static_cast<std::size_t>(neighbours));
+  double sum_rr = 0.0, sum_other = 0.0, sum_any = 0.0;
+  std::vector<double> distance_other, distance_any;
+  for (std::size_t i = 0; i < n; i += stride) {
+    double d_other = 0.0, d_any = 0.0;
+    Eigen::Vector3d mean_other = Eigen::Vector3d::Zero(), mean_any = Eigen::Vector3d::Zero();
+    const bool other = nearestMean(
+        q, residual, i, neighbours, [&](std::size_t j) { return std::abs(time[j] - time[i]) >= min_gap_s; }, best,
+        d_other, mean_other);
+    if (!other) continue;
+    nearestMean(
+        q, residual, i, neighbours, [](std::size_t) { return true; }, best, d_any, mean_any);
+    sum_rr += residual[i].squaredNorm();
+    sum_other += (residual[i] - mean_other).squaredNorm();
+    sum_any += (residual[i] - mean_any).squaredNorm();
+    distance_other.push_back(d_other);
+    distance_any.push_back(d_any);
+  }
+  p.scored_rows = static_cast<int>(distance_other.size());
+  if (p.scored_rows < neighbours + 1 || sum_rr <= 0.0) return p;
+  const double scored = static_cast<double>(p.scored_rows);
+  p.computed = true;
+  p.residual_rms = std::sqrt(sum_rr / scored);
+  p.left_other_times_rms = std::sqrt(sum_other / scored);
+  p.left_any_time_rms = std::sqrt(sum_any / scored);
+  p.median_distance_other_times = median(distance_other);
+  p.median_distance_any_time = median(distance_any);
+  const double noise_only = (1.0 + 1.0 / neighbours) * sum_rr;
+  p.smooth_share = std::clamp(1.0 - sum_other / noise_only, 0.0, 1.0);
+  return p;
+}
 
 UnexplainedResidual analyseUnexplained(const Robot& robot, const ResidualRows& rows, double fitted_rms,
                                        double noise_floor) {
@@ -111,6 +232,7 @@ UnexplainedResidual analyseUnexplained(const Robot& robot, const ResidualRows& r
     count[b] += 1.0;
   }
   for (std::size_t b = 0; b < sum.size(); ++b) u.block_rms.push_back(count[b] > 0 ? std::sqrt(sum[b] / count[b]) : 0.0);
+  if (!rows.residual.empty()) u.pose = posePredictability(rows.output_angle, rows.residual, rows.time);
   u.summary = summaryOf(robot, u, fitted_rms);
   return u;
 }

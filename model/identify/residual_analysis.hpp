@@ -1,7 +1,8 @@
 // Where a residual lies, for a discovery that stops well above the noise floor: which joints carry it (the
 // residual mapped to the joints), which orders of which angle repeat in it (a periodogram of each joint's
 // residual against its output angle and its motor angle), and how it spreads over time (blocks of
-// consecutive rows). It names where to look next; it fits nothing into the model.
+// consecutive rows), and how much of it is a function of the pose at all (its nearest poses measured at other
+// times predict it or not). It names where to look next; it fits nothing into the model.
 #pragma once
 
 #include <string>
@@ -26,6 +27,38 @@ constexpr int kMaxScannedOutputOrder = 24;
 constexpr int kMaxScannedMotorOrder = 8;
 constexpr double kUnexplainedFactor = 1.5;  // a fitted RMS above this many noise floors is reported
 
+// How much of a residual is a function of the pose that holds from one visit to the next, at the campaign's
+// own sampling: each row's residual is predicted by the mean of its k nearest rows in joint space (plain
+// radians), once among the rows measured at least min_gap_s before or after it, once among all rows. Noise
+// independent between rows leaves sqrt(1 + 1/k) times its RMS; a smooth function of the pose plus such noise
+// leaves only the noise's part. So smooth_share = 1 - left^2 / ((1 + 1/k) rms^2) is a lower bound of the share
+// of the residual's variance that a model of the pose could take: lower when the function varies faster than
+// the campaign samples the pose. Rows close in time and in pose that agree while rows far in time do not point
+// to something that changes between visits (drift, set-up), not to a missing joint effect.
+struct PosePredictability {
+  bool computed = false;  // false: too few rows, or no row has k neighbours measured min_gap_s away
+  int neighbours = 0;
+  double min_gap_s = 0.0;
+  int scored_rows = 0;                       // rows predicted (every row up to max_scored_rows, else a stride)
+  double residual_rms = 0.0;                 // m, 3-D RMS of the scored rows
+  double left_other_times_rms = 0.0;         // m, left after the mean of the nearest rows min_gap_s away in time
+  double left_any_time_rms = 0.0;            // m, left after the mean of the nearest rows at any time
+  double median_distance_other_times = 0.0;  // rad, median mean distance to those neighbours in joint space
+  double median_distance_any_time = 0.0;     // rad
+  double smooth_share = 0.0;                 // in [0, 1], from left_other_times_rms (see above)
+};
+
+constexpr int kPoseNeighbours = 3;
+constexpr double kPoseMinGapSeconds = 600.0;
+constexpr int kPoseMaxScoredRows = 4000;
+// Beyond this median distance (rad) to the neighbours, the summary says the poses are too sparse to tell.
+constexpr double kPoseSparseDistance = 0.3;
+
+// Throws InvalidArgument when the three vectors differ in size or a row has a non-finite value (naming it).
+PosePredictability posePredictability(const std::vector<JointVector>& q, const std::vector<Eigen::Vector3d>& residual,
+                                      const std::vector<double>& time, int neighbours = kPoseNeighbours,
+                                      double min_gap_s = kPoseMinGapSeconds, int max_scored_rows = kPoseMaxScoredRows);
+
 struct UnexplainedResidual {
   bool above_floor = false;           // the fitted RMS is above kUnexplainedFactor times the noise floor
   bool floor_known = false;           // false: nothing to compare with, so what is left is reported anyway
@@ -35,6 +68,7 @@ struct UnexplainedResidual {
   std::vector<double> joint_rms_m;    // per joint: RMS of |dm/dq_j| dq_j, its share at the target
   std::vector<ResidualOrder> orders;  // per joint and angle the strongest order, those standing out first
   std::vector<double> block_rms;      // m, 3-D RMS of each block of consecutive rows, in time order
+  PosePredictability pose;            // how much of it is a function of the pose (computed when rows have times)
   std::string summary;                // one paragraph naming where it lies
 };
 
@@ -45,6 +79,8 @@ struct ResidualRows {
   std::vector<JointVector> motor_angle;             // per row (rad)
   std::vector<double> residual_norm;                // per row, |measured - predicted| (m)
   std::vector<int> block;                           // per row, its time block (0 .. blocks-1, non-decreasing)
+  std::vector<Eigen::Vector3d> residual;            // per row, measured - predicted (m); empty: pose not analysed
+  std::vector<double> time;                         // per row (s), as residual
 };
 
 UnexplainedResidual analyseUnexplained(const Robot& robot, const ResidualRows& rows, double fitted_rms,

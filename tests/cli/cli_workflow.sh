@@ -132,7 +132,7 @@ if [ -n "$library" ]; then
 import re, sys
 text = open(sys.argv[1]).read()
 rms = float(re.search(r"residual RMS ([0-9.]+) mm", text).group(1))
-left = [float(x) for x in re.findall(r"nearest poses: ([0-9.]+) mm", text)]
+left = [float(x) for x in re.findall(r"nearest poses: ([0-9.]+) mm", text)]  # at any time
 assert 0.005 < rms < 0.1, rms  # the simulated tracker's noise, in mm
 assert len(left) == 2 and all(x > 0.95 * rms for x in left), (rms, left)
 PY
