@@ -661,6 +661,7 @@ private:
         c.fraction_outside.push_back(result_.coverage.fractionOutside(j, rows));
         c.flagged = c.flagged || c.fraction_outside.back() > kCoverageFlagFraction;
       }
+      if (!rows.empty()) c.median_pose_distance = medianDistanceToNearest(data_.command, rows);
       result_.heldout_coverage.push_back(c);
     }
   }

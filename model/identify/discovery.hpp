@@ -106,6 +106,7 @@ struct DiscoveryStep {
 struct HeldoutCoverage {
   std::vector<double> fraction_outside;  // per joint, of its rows
   bool flagged = false;                  // some joint has more than kCoverageFlagFraction of its rows outside
+  double median_pose_distance = 0.0;     // rad, median distance of its poses to the nearest fitted pose
 };
 constexpr double kCoverageHalfWidth = 0.0872664626;  // rad (5 deg) around every fitted row's angle
 constexpr double kCoverageFlagFraction = 0.05;

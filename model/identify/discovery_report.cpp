@@ -62,7 +62,8 @@ nlohmann::ordered_json coverageJson(const DiscoveryResult& result, const Discove
   for (std::size_t k = 0; k < result.heldout_coverage.size(); ++k) {
     held.push_back({{"campaign", campaignName(sources, true, static_cast<int>(k))},
                     {"fraction_outside_per_joint", result.heldout_coverage[k].fraction_outside},
-                    {"flagged", result.heldout_coverage[k].flagged}});
+                    {"flagged", result.heldout_coverage[k].flagged},
+                    {"median_distance_to_fitted_pose_rad", result.heldout_coverage[k].median_pose_distance}});
   }
   return {{"half_width_deg", kCoverageHalfWidth * kDeg},
           {"flag_fraction", kCoverageFlagFraction},
@@ -199,6 +200,14 @@ std::string discoverySummary(const DiscoveryResult& result, const DiscoveryOptio
   summary << line;
   for (std::size_t k = 0; k < result.heldout_coverage.size(); ++k) {
     const HeldoutCoverage& c = result.heldout_coverage[k];
+    std::snprintf(line, sizeof(line), "held-out %s: its poses lie %.3f rad (median) from the nearest fitted pose%s\n",
+                  campaignName(sources, true, static_cast<int>(k)).c_str(), c.median_pose_distance,
+                  result.unexplained.pose.computed &&
+                          c.median_pose_distance > 2.0 * result.unexplained.pose.median_distance_other_times
+                      ? ", beyond where the fitted residual is known as a function of the pose: only effects whose "
+                        "physical form carries over to other poses can help it"
+                      : "");
+    summary << line;
     if (!c.flagged) continue;
     summary << "warning: held-out " << campaignName(sources, true, static_cast<int>(k))
             << " visits joint angles the fit never covered:";

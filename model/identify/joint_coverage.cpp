@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
+#include <string>
 
 #include "model/common/errors.hpp"
 
@@ -63,6 +65,33 @@ std::string JointCoverage::describe(int joint) const {
     text += part;
   }
   return text;
+}
+
+double medianDistanceToNearest(const std::vector<JointVector>& fitted, const std::vector<JointVector>& rows,
+                               int max_rows) {
+  if (fitted.empty() || rows.empty() || max_rows < 1)
+    throw InvalidArgument("distance to the nearest fitted pose: no fitted rows, no rows or max_rows < 1");
+  const Eigen::Index n = fitted.front().size();
+  const auto check = [n](const std::vector<JointVector>& v, const char* what) {
+    for (std::size_t k = 0; k < v.size(); ++k) {
+      if (v[k].size() != n || !v[k].allFinite())
+        throw InvalidArgument(std::string("distance to the nearest fitted pose: ") + what + " row " +
+                              std::to_string(k) + " has another size or a non-finite angle");
+    }
+  };
+  check(fitted, "fitted");
+  check(rows, "held-out");
+  const std::size_t stride =
+      (rows.size() + static_cast<std::size_t>(max_rows) - 1) / static_cast<std::size_t>(max_rows);
+  std::vector<double> nearest;
+  for (std::size_t i = 0; i < rows.size(); i += stride) {
+    double best = std::numeric_limits<double>::infinity();
+    for (const JointVector& f : fitted) best = std::min(best, (f - rows[i]).squaredNorm());
+    nearest.push_back(std::sqrt(best));
+  }
+  const auto middle = nearest.begin() + static_cast<std::ptrdiff_t>(nearest.size() / 2);
+  std::nth_element(nearest.begin(), middle, nearest.end());
+  return *middle;
 }
 
 }  // namespace jointcomp

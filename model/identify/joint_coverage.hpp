@@ -27,4 +27,11 @@ struct JointCoverage {
 // Throws InvalidArgument for no rows, rows of different sizes, non-finite angles or a half width <= 0.
 JointCoverage jointCoverage(const std::vector<JointVector>& rows, double half_width);
 
+// The median over `rows` of the distance (rad, joint space, all joints) to the nearest of `fitted`: every joint
+// inside its coverage does not make a pose near the fitted ones (a held-out campaign that reaches its goals in
+// other configurations combines visited angles into unvisited poses). At most max_rows rows are scored (a
+// stride). Throws InvalidArgument for empty inputs, rows of different sizes or non-finite angles.
+double medianDistanceToNearest(const std::vector<JointVector>& fitted, const std::vector<JointVector>& rows,
+                               int max_rows = 4000);
+
 }  // namespace jointcomp

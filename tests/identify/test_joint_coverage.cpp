@@ -38,6 +38,26 @@ TEST(JointCoverage, AgreesWithABruteForceScan) {
   EXPECT_NE(coverage.describe(0).find(", "), std::string::npos);
 }
 
+TEST(JointCoverage, MedianDistanceToTheNearestFittedPose) {
+  // Two fitted poses; held-out poses 0.1, 0.2 (the median) and 2 rad away; joints covered one by one do not make
+  // a covered pose: (1, 1) has both angles visited but lies 1 rad from either fitted pose.
+  const std::vector<JointVector> fitted = {Eigen::Vector2d(0.0, 0.0), Eigen::Vector2d(1.0, 0.0),
+                                           Eigen::Vector2d(0.0, 1.0)};
+  const std::vector<JointVector> rows = {Eigen::Vector2d(0.1, 0.0), Eigen::Vector2d(1.0, 0.2),
+                                         Eigen::Vector2d(1.0, 3.0)};
+  EXPECT_DOUBLE_EQ(medianDistanceToNearest(fitted, rows), 0.2);
+  const JointCoverage coverage = jointCoverage(fitted, 0.05);
+  const std::vector<JointVector> combined = {Eigen::Vector2d(1.0, 1.0)};
+  EXPECT_EQ(coverage.fractionOutside(0, combined), 0.0);
+  EXPECT_EQ(coverage.fractionOutside(1, combined), 0.0);
+  EXPECT_DOUBLE_EQ(medianDistanceToNearest(fitted, combined), 1.0);
+  // A stride of at most max_rows rows: 1 of 3 scored, the first.
+  EXPECT_DOUBLE_EQ(medianDistanceToNearest(fitted, rows, 1), 0.1);
+  EXPECT_THROW(medianDistanceToNearest({}, rows), InvalidArgument);
+  EXPECT_THROW(medianDistanceToNearest(fitted, {Eigen::Vector3d::Zero()}), InvalidArgument);
+  EXPECT_THROW(medianDistanceToNearest(fitted, {Eigen::Vector2d(std::nan(""), 0.0)}), InvalidArgument);
+}
+
 TEST(JointCoverage, RefusesWhatItCannotCover) {
   EXPECT_THROW(jointCoverage({}, 0.1), InvalidArgument);
   JointVector q(1);

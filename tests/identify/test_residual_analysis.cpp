@@ -57,6 +57,11 @@ TEST(ResidualAnalysis, DiscoveryNamesWhatItCannotExplain) {
   // The summary file says it too.
   DiscoverySources sources;
   EXPECT_THAT(discoverySummary(r, DiscoveryOptions(), sources), ::testing::HasSubstr("what is left"));
+  // And how far the held-out poses lie from the fitted ones: random poses of six joints, radians.
+  ASSERT_EQ(r.heldout_coverage.size(), 1u);
+  EXPECT_GT(r.heldout_coverage[0].median_pose_distance, kPoseSparseDistance);
+  EXPECT_THAT(discoverySummary(r, DiscoveryOptions(), sources),
+              ::testing::HasSubstr("(median) from the nearest fitted pose"));
 }
 
 // Rows on a dense random set of poses (two joints move), times 1 s apart in the order the poses are visited.
