@@ -1024,6 +1024,38 @@ private:
 
 }  // namespace
 
+namespace {
+
+// Fitted campaigns share one instrument frame. Campaigns from different tracker set-ups do not, and fitted
+// together they make a calibration that cannot converge (seconds later, with a message about iterations):
+// each campaign's frame is fitted alone on the prior first, and frames far apart are named at once.
+void checkOneInstrumentSetUp(const JointErrorModel& prior, const std::vector<MeasurementCampaign>& fitted,
+                             const DiscoveryOptions& options) {
+  if (fitted.size() < 2 || fitted.front().frame != MeasurementFrame::Instrument) return;
+  std::vector<GeometricParameters> frames;
+  for (const MeasurementCampaign& c : fitted) {
+    frames.push_back(
+        evaluateOnCampaign(prior, nominalParameters(prior, c), c, /*refit_frame=*/true, options.calibration)
+            .parameters);
+  }
+  for (std::size_t c = 1; c < fitted.size(); ++c) {
+    const Eigen::Isometry3d relative = frames[c].instrumentFromBase() * frames.front().instrumentFromBase().inverse();
+    const double apart_m = relative.translation().norm();
+    const double apart_rad = Eigen::AngleAxisd(relative.linear()).angle();
+    if (apart_m <= kSameSetUpDistance && apart_rad <= kSameSetUpAngle) continue;
+    char text[160];
+    std::snprintf(text, sizeof(text), "%.1f mm and %.2f deg", apart_m * 1e3, apart_rad * 180.0 / M_PI);
+    throw InvalidArgument("discover: '" + fitted[c].source + "' was measured from another instrument set-up than '" +
+                          fitted.front().source + "' (their instrument frames, each fitted on the prior, differ by " +
+                          text +
+                          "); discovery fits one instrument frame for all fitted campaigns: fit the campaigns "
+                          "of one set-up together and hold the others out (--holdout), which re-fits their "
+                          "frames");
+  }
+}
+
+}  // namespace
+
 DiscoveryResult discoverEffects(const JointErrorModel& prior, const std::vector<MeasurementCampaign>& fitted,
                                 const std::vector<MeasurementCampaign>& heldout, const DiscoveryOptions& options) {
   if (options.folds < 2) throw InvalidArgument("discover: folds must be at least 2");
@@ -1031,6 +1063,7 @@ DiscoveryResult discoverEffects(const JointErrorModel& prior, const std::vector<
     throw InvalidArgument("discover: max_prior_weight is " + std::to_string(options.max_prior_weight) +
                           "; it must be finite and >= 0 (0: no prior)");
   }
+  checkOneInstrumentSetUp(prior, fitted, options);
   return DiscoveryRun(prior, fitted, heldout, options).run();
 }
 

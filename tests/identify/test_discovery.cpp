@@ -118,6 +118,44 @@ TEST(Discovery, FlagsAHeldOutCampaignBeyondTheFittedAngles) {
   EXPECT_GT(r.heldout_coverage[0].fraction_outside[0], 0.2);
 }
 
+// Campaigns seen from an instrument: positions through a rigid transform, the frame declared "instrument".
+MeasurementCampaign seenFrom(MeasurementCampaign c, const Eigen::Isometry3d& instrument_from_base,
+                             const std::string& source) {
+  for (Eigen::Vector3d& p : c.position) p = instrument_from_base * p;
+  c.frame = MeasurementFrame::Instrument;
+  c.source = source;
+  return c;
+}
+
+TEST(Discovery, FittedCampaignsFromTwoInstrumentSetUpsAreNamedNotFitted) {
+  Eigen::Isometry3d tracker = Eigen::Isometry3d::Identity();
+  tracker.linear() = Eigen::AngleAxisd(0.4, Eigen::Vector3d(0.1, 0.2, 1.0).normalized()).toRotationMatrix();
+  tracker.translation() = Eigen::Vector3d(2.5, -1.0, 0.3);
+  const MeasurementCampaign first = seenFrom(randomCampaign(rx170Model(), 200, 14), tracker, "first.csv");
+  const MeasurementCampaign same = seenFrom(randomCampaign(rx170Model(), 200, 15), tracker, "same.csv");
+  DiscoveryOptions options;
+  options.types = {"offset"};
+  options.max_steps = 1;
+  // One set-up: fitted together.
+  EXPECT_NO_THROW(discoverEffects(rx170Model(), {first, same}, {}, options));
+  // The tracker moved 100 mm, or turned 5 degrees: a clear error naming both campaigns, before any fit.
+  Eigen::Isometry3d moved = tracker;
+  moved.translation() += Eigen::Vector3d(0.0, 0.1, 0.0);
+  Eigen::Isometry3d turned = tracker;
+  turned.linear() = Eigen::AngleAxisd(5.0 * M_PI / 180.0, Eigen::Vector3d::UnitZ()) * tracker.linear();
+  for (const Eigen::Isometry3d& other : {moved, turned}) {
+    const MeasurementCampaign second = seenFrom(randomCampaign(rx170Model(), 200, 15), other, "second.csv");
+    try {
+      discoverEffects(rx170Model(), {first, second}, {}, options);
+      ADD_FAILURE() << "two set-ups were fitted as one";
+    } catch (const InvalidArgument& e) {
+      EXPECT_THAT(e.what(), ::testing::HasSubstr("'second.csv' was measured from another instrument set-up than "
+                                                 "'first.csv'"));
+      EXPECT_THAT(e.what(), ::testing::HasSubstr("--holdout"));
+    }
+  }
+}
+
 TEST(Discovery, RejectsATermThatHelpsOnePartAndHurtsAnother) {
   // Joint 3 is off by 1 mrad, but only where joint 1 is below -0.5 rad (the rest of the workspace is
   // exact): one offset over all the data fits the average, helps one region and hurts the other.
