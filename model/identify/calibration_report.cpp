@@ -75,8 +75,18 @@ CalibrationRun runCalibration(const JointErrorModel& prior, const MeasurementCam
   std::vector<std::string> left_out;
   JointErrorModel calibrated = calibratedJointErrorModel(prior, calibrated_robot, result, left_out);
   std::vector<RowResidual> residual = rowResiduals(prior, result.estimate, campaign);
-  return CalibrationRun{std::move(result),   std::move(runs), calibrated_robot,   std::move(calibrated),
-                        std::move(left_out), seconds,         std::move(residual)};
+  std::vector<JointVector> pose_q;
+  std::vector<Eigen::Vector3d> pose_error;
+  std::vector<double> pose_time;
+  for (const RowResidual& r : residual) {
+    pose_q.push_back(campaign.command[static_cast<std::size_t>(r.row)]);
+    pose_error.push_back(r.error);
+    pose_time.push_back(campaign.time[static_cast<std::size_t>(r.row)]);
+  }
+  CalibrationRun run{
+      std::move(result),   std::move(runs), calibrated_robot,    std::move(calibrated),
+      std::move(left_out), seconds,         std::move(residual), posePredictability(pose_q, pose_error, pose_time)};
+  return run;
 }
 
 nlohmann::ordered_json calibrationReportJson(const CalibrationRun& run, const MeasurementCampaign& campaign,
@@ -162,6 +172,7 @@ nlohmann::ordered_json calibrationReportJson(const CalibrationRun& run, const Me
                          {"after_with_calibration_frame", errorStatisticsJson(held.shared_frame.statistics)}});
   }
   report["campaigns"] = campaigns;
+  report["pose_predictability"] = posePredictabilityJson(run.pose);
   report["outputs"] = sources.outputs;
   return report;
 }
@@ -204,6 +215,7 @@ std::string calibrationSummary(const CalibrationRun& run, const CalibrationSourc
                       : ": the campaigns share the instrument frame");
     summary << line;
   }
+  summary << "\nWhat the calibration leaves. " << describePosePredictability(run.pose) << "\n";
   summary << "\nIdentified parameters (1 sigma):\n";
   for (const ParameterEstimate& p : result.parameters) {
     if (p.identified) summary << parameterLine(p);
@@ -220,6 +232,19 @@ std::string calibrationSummary(const CalibrationRun& run, const CalibrationSourc
     for (const std::string& item : run.compliance_left_out) summary << "  " << item << "\n";
   }
   return summary.str();
+}
+
+nlohmann::ordered_json posePredictabilityJson(const PosePredictability& pose) {
+  if (!pose.computed) return nullptr;
+  return {{"neighbours", pose.neighbours},
+          {"min_gap_s", pose.min_gap_s},
+          {"scored_rows", pose.scored_rows},
+          {"residual_rms_mm", pose.residual_rms * 1e3},
+          {"left_other_times_rms_mm", pose.left_other_times_rms * 1e3},
+          {"left_any_time_rms_mm", pose.left_any_time_rms * 1e3},
+          {"median_distance_other_times_rad", pose.median_distance_other_times},
+          {"median_distance_any_time_rad", pose.median_distance_any_time},
+          {"smooth_share", pose.smooth_share}};
 }
 
 std::string calibrationResidualsCsv(const CalibrationRun& run, const CalibrationSources& sources) {

@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include "model/identify/geometric_calibration.hpp"
+#include "model/identify/residual_analysis.hpp"
 
 namespace jointcomp {
 
@@ -30,6 +31,7 @@ struct CalibrationRun {
   std::vector<std::string> compliance_left_out;   // "<joint>: reason" (see calibratedJointErrorModel)
   double seconds = 0.0;                           // wall time of the fit
   std::vector<RowResidual> residual;              // calibrated, per used row of the campaign
+  PosePredictability pose;                        // how much of that residual is a function of the pose
 };
 
 CalibrationRun runCalibration(const JointErrorModel& prior, const MeasurementCampaign& campaign,
@@ -55,5 +57,7 @@ std::string calibrationResidualsCsv(const CalibrationRun& run, const Calibration
 
 // Statistics in the units people read (mm), as every report writes them.
 nlohmann::ordered_json errorStatisticsJson(const ErrorStatistics& statistics);
+// residual_analysis.hpp's PosePredictability in report units (mm, rad); null when not computed.
+nlohmann::ordered_json posePredictabilityJson(const PosePredictability& pose);
 
 }  // namespace jointcomp

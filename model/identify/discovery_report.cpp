@@ -93,25 +93,13 @@ nlohmann::ordered_json unexplainedJson(const DiscoveryResult& result) {
   }
   nlohmann::ordered_json blocks = nlohmann::ordered_json::array();
   for (double b : u.block_rms) blocks.push_back(b * 1e3);
-  nlohmann::ordered_json pose = nullptr;
-  if (u.pose.computed) {
-    pose = {{"neighbours", u.pose.neighbours},
-            {"min_gap_s", u.pose.min_gap_s},
-            {"scored_rows", u.pose.scored_rows},
-            {"residual_rms_mm", u.pose.residual_rms * 1e3},
-            {"left_other_times_rms_mm", u.pose.left_other_times_rms * 1e3},
-            {"left_any_time_rms_mm", u.pose.left_any_time_rms * 1e3},
-            {"median_distance_other_times_rad", u.pose.median_distance_other_times},
-            {"median_distance_any_time_rad", u.pose.median_distance_any_time},
-            {"smooth_share", u.pose.smooth_share}};
-  }
   return {
       {"above_noise_floor", u.floor_known ? nlohmann::ordered_json(u.above_floor) : nlohmann::ordered_json(nullptr)},
       {"fitted_over_floor", u.over_floor},
       {"joints_by_rms", joints},
       {"strongest_orders", orders},
       {"time_block_rms_mm", blocks},
-      {"pose_predictability", pose},
+      {"pose_predictability", posePredictabilityJson(u.pose)},
       {"summary", u.summary}};
 }
 

@@ -63,38 +63,18 @@ std::string summaryOf(const Robot& robot, const UnexplainedResidual& u, double f
                   *high > 1.5 * *low ? "uneven: it changes with time or with where each block went" : "even");
     s += text;
   }
-  const PosePredictability& p = u.pose;
-  if (!p.computed) return s;
-  std::snprintf(text, sizeof(text),
-                " As a function of the pose: the mean of the %d nearest poses measured at least %.0f s apart (%.3f rad "
-                "away) leaves %.4f of %.4f mm, ",
-                p.neighbours, p.min_gap_s, p.median_distance_other_times, p.left_other_times_rms * 1e3,
-                p.residual_rms * 1e3);
-  s += text;
-  if (p.median_distance_other_times > kPoseSparseDistance) {
-    s += "but the campaign's poses lie too far apart to tell whether it is a function of the pose";
-  } else {
-    std::snprintf(text, sizeof(text), "so at least %.0f %% of its variance is a function of the pose at this sampling",
-                  100.0 * p.smooth_share);
-    s += text;
-  }
-  std::snprintf(text, sizeof(text), "; the nearest at any time (%.3f rad away) leave %.4f mm",
-                p.median_distance_any_time, p.left_any_time_rms * 1e3);
-  s += text;
-  if (p.left_any_time_rms < 0.75 * p.left_other_times_rms)
-    s += ": rows close in time agree, rows far apart do not, so the rest changes between visits or over poses closer "
-         "than the campaign samples";
-  return s + ".";
+  return u.pose.computed ? s + " " + describePosePredictability(u.pose) : s;
 }
 
 // The mean distance (rad) to the k nearest candidates of `i` and the mean of their residuals; false when fewer
 // than k candidates pass `admit`.
+// Candidates are every `step`-th row, so that the work stays bounded on very long campaigns.
 template <class Admit>
 bool nearestMean(const std::vector<JointVector>& q, const std::vector<Eigen::Vector3d>& residual, std::size_t i, int k,
-                 Admit admit, std::vector<std::pair<double, std::size_t>>& best, double& distance,
+                 std::size_t step, Admit admit, std::vector<std::pair<double, std::size_t>>& best, double& distance,
                  Eigen::Vector3d& mean) {
   best.clear();
-  for (std::size_t j = 0; j < q.size(); ++j) {
+  for (std::size_t j = 0; j < q.size(); j += step) {
     if (j == i || !admit(j)) continue;
     const double d2 = (q[j] - q[i]).squaredNorm();
     if (static_cast<int>(best.size()) == k && d2 >= best.back().first) continue;
@@ -127,6 +107,32 @@ double median(std::vector<double> v) {
 
 }  // namespace
 
+std::string describePosePredictability(const PosePredictability& p) {
+  if (!p.computed) return "As a function of the pose: not known (too few rows, or none measured far enough apart).";
+  char text[256];
+  std::string s;
+  std::snprintf(text, sizeof(text),
+                "As a function of the pose: the mean of the %d nearest poses measured at least %.0f s apart (%.3f rad "
+                "away) leaves %.4f of %.4f mm, ",
+                p.neighbours, p.min_gap_s, p.median_distance_other_times, p.left_other_times_rms * 1e3,
+                p.residual_rms * 1e3);
+  s += text;
+  if (p.median_distance_other_times > kPoseSparseDistance) {
+    s += "but the campaign's poses lie too far apart to tell whether it is a function of the pose";
+  } else {
+    std::snprintf(text, sizeof(text), "so at least %.0f %% of its variance is a function of the pose at this sampling",
+                  100.0 * p.smooth_share);
+    s += text;
+  }
+  std::snprintf(text, sizeof(text), "; the nearest at any time (%.3f rad away) leave %.4f mm",
+                p.median_distance_any_time, p.left_any_time_rms * 1e3);
+  s += text;
+  if (p.left_any_time_rms < 0.75 * p.left_other_times_rms)
+    s += ": rows close in time agree, rows far apart do not, so the rest changes between visits or over poses closer "
+         "than the campaign samples";
+  return s + ".";
+}
+
 PosePredictability posePredictability(const std::vector<JointVector>& q, const std::vector<Eigen::Vector3d>& residual,
                                       const std::vector<double>& time, int neighbours, double min_gap_s,
                                       int max_scored_rows) {
@@ -149,6 +155,9 @@ PosePredictability posePredictability(const std::vector<JointVector>& q, const s
   if (n < static_cast<std::size_t>(neighbours) + 2) return p;
   const std::size_t stride =
       (n + static_cast<std::size_t>(max_scored_rows) - 1) / static_cast<std::size_t>(max_scored_rows);
+  // At most kPoseMaxCandidateRows candidate neighbours: a stride on very long campaigns (the estimate then
+  // sees the pose more coarsely; it stays a lower bound).
+  const std::size_t step = (n + kPoseMaxCandidateRows - 1) / kPoseMaxCandidateRows;
   std::vector<std::pair<double, std::size_t>> best;
   best.reserve(static_cast<std::size_t>(neighbours));
   double sum_rr = 0.0, sum_other = 0.0, sum_any = 0.0;
@@ -157,11 +166,11 @@ PosePredictability posePredictability(const std::vector<JointVector>& q, const s
     double d_other = 0.0, d_any = 0.0;
     Eigen::Vector3d mean_other = Eigen::Vector3d::Zero(), mean_any = Eigen::Vector3d::Zero();
     const bool other = nearestMean(
-        q, residual, i, neighbours, [&](std::size_t j) { return std::abs(time[j] - time[i]) >= min_gap_s; }, best,
+        q, residual, i, neighbours, step, [&](std::size_t j) { return std::abs(time[j] - time[i]) >= min_gap_s; }, best,
         d_other, mean_other);
     if (!other) continue;
     nearestMean(
-        q, residual, i, neighbours, [](std::size_t) { return true; }, best, d_any, mean_any);
+        q, residual, i, neighbours, step, [](std::size_t) { return true; }, best, d_any, mean_any);
     sum_rr += residual[i].squaredNorm();
     sum_other += (residual[i] - mean_other).squaredNorm();
     sum_any += (residual[i] - mean_any).squaredNorm();

@@ -5,6 +5,7 @@
 // times predict it or not). It names where to look next; it fits nothing into the model.
 #pragma once
 
+#include <cstddef>
 #include <string>
 #include <vector>
 
@@ -51,6 +52,7 @@ struct PosePredictability {
 constexpr int kPoseNeighbours = 3;
 constexpr double kPoseMinGapSeconds = 600.0;
 constexpr int kPoseMaxScoredRows = 4000;
+constexpr std::size_t kPoseMaxCandidateRows = 50000;  // neighbours are looked for among at most this many rows
 // Beyond this median distance (rad) to the neighbours, the summary says the poses are too sparse to tell.
 constexpr double kPoseSparseDistance = 0.3;
 
@@ -58,6 +60,9 @@ constexpr double kPoseSparseDistance = 0.3;
 PosePredictability posePredictability(const std::vector<JointVector>& q, const std::vector<Eigen::Vector3d>& residual,
                                       const std::vector<double>& time, int neighbours = kPoseNeighbours,
                                       double min_gap_s = kPoseMinGapSeconds, int max_scored_rows = kPoseMaxScoredRows);
+
+// One or two sentences for reports: "As a function of the pose: the mean of the 3 nearest poses measured ...".
+std::string describePosePredictability(const PosePredictability& p);
 
 struct UnexplainedResidual {
   bool above_floor = false;           // the fitted RMS is above kUnexplainedFactor times the noise floor
