@@ -5,6 +5,8 @@
 
 #include <Eigen/Dense>
 
+#include "model/common/median.hpp"
+
 namespace jointcomp {
 
 OrderPeak strongestOrder(const std::vector<double>& signal, const std::vector<double>& angle, int first_order,
@@ -30,8 +32,7 @@ OrderPeak strongestOrder(const std::vector<double>& signal, const std::vector<do
   }
   // The median needs a few orders to stand for the noise.
   if (amplitude.size() >= 3) {
-    std::nth_element(amplitude.begin(), amplitude.begin() + static_cast<long>(amplitude.size() / 2), amplitude.end());
-    best.stands_out = best.amplitude > kOrderStandsOut * amplitude[amplitude.size() / 2];
+    best.stands_out = best.amplitude > kOrderStandsOut * median(std::move(amplitude));
   }
   return best;
 }

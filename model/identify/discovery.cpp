@@ -8,6 +8,7 @@
 #include <set>
 
 #include "model/common/errors.hpp"
+#include "model/common/median.hpp"
 #include "model/compensation/metrics.hpp"
 #include "model/effects/registry.hpp"
 #include "model/robot/kinematics.hpp"
@@ -518,9 +519,8 @@ bool isPathCampaign(const MeasurementCampaign& campaign) {
   if (campaign.time.size() < 20) return false;
   std::vector<double> steps;
   for (std::size_t k = 1; k < campaign.time.size(); ++k) steps.push_back(campaign.time[k] - campaign.time[k - 1]);
-  std::nth_element(steps.begin(), steps.begin() + static_cast<long>(steps.size() / 2), steps.end());
-  const double median = steps[steps.size() / 2];
-  return median > 0.0 && median <= 0.1;
+  const double typical_step = median(std::move(steps));
+  return typical_step > 0.0 && typical_step <= 0.1;
 }
 
 const std::vector<std::string>& discoveryEffectTypes() {

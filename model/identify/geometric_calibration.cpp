@@ -13,6 +13,7 @@
 #include <Eigen/SVD>
 
 #include "model/common/errors.hpp"
+#include "model/common/median.hpp"
 #include "model/common/random.hpp"
 #include "model/effects/backlash.hpp"
 #include "model/effects/compliance.hpp"
@@ -62,13 +63,6 @@ std::string fmt(const char* format, double value) {
   char buffer[64];
   std::snprintf(buffer, sizeof(buffer), format, value);
   return buffer;
-}
-
-double median(std::vector<double> values) {
-  if (values.empty()) return 0.0;
-  const std::size_t middle = values.size() / 2;
-  std::nth_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(middle), values.end());
-  return values[middle];
 }
 
 // The least-squares problem over a subset of the parameters, the others held at `base`.

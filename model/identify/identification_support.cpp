@@ -5,6 +5,7 @@
 #include <cstdio>
 
 #include "model/common/errors.hpp"
+#include "model/common/median.hpp"
 #include "model/effects/compliance.hpp"
 #include "model/robot/kinematics.hpp"
 
@@ -110,11 +111,7 @@ bool fillUnknownSigma(std::vector<double>& sigma) {
   for (double s : sigma) {
     if (std::isfinite(s) && s > 0.0) known.push_back(s);
   }
-  double fill = 1.0;
-  if (!known.empty()) {
-    std::nth_element(known.begin(), known.begin() + static_cast<long>(known.size() / 2), known.end());
-    fill = known[known.size() / 2];
-  }
+  const double fill = known.empty() ? 1.0 : median(known);
   for (double& s : sigma) {
     if (!(std::isfinite(s) && s > 0.0)) s = fill;
   }

@@ -5,8 +5,10 @@
 #include <cstdio>
 #include <limits>
 #include <string>
+#include <utility>
 
 #include "model/common/errors.hpp"
+#include "model/common/median.hpp"
 
 namespace jointcomp {
 
@@ -89,9 +91,7 @@ double medianDistanceToNearest(const std::vector<JointVector>& fitted, const std
     for (const JointVector& f : fitted) best = std::min(best, (f - rows[i]).squaredNorm());
     nearest.push_back(std::sqrt(best));
   }
-  const auto middle = nearest.begin() + static_cast<std::ptrdiff_t>(nearest.size() / 2);
-  std::nth_element(nearest.begin(), middle, nearest.end());
-  return *middle;
+  return median(std::move(nearest));
 }
 
 }  // namespace jointcomp

@@ -8,6 +8,7 @@
 #include <tuple>
 
 #include "model/common/errors.hpp"
+#include "model/common/median.hpp"
 
 namespace jointcomp {
 
@@ -96,13 +97,6 @@ bool nearestMean(const std::vector<JointVector>& q, const std::vector<Eigen::Vec
   distance /= k;
   mean /= k;
   return true;
-}
-
-double median(std::vector<double> v) {
-  if (v.empty()) return 0.0;
-  const auto middle = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
-  std::nth_element(v.begin(), middle, v.end());
-  return *middle;
 }
 
 }  // namespace

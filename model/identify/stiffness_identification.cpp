@@ -5,6 +5,7 @@
 #include <limits>
 
 #include "model/common/errors.hpp"
+#include "model/common/median.hpp"
 #include "model/effects/compliance.hpp"
 #include "model/identify/identification_statistics.hpp"
 #include "model/identify/identification_support.hpp"
@@ -618,11 +619,9 @@ JointErrorModel withIdentifiedStiffness(const JointErrorModel& nominal, const St
       note += "; before: " + updated.effect(index).estimate_note;
     updated.effect(index).estimate_note = note;
   } else {
-    std::nth_element(identified_values.begin(),
-                     identified_values.begin() + static_cast<long>(identified_values.size() / 2),
-                     identified_values.end());
+    const double typical = median(std::move(identified_values));
     for (double& v : values) {
-      if (!std::isfinite(v)) v = identified_values[identified_values.size() / 2];
+      if (!std::isfinite(v)) v = typical;
     }
     auto effect = std::make_unique<ComplianceEffect>(robot, values);
     effect->estimate_note = note;
