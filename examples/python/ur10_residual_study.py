@@ -1,0 +1,265 @@
+"""What the UR10's residual is not: the three checks behind the README's statements on the IPA data.
+
+1. Harmonics of one joint's output angle: each order is fitted alone on Series A's first session (the rows
+   before the first pause of more than an hour) and scored on that session, on A's later sessions and on
+   Series B (each campaign in its own instrument frame, B's frame re-fitted).
+2. Series B from Series A's residual field: how far B's poses lie from A's in joint space, and what the mean
+   residual of the nearest A poses (rotated into B's frame) does to B.
+3. The T-Mac's orientations (optional, from the raw IPA file): what a full kinematic orientation model leaves,
+   how repeatable it is, and how much of it the configurations reaching one T-Mac pose share.
+
+Usage, after `jointcomp import-ipa` of both series and
+`jointcomp calibrate --urdf model/robots/ur10.urdf --campaign A.csv --holdout B.csv --out DIR`:
+    /usr/bin/python3 examples/python/ur10_residual_study.py DIR A.csv B.csv \
+        [--raw-b .../Series_B/measurements_joint_configurations.csv --trafo-b .../Series_B/Trafo_TM_F_init.txt]
+
+Kinematics: the UR10's published standard DH (data README), with the calibrated target's 93 mm; the
+Jacobians only need to be right to a few per cent, so the nominal kinematics serve.
+"""
+
+import argparse
+import sys
+
+import numpy as np
+
+D = [0.1273, 0.0, 0.0, 0.163941, 0.1157, 0.0922]
+A = [0.0, -0.612, -0.5723, 0.0, 0.0, 0.0]
+ALPHA = [np.pi / 2, 0.0, 0.0, np.pi / 2, -np.pi / 2, 0.0]
+TOOL = np.array([0.0, 0.0, 0.0931])
+
+
+def read_campaign(path):
+    rows = [line.strip().split(",") for line in open(path) if not line.startswith("#")]
+    header, values = rows[0], np.array(rows[1:], dtype=float)
+    q = np.radians(values[:, [header.index("q%d" % j) for j in range(1, 7)]])
+    measured = values[:, [header.index(axis) for axis in ("x", "y", "z")]]
+    return q, measured, values[:, header.index("t")]
+
+
+def read_residuals(path, campaign):
+    rows = [line.strip().split(",") for line in open(path)]
+    header = rows[0]
+    name, columns = header.index("campaign"), [header.index(c) for c in ("dx_mm", "dy_mm", "dz_mm")]
+    return np.array([[float(r[c]) for c in columns] for r in rows[1:] if r[name] == campaign])
+
+
+def frames(q):
+    """Per row, the rotation of each DH frame 0..6 and the tool point (m), standard DH."""
+    n = len(q)
+    rotation = np.tile(np.eye(3), (n, 1, 1))
+    position = np.zeros((n, 3))
+    rotations, origins = [], []
+    for k in range(6):
+        rotations.append(rotation.copy())
+        origins.append(position.copy())
+        c, s = np.cos(q[:, k]), np.sin(q[:, k])
+        ca, sa = np.cos(ALPHA[k]), np.sin(ALPHA[k])
+        step = np.zeros((n, 3, 3))
+        step[:, 0, 0], step[:, 0, 1], step[:, 0, 2] = c, -s * ca, s * sa
+        step[:, 1, 0], step[:, 1, 1], step[:, 1, 2] = s, c * ca, -c * sa
+        step[:, 2, 1], step[:, 2, 2] = sa, ca
+        position = position + np.einsum("nij,nj->ni", rotation, np.stack([A[k] * c, A[k] * s, np.full(n, D[k])], 1))
+        rotation = np.einsum("nij,njk->nik", rotation, step)
+    rotations.append(rotation)
+    tool = position + rotation @ TOOL
+    return rotations, origins, tool
+
+
+def instrument_jacobians(q, measured):
+    """d(point)/dq per row (mm/rad) in the campaign's instrument frame (rotation by a rigid fit)."""
+    rotations, origins, tool = frames(q)
+    points = tool * 1e3
+    h = (points - points.mean(0)).T @ (measured - measured.mean(0))
+    u, _, vt = np.linalg.svd(h)
+    fix = np.diag([1.0, 1.0, np.sign(np.linalg.det(vt.T @ u.T))])
+    base_to_instrument = vt.T @ fix @ u.T
+    columns = [np.cross(rotations[k][:, :, 2], tool - origins[k]) * 1e3 for k in range(6)]
+    return np.einsum("ij,nkj->nik", base_to_instrument, np.stack(columns, 1)), base_to_instrument
+
+
+def frame_columns(measured):
+    """The six frame parameters' columns (translation, small rotation about the centroid), rows x 3 x 6."""
+    n = len(measured)
+    columns = np.zeros((n, 3, 6))
+    centred = measured - measured.mean(0)
+    for i in range(3):
+        columns[:, i, i] = 1.0
+        unit = np.zeros(3)
+        unit[i] = 1.0
+        columns[:, :, 3 + i] = np.cross(unit, centred)
+    return columns
+
+
+def without_frame(residual, measured):
+    """The residual after re-fitting the six frame parameters (linearised)."""
+    f = frame_columns(measured).reshape(-1, 6)
+    y = residual.reshape(-1)
+    return (y - f @ np.linalg.lstsq(f, y, rcond=None)[0]).reshape(-1, 3)
+
+
+def rms(e):
+    return np.sqrt(np.mean(np.sum(e ** 2, axis=1)))
+
+
+def harmonic_columns(jacobian, q, joint, order):
+    column = jacobian[:, :, joint]
+    return np.stack([(column * np.sin(order * q[:, joint])[:, None]).reshape(-1),
+                     (column * np.cos(order * q[:, joint])[:, None]).reshape(-1)], 1)
+
+
+def gain(residual, columns, coefficients):
+    y = residual.reshape(-1)
+    return 1.0 - np.sum((y - columns @ coefficients) ** 2) / np.sum(y ** 2)
+
+
+def harmonics(a, b, max_order):
+    qa, ma, ta, ra = a
+    qb, mb, _, rb = b
+    ja, _ = instrument_jacobians(qa, ma)
+    jb, _ = instrument_jacobians(qb, mb)
+    pauses = np.where(np.diff(ta) > 3600.0)[0]
+    first = slice(0, pauses[0] + 1 if len(pauses) else len(qa))
+    later = slice(first.stop, len(qa))
+    results = []
+    for joint in range(5):  # joint 6 barely moves a point on its axis
+        for order in range(1, max_order + 1):
+            columns = harmonic_columns(ja[first], qa[first], joint, order)
+            coefficients = np.linalg.lstsq(columns, ra[first].reshape(-1), rcond=None)[0]
+            later_gain = gain(ra[later], harmonic_columns(ja[later], qa[later], joint, order), coefficients)
+            b_gain = gain(rb, harmonic_columns(jb, qb, joint, order), coefficients)
+            results.append((gain(ra[first], columns, coefficients), joint + 1, order, later_gain, b_gain,
+                            1e3 * np.hypot(*coefficients)))
+    results.sort(reverse=True)
+    print("1. output-angle harmonics, orders 1..%d, fitted on A's first session (%d rows):" % (max_order, first.stop))
+    for first_gain, joint, order, later_gain, b_gain, amplitude in results[:5]:
+        print("   joint %d order %2d (%.3f mrad): first session %+5.1f %%, later sessions %+5.1f %%, B %+5.1f %%"
+              % (joint, order, amplitude, 100 * first_gain, 100 * later_gain, 100 * b_gain))
+    print("   best on B of all: %+.1f %%" % (100 * max(r[4] for r in results)))
+
+
+def nearest_from_a(a, b, neighbours):
+    qa, ma, _, ra = a
+    qb, mb, _, rb = b
+    _, a_rotation = instrument_jacobians(qa, ma)
+    _, b_rotation = instrument_jacobians(qb, mb)
+    distance = np.empty((len(qb), neighbours))
+    index = np.empty((len(qb), neighbours), dtype=int)
+    squared_a = np.sum(qa ** 2, axis=1)
+    for start in range(0, len(qb), 256):
+        block = slice(start, min(start + 256, len(qb)))
+        d2 = np.sum(qb[block] ** 2, axis=1)[:, None] + squared_a[None, :] - 2 * qb[block] @ qa.T
+        nearest = np.argpartition(d2, neighbours, axis=1)[:, :neighbours]
+        index[block] = nearest
+        distance[block] = np.sqrt(np.maximum(np.take_along_axis(d2, nearest, axis=1), 0.0))
+    # A's residuals into the base frame, then into B's instrument frame.
+    predicted = (ra @ a_rotation)[index].mean(axis=1) @ b_rotation.T
+    print("2. Series B's poses lie %.3f rad (median) from the nearest Series A pose; B's RMS %.4f mm, after "
+          "subtracting the mean of its %d nearest A residuals (frame re-fitted): %.4f mm"
+          % (np.median(distance[:, 0]), rms(rb), neighbours, rms(without_frame(rb - predicted, mb))))
+
+
+def euler_xyz(degrees):
+    """Intrinsic X-Y-Z Euler angles (deg) to rotation matrices: Rx(a) Ry(b) Rz(c)."""
+    a, b, c = np.radians(degrees).T
+    ones, zeros = np.ones_like(a), np.zeros_like(a)
+    rx = np.stack([ones, zeros, zeros, zeros, np.cos(a), -np.sin(a), zeros, np.sin(a), np.cos(a)], 1).reshape(-1, 3, 3)
+    ry = np.stack([np.cos(b), zeros, np.sin(b), zeros, ones, zeros, -np.sin(b), zeros, np.cos(b)], 1).reshape(-1, 3, 3)
+    rz = np.stack([np.cos(c), -np.sin(c), zeros, np.sin(c), np.cos(c), zeros, zeros, zeros, ones], 1).reshape(-1, 3, 3)
+    return rx @ ry @ rz
+
+
+def exp_rotation(v):
+    angle = np.linalg.norm(v)
+    if angle < 1e-15:
+        return np.eye(3)
+    k = v / angle
+    cross = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
+    return np.eye(3) + np.sin(angle) * cross + (1 - np.cos(angle)) * cross @ cross
+
+
+def log_rotations(r):
+    """Rotation vectors of small rotations (n x 3 x 3 -> n x 3)."""
+    angle = np.arccos(np.clip((np.trace(r, axis1=1, axis2=2) - 1) / 2, -1.0, 1.0))
+    scale = np.where(angle > 1e-12, angle / (2 * np.sin(np.maximum(angle, 1e-12))), 0.5)
+    return scale[:, None] * np.stack([r[:, 2, 1] - r[:, 1, 2], r[:, 0, 2] - r[:, 2, 0], r[:, 1, 0] - r[:, 0, 1]], 1)
+
+
+def project_rotation(m):
+    u, _, vt = np.linalg.svd(m)
+    return u @ np.diag([1.0, 1.0, np.sign(np.linalg.det(u @ vt))]) @ vt
+
+
+def orientations(raw_path, trafo_path):
+    rows = [line.strip().split(";") for line in open(raw_path, encoding="latin-1")]
+    header = rows[0]
+    values = np.array([[float(c.replace(",", ".")) if c else np.nan for c in r] for r in rows[1:]])
+    joints = ["shoulder_pan_joint", "shoulder_lift_joint", "elbow_joint", "wrist_1_joint", "wrist_2_joint",
+              "wrist_3_joint"]
+    q = values[:, [header.index(j) for j in joints]]
+    euler = values[:, [header.index("measurement_r" + a) for a in "xyz"]]
+    keep = np.isfinite(q).all(1) & np.isfinite(euler).all(1)
+    q, measured = q[keep], euler_xyz(euler[keep])
+    rotations, _, _ = frames(q)
+    flange = rotations[6]
+    trafo = np.loadtxt(trafo_path)[:3, :3]
+
+    def residual(instrument, tool):  # base-frame rotation vectors of measured vs predicted
+        return log_rotations(np.einsum("ij,njk,kl,nml->nim", instrument.T, measured, tool.T, flange))
+
+    best = None
+    for tool in (trafo, trafo.T):  # the file's direction is not documented
+        instrument = project_rotation(np.einsum("nij,kj,nlk->il", measured, tool, flange))
+        for _ in range(20):  # Gauss-Newton on both rotations, by finite differences
+            r0 = residual(instrument, tool).reshape(-1)
+            jac = np.empty((len(r0), 6))
+            for p in range(6):
+                step = np.zeros(3)
+                step[p % 3] = 1e-7
+                trial = (exp_rotation(step) @ instrument, tool) if p < 3 else (instrument, exp_rotation(step) @ tool)
+                jac[:, p] = (residual(*trial).reshape(-1) - r0) / 1e-7
+            delta = -np.linalg.lstsq(jac, r0, rcond=None)[0]
+            instrument, tool = exp_rotation(delta[:3]) @ instrument, exp_rotation(delta[3:]) @ tool
+        left = residual(instrument, tool)
+        if best is None or rms(left) < rms(best):
+            best = left
+    # Every small rotation of every joint frame (offsets and placement rotations) and of the instrument.
+    columns = [np.stack([rotations[k][:, :, axis] for k in range(7) for axis in range(3)], 2)]
+    columns.append(np.tile(np.eye(3), (len(q), 1, 1)))
+    design = np.concatenate(columns, 2).reshape(-1, 24)
+    y = best.reshape(-1)
+    left = (y - design @ np.linalg.lstsq(design, y, rcond=None)[0]).reshape(-1, 3)
+    same_q = np.array([(i, j) for i in range(len(q)) for j in range(i + 1, min(i + 20, len(q)))
+                       if np.max(np.abs(q[i] - q[j])) < 1e-4])
+    repeat = np.median(np.linalg.norm(left[same_q[:, 0]] - left[same_q[:, 1]], axis=1)) if len(same_q) else np.nan
+    print("3. T-Mac orientations of Series B: %.3f mrad after frame and tool rotations, %.3f mrad after every "
+          "small rotation of every joint frame; poses measured twice with one joint vector agree to %.3f mrad "
+          "(median, %d pairs)" % (1e3 * rms(best), 1e3 * rms(left), 1e3 * repeat, len(same_q)))
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("calibration", help="output folder of jointcomp calibrate (A fitted, B held out)")
+    parser.add_argument("series_a", help="Series A campaign (jointcomp import-ipa)")
+    parser.add_argument("series_b", help="Series B campaign (jointcomp import-ipa)")
+    parser.add_argument("--max-order", type=int, default=60, help="highest harmonic order scanned")
+    parser.add_argument("--neighbours", type=int, default=3)
+    parser.add_argument("--raw-b", help="Series B's raw IPA file, for the orientation check")
+    parser.add_argument("--trafo-b", help="Series B's Trafo_TM_F_init.txt, with --raw-b")
+    arguments = parser.parse_args()
+    residuals = "%s/residuals.csv" % arguments.calibration
+    a = read_campaign(arguments.series_a) + (read_residuals(residuals, arguments.series_a.split("/")[-1]),)
+    b = read_campaign(arguments.series_b) + (read_residuals(residuals, arguments.series_b.split("/")[-1]),)
+    for name, series in (("A", a), ("B", b)):
+        if len(series[3]) != len(series[0]):
+            sys.exit("%s: %d rows, but %d residual rows of it in %s (every row must be used)"
+                     % (name, len(series[0]), len(series[3]), residuals))
+    harmonics(a, b, arguments.max_order)
+    nearest_from_a(a, b, arguments.neighbours)
+    if arguments.raw_b:
+        if not arguments.trafo_b:
+            sys.exit("--raw-b needs --trafo-b")
+        orientations(arguments.raw_b, arguments.trafo_b)
+
+
+if __name__ == "__main__":
+    main()

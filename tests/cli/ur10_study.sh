@@ -1,0 +1,48 @@
+#!/usr/bin/env bash
+# The README's statements on the real UR10 (why Series B stays near 0.43 mm), measured again from the data by
+# examples/python/ur10_residual_study.py after jointcomp's own import and calibration:
+# B's poses lie far from A's, A's residual field makes B worse, no output harmonic fitted on A helps B much,
+# and the T-Mac's orientation residual is repeatable but not explained by a full kinematic orientation model.
+#   ur10_study.sh <jointcomp> <scratch folder>        (needs JOINTCOMP_SHARED; exits 77, a skip, without it)
+set -euo pipefail
+jointcomp="$1" work="$2"
+data="${JOINTCOMP_SHARED:-}/data/ipa-ur10"
+if [ -z "${JOINTCOMP_SHARED:-}" ]; then
+  echo "skipped: the IPA UR10 data not found: JOINTCOMP_SHARED is not set"
+  exit 77
+fi
+if [ ! -f "$data/Series_B/measurements_joint_configurations.csv" ]; then
+  echo "skipped: the IPA UR10 data not found at $data"
+  exit 77
+fi
+python=/usr/bin/python3
+rm -rf "$work" && mkdir -p "$work"
+"$jointcomp" import-ipa --in "$data/Series_A/measurements_grid.csv" --trafo "$data/Series_A/Trafo_TM_F_init.txt" \
+  --out "$work/A.csv" >/dev/null
+"$jointcomp" import-ipa --in "$data/Series_B/measurements_joint_configurations.csv" \
+  --trafo "$data/Series_B/Trafo_TM_F_init.txt" --out "$work/B.csv" >/dev/null
+model="$(dirname "$0")/../../model/robots/ur10.urdf"
+"$jointcomp" calibrate --urdf "$model" --campaign "$work/A.csv" --holdout "$work/B.csv" --out "$work/calibrate" \
+  --no-plot >/dev/null
+"$python" "$(dirname "$0")/../../examples/python/ur10_residual_study.py" "$work/calibrate" "$work/A.csv" "$work/B.csv" \
+  --max-order 30 --raw-b "$data/Series_B/measurements_joint_configurations.csv" \
+  --trafo-b "$data/Series_B/Trafo_TM_F_init.txt" >"$work/study.txt"
+cat "$work/study.txt"
+"$python" - "$work/study.txt" <<'PY'
+import re, sys
+text = open(sys.argv[1]).read()
+number = lambda pattern: float(re.search(pattern, text).group(1))
+distance = number(r"lie ([0-9.]+) rad \(median\)")
+b_rms = number(r"B's RMS ([0-9.]+) mm")
+b_after = number(r"frame re-fitted\): ([0-9.]+) mm")
+best_b = number(r"best on B of all: ([-+0-9.]+) %")
+first = [float(x) for x in re.findall(r"first session ([-+0-9. ]+) %", text)]
+after_frames = number(r"([0-9.]+) mrad after every small rotation")
+repeat = number(r"agree to ([0-9.]+) mrad")
+assert distance > 1.0, distance            # B reaches its goals in other configurations than A
+assert b_after > b_rms, (b_after, b_rms)   # A's residual field does not carry to B
+assert max(first) > 20.0, first            # a harmonic fits A's first session...
+assert best_b < 15.0, best_b               # ...but none helps B much
+assert after_frames > 5.0 * repeat, (after_frames, repeat)  # repeatable, and not kinematic
+print("the UR10 study holds")
+PY
