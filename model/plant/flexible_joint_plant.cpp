@@ -739,7 +739,9 @@ void FlexibleJointPlant::jacobian(double t, const double* y, double* jacobian) {
   linkAcceleration(q, qd, spring_torque, qdd);
   w.link_by_q.resize(n, n);
   w.link_by_qd.resize(n, n);
-  w.inverse_mass = ws_.robot.mass_llt.solve(JointMatrix::Identity(n, n));
+  // Eigen's LLT here (a Jacobian is rare): its solve for a matrix groups the sums unlike the vector solves.
+  w.mass_llt.compute(ws_.robot.mass_matrix);
+  w.inverse_mass = w.mass_llt.solve(JointMatrix::Identity(n, n));
   const JointVector link_torque = spring_torque - ctx_.load_torque;
   const double step = std::sqrt(std::numeric_limits<double>::epsilon());
   JointVector shifted = qd;

@@ -21,6 +21,8 @@
 #include <string>
 #include <vector>
 
+#include <Eigen/Cholesky>
+
 #include "model/effects/joint_error_model.hpp"
 #include "model/plant/drive_parameters.hpp"
 
@@ -208,6 +210,7 @@ private:
   struct JacobianScratch {
     JointMatrix inverse_mass, spring_by_motor, reaction_by_motor, reaction_by_motor_rate, link_by_q, link_by_qd;
     JointVector curvature, ahead, behind;
+    Eigen::LLT<JointMatrix> mass_llt;
   } jacobian_scratch_;
   std::unique_ptr<Solver> solver_;
 };
