@@ -15,6 +15,7 @@
 #include "model/common/errors.hpp"
 #include "model/effects/compliance.hpp"
 #include "model/effects/spring_balancer.hpp"
+#include "model/effects/transmission_error.hpp"
 #include "model/plant/plant_vector_operations.hpp"
 #include "model/robot/dynamics.hpp"
 #include "model/robot/kinematics.hpp"
@@ -301,6 +302,7 @@ FlexibleJointPlant::FlexibleJointPlant(const JointErrorModel& truth, std::vector
       error_mask_ |= EffectMask(1) << i;
       if (effect.dependsOnCommand() && !effect.addMotorSlope(robot, ctx_, probe)) analytic_slope_ = false;
     }
+    transmission_effects_.push_back(dynamic_cast<const TransmissionErrorEffect*>(&effect));
   }
   if (!(options_.relative_tolerance > 0.0) || !(options_.absolute_tolerance > 0.0) ||
       !(options_.velocity_tolerance_factor > 0.0) || options_.max_step < 0.0 || options_.max_steps_per_advance < 1) {
@@ -595,13 +597,13 @@ void FlexibleJointPlant::transmissionTorques(const JointVector& p, const JointVe
   // slopes (the error of joint j depends on its motor angle m = G p), or by central differences when an
   // effect does not give its slope.
   JointVector error;
-  transmissionError(p, q, error);  // leaves ctx_ at command p, its motor angles set
   JointMatrix slope = JointMatrix::Zero(n_, n_);
   if (error_mask_ != 0 && analytic_slope_) {
-    JointVector motor_slope = JointVector::Zero(n_);
-    addMotorSlopes(motor_slope);
+    JointVector motor_slope;
+    transmissionErrorAndMotorSlopes(p, q, error, motor_slope);  // leaves ctx_ at command p, its motor angles set
     slope = motor_slope.asDiagonal() * truth_.gears().motorFromJoint();
   } else if (error_mask_ != 0) {
+    transmissionError(p, q, error);
     JointVector shifted = p;
     JointVector ahead, behind;
     constexpr double kStep = 1e-6;  // rad of joint-side motor angle
@@ -613,11 +615,34 @@ void FlexibleJointPlant::transmissionTorques(const JointVector& p, const JointVe
       shifted[k] = p[k];
       slope.col(k) = (ahead - behind) / (2.0 * kStep);
     }
+  } else {
+    transmissionError(p, q, error);
   }
   const JointVector output_rate = pd + slope * pd;
   link_torque = stiffness_.cwiseProduct(p + error - q);
   for (int j = 0; j < n_; ++j) link_torque[j] += drives_[j].transmission_damping_nms_per_rad * (output_rate[j] - qd[j]);
   motor_reaction = link_torque + slope.transpose() * link_torque;
+}
+
+void FlexibleJointPlant::transmissionErrorAndMotorSlopes(const JointVector& p, const JointVector& q, JointVector& error,
+                                                         JointVector& motor_slope) {
+  ctx_.q = q;
+  ctx_.command = p;
+  updateMotorAngles(truth_, ctx_);
+  error.setZero(n_);
+  motor_slope.setZero(n_);
+  // Effect by effect in index order, as addSelectedJointErrors and addMotorSlopes sum them: the same bits.
+  const Robot& robot = truth_.robot();
+  for (int i = 0; i < truth_.effectCount(); ++i) {
+    if ((error_mask_ >> i & 1) == 0) continue;
+    if (const TransmissionErrorEffect* transmission = transmission_effects_[static_cast<std::size_t>(i)]) {
+      transmission->addJointErrorAndMotorSlope(ctx_, error, motor_slope);
+      continue;
+    }
+    const Effect& effect = truth_.effect(i);
+    effect.addJointError(robot, ctx_, error);
+    if (effect.dependsOnCommand()) effect.addMotorSlope(robot, ctx_, motor_slope);
+  }
 }
 
 void FlexibleJointPlant::addMotorSlopes(JointVector& slope) const {

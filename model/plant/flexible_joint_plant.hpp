@@ -28,6 +28,8 @@
 
 namespace jointcomp {
 
+class TransmissionErrorEffect;
+
 // Bounds that keep every integration's work finite (flexible_joint_plant.cpp says why).
 constexpr double kMaxLoopFrequency = 1e4;     // rad/s: sqrt(kp / J), kd / J; ki / J below its cube
 constexpr double kStepBudgetFloor = 2000.0;   // CVODE steps per advance, whatever its length
@@ -178,6 +180,10 @@ private:
   void transmissionError(const JointVector& p, const JointVector& q, JointVector& error);
   void transmissionTorques(const JointVector& p, const JointVector& pd, const JointVector& q, const JointVector& qd,
                            JointVector& link_torque, JointVector& motor_reaction);
+  // transmissionError and, with analytic_slope_, addMotorSlopes at the motor angles of p, in one pass (the
+  // transmission errors' phases once): the same bits as the two.
+  void transmissionErrorAndMotorSlopes(const JointVector& p, const JointVector& q, JointVector& error,
+                                       JointVector& motor_slope);
   // Sum of the command-dependent effects' motor slopes at the motor angles in ctx_.
   void addMotorSlopes(JointVector& slope) const;
   // Link accelerations for the transmitted torque `spring_torque`: loads, then forward dynamics at q.
@@ -193,6 +199,8 @@ private:
   EffectMask load_mask_;
   EffectMask error_mask_;       // joint-error effects other than compliance: the transmission error
   bool analytic_slope_ = true;  // every command-dependent effect of error_mask_ gives its motor slope
+  // Per effect of truth_: the effect as a transmission error, or null (one dynamic_cast, not one per rhs).
+  std::vector<const TransmissionErrorEffect*> transmission_effects_;
   JointVector stiffness_;
   JointVector windup_gain_;  // per joint, 1 / (ki Tt): how fast a clamped excess pulls the integral back
   double time_ = 0.0;
