@@ -597,12 +597,20 @@ void FlexibleJointPlant::transmissionTorques(const JointVector& p, const JointVe
   // slopes (the error of joint j depends on its motor angle m = G p), or by central differences when an
   // effect does not give its slope.
   JointVector error;
-  JointMatrix slope = JointMatrix::Zero(n_, n_);
   if (error_mask_ != 0 && analytic_slope_) {
-    JointVector motor_slope;
+    // E = diag(s) G applied without forming it (the rhs's path; the same bits as the matrix form below).
+    JointVector motor_slope, output_rate;
     transmissionErrorAndMotorSlopes(p, q, error, motor_slope);  // leaves ctx_ at command p, its motor angles set
-    slope = motor_slope.asDiagonal() * truth_.gears().motorFromJoint();
-  } else if (error_mask_ != 0) {
+    const JointMatrix& gears = truth_.gears().motorFromJoint();
+    transmissionOutputRate(motor_slope, gears, pd, output_rate);
+    link_torque = stiffness_.cwiseProduct(p + error - q);
+    for (int j = 0; j < n_; ++j)
+      link_torque[j] += drives_[j].transmission_damping_nms_per_rad * (output_rate[j] - qd[j]);
+    transmissionReaction(motor_slope, gears, link_torque, motor_reaction);
+    return;
+  }
+  JointMatrix slope = JointMatrix::Zero(n_, n_);
+  if (error_mask_ != 0) {
     transmissionError(p, q, error);
     JointVector shifted = p;
     JointVector ahead, behind;
@@ -642,6 +650,38 @@ void FlexibleJointPlant::transmissionErrorAndMotorSlopes(const JointVector& p, c
     const Effect& effect = truth_.effect(i);
     effect.addJointError(robot, ctx_, error);
     if (effect.dependsOnCommand()) effect.addMotorSlope(robot, ctx_, motor_slope);
+  }
+}
+
+// Eigen's column-major matrix-vector kernel sums each row over the columns in order, from zero, and adds
+// the sum to the vector it is added to.
+void transmissionOutputRate(const JointVector& motor_slope, const JointMatrix& gears, const JointVector& pd,
+                            JointVector& output_rate) {
+  const Eigen::Index n = pd.size();
+  output_rate.resize(n);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    double sum = 0.0;
+    for (Eigen::Index k = 0; k < n; ++k) sum += (motor_slope[i] * gears(i, k)) * pd[k];
+    output_rate[i] = pd[i] + sum;
+  }
+}
+
+// Eigen's row-major kernel (E^T of a column-major E) sums each row in two lanes, even and odd columns, from
+// zero, adds the lanes, then the last column of an odd count (SSE2's two doubles per packet).
+void transmissionReaction(const JointVector& motor_slope, const JointMatrix& gears, const JointVector& torque,
+                          JointVector& reaction) {
+  const Eigen::Index n = torque.size();
+  const Eigen::Index paired = n - n % 2;
+  reaction.resize(n);
+  for (Eigen::Index j = 0; j < n; ++j) {
+    double even = 0.0, odd = 0.0;
+    for (Eigen::Index k = 0; k < paired; k += 2) {
+      even += (motor_slope[k] * gears(k, j)) * torque[k];
+      odd += (motor_slope[k + 1] * gears(k + 1, j)) * torque[k + 1];
+    }
+    double sum = even + odd;
+    if (paired < n) sum += (motor_slope[n - 1] * gears(n - 1, j)) * torque[n - 1];
+    reaction[j] = torque[j] + sum;
   }
 }
 

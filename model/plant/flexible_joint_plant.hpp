@@ -97,6 +97,14 @@ struct PlantState {
   Eigen::Vector3d payload_com = Eigen::Vector3d::Zero();
 };
 
+// The transmission's rates through E = diag(motor_slope) G (de/dp from the effects' motor slopes and the gear
+// matrix) without forming E: output_rate = pd + E pd and reaction = torque + E^T torque, with the arithmetic
+// of Eigen's matrix-vector products (the same bits as those matrix expressions, which tests compare).
+void transmissionOutputRate(const JointVector& motor_slope, const JointMatrix& gears, const JointVector& pd,
+                            JointVector& output_rate);
+void transmissionReaction(const JointVector& motor_slope, const JointMatrix& gears, const JointVector& torque,
+                          JointVector& reaction);
+
 class FlexibleJointPlant {
 public:
   // `truth` is the plant's own joint-error model (the robot as it really is); it must hold a compliance
