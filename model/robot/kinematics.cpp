@@ -24,17 +24,6 @@ void rotateAboutAxis(Eigen::Matrix3d& rotation, const Eigen::Vector3d& axis, dou
   rotation = rotation * joint_rotation;
 }
 
-// rotation * vector (rotation column-major) with the arithmetic of Eigen's fixed-size 3 x 3 products under
-// SSE2, so that results keep their bits: rows 0 and 1 (its packet path) sum (a0 b0 + a1 b1) + a2 b2, row 2
-// (its unrolled sum) a0 b0 + (a1 b1 + a2 b2). Written out, the products skip Eigen's temporaries and
-// shuffles: a quarter less time per forward kinematics, which the plant runs five times per communication
-// step (checked against the Eigen expressions in tests/robot/test_forward_kinematics.cpp).
-void rotate(const double* rotation, const double* vector, double* out) {
-  out[0] = (rotation[0] * vector[0] + rotation[3] * vector[1]) + rotation[6] * vector[2];
-  out[1] = (rotation[1] * vector[0] + rotation[4] * vector[1]) + rotation[7] * vector[2];
-  out[2] = rotation[2] * vector[0] + (rotation[5] * vector[1] + rotation[8] * vector[2]);
-}
-
 }  // namespace
 
 void forwardKinematics(const Robot& robot, RobotWorkspace& ws, const JointVector& q) {
@@ -43,21 +32,14 @@ void forwardKinematics(const Robot& robot, RobotWorkspace& ws, const JointVector
   Eigen::Vector3d position = Eigen::Vector3d::Zero();
   for (int i = 0; i < robot.dof(); ++i) {
     const Joint& joint = robot.joints[i];
-    double step[3];
-    rotate(rotation.data(), joint.placement.translation().data(), step);
-    for (int k = 0; k < 3; ++k) position[k] += step[k];
-    const Eigen::Matrix3d placement = joint.placement.linear();
-    Eigen::Matrix3d placed;
-    for (int c = 0; c < 3; ++c) rotate(rotation.data(), placement.data() + 3 * c, placed.data() + 3 * c);
-    rotation = placed;
-    rotate(rotation.data(), joint.axis.data(), ws.axis[i].data());  // the axis is fixed by the joint's own rotation
+    position += rotation * joint.placement.translation();
+    rotation = rotation * joint.placement.linear();
+    ws.axis[i] = rotation * joint.axis;  // the axis is fixed by the joint's own rotation
     rotateAboutAxis(rotation, joint.axis, q[i]);
     ws.joint_pose[i].linear() = rotation;
     ws.joint_pose[i].translation() = position;
     ws.origin[i] = position;
-    double com[3];
-    rotate(rotation.data(), joint.body.com.data(), com);
-    for (int k = 0; k < 3; ++k) ws.com[i][k] = position[k] + com[k];
+    ws.com[i] = position + rotation * joint.body.com;
   }
   ws.tool_pose.linear() = rotation * robot.tool.linear();
   ws.tool_pose.translation() = position + rotation * robot.tool.translation();

@@ -4,7 +4,6 @@
 #include <cmath>
 #include <limits>
 #include <random>
-#include <vector>
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -211,79 +210,6 @@ TEST(ForwardKinematics, IsDeterministic) {
   forwardKinematics(robot, second, q);
   forwardKinematics(robot, second, q);
   EXPECT_TRUE(first.tool_pose.matrix() == second.tool_pose.matrix());
-}
-
-// The products written out keep the bits of the Eigen expressions they replaced (the plant's stored
-// regressions rest on them): the former loop, re-stated here with Eigen's fixed-size products, against
-// forwardKinematics on both robots and on chains with random placements, axes and centres of mass.
-Eigen::Isometry3d formerForwardKinematics(const Robot& robot, const JointVector& q, std::vector<Eigen::Vector3d>& axes,
-                                          std::vector<Eigen::Vector3d>& coms, std::vector<Eigen::Isometry3d>& poses) {
-  Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();
-  Eigen::Vector3d position = Eigen::Vector3d::Zero();
-  for (int i = 0; i < robot.dof(); ++i) {
-    const Joint& joint = robot.joints[i];
-    position += rotation * joint.placement.translation();
-    rotation = rotation * joint.placement.linear();
-    axes.push_back(rotation * joint.axis);
-    const double c = std::cos(q[i]);
-    const double s = std::sin(q[i]);
-    const Eigen::Vector3d& a = joint.axis;
-    if (a.x() == 0.0 && a.y() == 0.0 && a.z() == 1.0) {
-      const Eigen::Vector3d x = rotation.col(0);
-      const Eigen::Vector3d y = rotation.col(1);
-      rotation.col(0) = c * x + s * y;
-      rotation.col(1) = c * y - s * x;
-    } else {
-      Eigen::Matrix3d cross;
-      cross << 0.0, -a.z(), a.y(), a.z(), 0.0, -a.x(), -a.y(), a.x(), 0.0;
-      const Eigen::Matrix3d turn = Eigen::Matrix3d::Identity() + s * cross + (1.0 - c) * (cross * cross);
-      rotation = rotation * turn;
-    }
-    Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
-    pose.linear() = rotation;
-    pose.translation() = position;
-    poses.push_back(pose);
-    coms.push_back(position + rotation * joint.body.com);
-  }
-  Eigen::Isometry3d tool = Eigen::Isometry3d::Identity();
-  tool.linear() = rotation * robot.tool.linear();
-  tool.translation() = position + rotation * robot.tool.translation();
-  return tool;
-}
-
-TEST(ForwardKinematics, KeepsTheBitsOfEigensProducts) {
-  std::mt19937 rng(1717u);
-  std::uniform_real_distribution<double> unit(-1.0, 1.0);
-  std::vector<Robot> robots = {testing_support::rx170(), testing_support::ur10()};
-  for (int variant = 0; variant < 20; ++variant) {
-    Robot random = testing_support::rx170();
-    for (Joint& joint : random.joints) {
-      joint.placement.linear() =
-          Eigen::AngleAxisd(3.0 * unit(rng), Eigen::Vector3d(unit(rng), unit(rng), unit(rng)).normalized())
-              .toRotationMatrix();
-      joint.placement.translation() = Eigen::Vector3d(unit(rng), unit(rng), unit(rng));
-      joint.body.com = Eigen::Vector3d(unit(rng), unit(rng), unit(rng));
-      if (variant % 2 == 1) joint.axis = Eigen::Vector3d(unit(rng), unit(rng), unit(rng)).normalized();
-    }
-    robots.push_back(random);
-  }
-  for (const Robot& robot : robots) {
-    RobotWorkspace ws(robot);
-    for (int sample = 0; sample < 50; ++sample) {
-      const JointVector q = testing_support::randomConfiguration(robot, rng);
-      std::vector<Eigen::Vector3d> axes, coms;
-      std::vector<Eigen::Isometry3d> poses;
-      const Eigen::Isometry3d tool = formerForwardKinematics(robot, q, axes, coms, poses);
-      forwardKinematics(robot, ws, q);
-      for (int i = 0; i < robot.dof(); ++i) {
-        EXPECT_EQ(ws.axis[i], axes[i]) << robot.name << " joint " << i;
-        EXPECT_EQ(ws.com[i], coms[i]) << robot.name << " joint " << i;
-        EXPECT_EQ(ws.origin[i], poses[i].translation()) << robot.name << " joint " << i;
-        EXPECT_EQ(ws.joint_pose[i].matrix(), poses[i].matrix()) << robot.name << " joint " << i;
-      }
-      EXPECT_EQ(ws.tool_pose.matrix(), tool.matrix()) << robot.name;
-    }
-  }
 }
 
 TEST(ForwardKinematics, WrongSizeConfigurationThrowsInvalidArgument) {
