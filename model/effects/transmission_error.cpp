@@ -77,6 +77,17 @@ bool TransmissionErrorEffect::addMotorSlope(const Robot&, const JointContext& ct
   return true;
 }
 
+void TransmissionErrorEffect::addJointErrorAndMotorSlope(const JointContext& ctx, JointVector& dq,
+                                                         JointVector& slope) const {
+  for (const Harmonic& h : harmonics_) {
+    const double angle = gears_.stageInputAngle(h.joint, h.stage, ctx.motor);
+    const double phase = h.cycles_per_revolution * angle + h.phase_rad;
+    dq[h.joint] += h.amplitude_rad * std::sin(phase);
+    slope[h.joint] +=
+        h.amplitude_rad * h.cycles_per_revolution * gears_.stageInputPerMotor(h.joint, h.stage) * std::cos(phase);
+  }
+}
+
 void TransmissionErrorEffect::addJointErrorAndMotorSlope(const JointContext& ctx, Anchor* anchors, bool reuse_anchors,
                                                          JointVector& dq, JointVector& slope) const {
   for (std::size_t i = 0; i < harmonics_.size(); ++i) {

@@ -44,6 +44,9 @@ public:
   static constexpr double kNearAnchor = 0.0625;  // rad of phase
   void addJointErrorAndMotorSlope(const JointContext& ctx, Anchor* anchors, bool reuse_anchors, JointVector& dq,
                                   JointVector& slope) const;
+  // For the plant's right-hand side: addJointError and addMotorSlope in one pass with their own arithmetic
+  // (the same bits as the two calls), each harmonic's phase once and its sine and cosine together.
+  void addJointErrorAndMotorSlope(const JointContext& ctx, JointVector& dq, JointVector& slope) const;
   std::vector<std::string> parameterNames() const override;
   std::vector<double> parameters() const override;
   void setParameters(const std::vector<double>& values) override;

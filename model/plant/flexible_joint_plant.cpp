@@ -15,6 +15,7 @@
 #include "model/common/errors.hpp"
 #include "model/effects/compliance.hpp"
 #include "model/effects/spring_balancer.hpp"
+#include "model/effects/transmission_error.hpp"
 #include "model/plant/plant_vector_operations.hpp"
 #include "model/robot/dynamics.hpp"
 #include "model/robot/kinematics.hpp"
@@ -301,6 +302,7 @@ FlexibleJointPlant::FlexibleJointPlant(const JointErrorModel& truth, std::vector
       error_mask_ |= EffectMask(1) << i;
       if (effect.dependsOnCommand() && !effect.addMotorSlope(robot, ctx_, probe)) analytic_slope_ = false;
     }
+    transmission_effects_.push_back(dynamic_cast<const TransmissionErrorEffect*>(&effect));
   }
   if (!(options_.relative_tolerance > 0.0) || !(options_.absolute_tolerance > 0.0) ||
       !(options_.velocity_tolerance_factor > 0.0) || options_.max_step < 0.0 || options_.max_steps_per_advance < 1) {
@@ -595,13 +597,21 @@ void FlexibleJointPlant::transmissionTorques(const JointVector& p, const JointVe
   // slopes (the error of joint j depends on its motor angle m = G p), or by central differences when an
   // effect does not give its slope.
   JointVector error;
-  transmissionError(p, q, error);  // leaves ctx_ at command p, its motor angles set
-  JointMatrix slope = JointMatrix::Zero(n_, n_);
   if (error_mask_ != 0 && analytic_slope_) {
-    JointVector motor_slope = JointVector::Zero(n_);
-    addMotorSlopes(motor_slope);
-    slope = motor_slope.asDiagonal() * truth_.gears().motorFromJoint();
-  } else if (error_mask_ != 0) {
+    // E = diag(s) G applied without forming it (the rhs's path; the same bits as the matrix form below).
+    JointVector motor_slope, output_rate;
+    transmissionErrorAndMotorSlopes(p, q, error, motor_slope);  // leaves ctx_ at command p, its motor angles set
+    const JointMatrix& gears = truth_.gears().motorFromJoint();
+    transmissionOutputRate(motor_slope, gears, pd, output_rate);
+    link_torque = stiffness_.cwiseProduct(p + error - q);
+    for (int j = 0; j < n_; ++j)
+      link_torque[j] += drives_[j].transmission_damping_nms_per_rad * (output_rate[j] - qd[j]);
+    transmissionReaction(motor_slope, gears, link_torque, motor_reaction);
+    return;
+  }
+  JointMatrix slope = JointMatrix::Zero(n_, n_);
+  if (error_mask_ != 0) {
+    transmissionError(p, q, error);
     JointVector shifted = p;
     JointVector ahead, behind;
     constexpr double kStep = 1e-6;  // rad of joint-side motor angle
@@ -613,11 +623,66 @@ void FlexibleJointPlant::transmissionTorques(const JointVector& p, const JointVe
       shifted[k] = p[k];
       slope.col(k) = (ahead - behind) / (2.0 * kStep);
     }
+  } else {
+    transmissionError(p, q, error);
   }
   const JointVector output_rate = pd + slope * pd;
   link_torque = stiffness_.cwiseProduct(p + error - q);
   for (int j = 0; j < n_; ++j) link_torque[j] += drives_[j].transmission_damping_nms_per_rad * (output_rate[j] - qd[j]);
   motor_reaction = link_torque + slope.transpose() * link_torque;
+}
+
+void FlexibleJointPlant::transmissionErrorAndMotorSlopes(const JointVector& p, const JointVector& q, JointVector& error,
+                                                         JointVector& motor_slope) {
+  ctx_.q = q;
+  ctx_.command = p;
+  updateMotorAngles(truth_, ctx_);
+  error.setZero(n_);
+  motor_slope.setZero(n_);
+  // Effect by effect in index order, as addSelectedJointErrors and addMotorSlopes sum them: the same bits.
+  const Robot& robot = truth_.robot();
+  for (int i = 0; i < truth_.effectCount(); ++i) {
+    if ((error_mask_ >> i & 1) == 0) continue;
+    if (const TransmissionErrorEffect* transmission = transmission_effects_[static_cast<std::size_t>(i)]) {
+      transmission->addJointErrorAndMotorSlope(ctx_, error, motor_slope);
+      continue;
+    }
+    const Effect& effect = truth_.effect(i);
+    effect.addJointError(robot, ctx_, error);
+    if (effect.dependsOnCommand()) effect.addMotorSlope(robot, ctx_, motor_slope);
+  }
+}
+
+// Eigen's column-major matrix-vector kernel sums each row over the columns in order, from zero, and adds
+// the sum to the vector it is added to.
+void transmissionOutputRate(const JointVector& motor_slope, const JointMatrix& gears, const JointVector& pd,
+                            JointVector& output_rate) {
+  const Eigen::Index n = pd.size();
+  output_rate.resize(n);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    double sum = 0.0;
+    for (Eigen::Index k = 0; k < n; ++k) sum += (motor_slope[i] * gears(i, k)) * pd[k];
+    output_rate[i] = pd[i] + sum;
+  }
+}
+
+// Eigen's row-major kernel (E^T of a column-major E) sums each row in two lanes, even and odd columns, from
+// zero, adds the lanes, then the last column of an odd count (SSE2's two doubles per packet).
+void transmissionReaction(const JointVector& motor_slope, const JointMatrix& gears, const JointVector& torque,
+                          JointVector& reaction) {
+  const Eigen::Index n = torque.size();
+  const Eigen::Index paired = n - n % 2;
+  reaction.resize(n);
+  for (Eigen::Index j = 0; j < n; ++j) {
+    double even = 0.0, odd = 0.0;
+    for (Eigen::Index k = 0; k < paired; k += 2) {
+      even += (motor_slope[k] * gears(k, j)) * torque[k];
+      odd += (motor_slope[k + 1] * gears(k + 1, j)) * torque[k + 1];
+    }
+    double sum = even + odd;
+    if (paired < n) sum += (motor_slope[n - 1] * gears(n - 1, j)) * torque[n - 1];
+    reaction[j] = torque[j] + sum;
+  }
 }
 
 void FlexibleJointPlant::addMotorSlopes(JointVector& slope) const {
@@ -739,7 +804,9 @@ void FlexibleJointPlant::jacobian(double t, const double* y, double* jacobian) {
   linkAcceleration(q, qd, spring_torque, qdd);
   w.link_by_q.resize(n, n);
   w.link_by_qd.resize(n, n);
-  w.inverse_mass = ws_.robot.mass_llt.solve(JointMatrix::Identity(n, n));
+  // Eigen's LLT here (a Jacobian is rare): its solve for a matrix groups the sums unlike the vector solves.
+  w.mass_llt.compute(ws_.robot.mass_matrix);
+  w.inverse_mass = w.mass_llt.solve(JointMatrix::Identity(n, n));
   const JointVector link_torque = spring_torque - ctx_.load_torque;
   const double step = std::sqrt(std::numeric_limits<double>::epsilon());
   JointVector shifted = qd;

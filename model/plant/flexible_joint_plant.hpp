@@ -21,10 +21,14 @@
 #include <string>
 #include <vector>
 
+#include <Eigen/Cholesky>
+
 #include "model/effects/joint_error_model.hpp"
 #include "model/plant/drive_parameters.hpp"
 
 namespace jointcomp {
+
+class TransmissionErrorEffect;
 
 // Bounds that keep every integration's work finite (flexible_joint_plant.cpp says why).
 constexpr double kMaxLoopFrequency = 1e4;     // rad/s: sqrt(kp / J), kd / J; ki / J below its cube
@@ -92,6 +96,14 @@ struct PlantState {
   double payload_mass = 0.0;
   Eigen::Vector3d payload_com = Eigen::Vector3d::Zero();
 };
+
+// The transmission's rates through E = diag(motor_slope) G (de/dp from the effects' motor slopes and the gear
+// matrix) without forming E: output_rate = pd + E pd and reaction = torque + E^T torque, with the arithmetic
+// of Eigen's matrix-vector products (the same bits as those matrix expressions, which tests compare).
+void transmissionOutputRate(const JointVector& motor_slope, const JointMatrix& gears, const JointVector& pd,
+                            JointVector& output_rate);
+void transmissionReaction(const JointVector& motor_slope, const JointMatrix& gears, const JointVector& torque,
+                          JointVector& reaction);
 
 class FlexibleJointPlant {
 public:
@@ -176,6 +188,10 @@ private:
   void transmissionError(const JointVector& p, const JointVector& q, JointVector& error);
   void transmissionTorques(const JointVector& p, const JointVector& pd, const JointVector& q, const JointVector& qd,
                            JointVector& link_torque, JointVector& motor_reaction);
+  // transmissionError and, with analytic_slope_, addMotorSlopes at the motor angles of p, in one pass (the
+  // transmission errors' phases once): the same bits as the two.
+  void transmissionErrorAndMotorSlopes(const JointVector& p, const JointVector& q, JointVector& error,
+                                       JointVector& motor_slope);
   // Sum of the command-dependent effects' motor slopes at the motor angles in ctx_.
   void addMotorSlopes(JointVector& slope) const;
   // Link accelerations for the transmitted torque `spring_torque`: loads, then forward dynamics at q.
@@ -191,6 +207,8 @@ private:
   EffectMask load_mask_;
   EffectMask error_mask_;       // joint-error effects other than compliance: the transmission error
   bool analytic_slope_ = true;  // every command-dependent effect of error_mask_ gives its motor slope
+  // Per effect of truth_: the effect as a transmission error, or null (one dynamic_cast, not one per rhs).
+  std::vector<const TransmissionErrorEffect*> transmission_effects_;
   JointVector stiffness_;
   JointVector windup_gain_;  // per joint, 1 / (ki Tt): how fast a clamped excess pulls the integral back
   double time_ = 0.0;
@@ -208,6 +226,7 @@ private:
   struct JacobianScratch {
     JointMatrix inverse_mass, spring_by_motor, reaction_by_motor, reaction_by_motor_rate, link_by_q, link_by_qd;
     JointVector curvature, ahead, behind;
+    Eigen::LLT<JointMatrix> mass_llt;
   } jacobian_scratch_;
   std::unique_ptr<Solver> solver_;
 };

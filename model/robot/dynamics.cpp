@@ -2,6 +2,8 @@
 // coordinates, which keeps the recursions short and lets the mass matrix use composite bodies directly.
 #include "model/robot/dynamics.hpp"
 
+#include <cmath>
+
 #include "model/common/errors.hpp"
 #include "model/robot/kinematics.hpp"
 
@@ -22,11 +24,11 @@ void updateBodyInertias(const Robot& robot, RobotWorkspace& ws) {
   }
 }
 
-// Newton-Euler at the configuration of the last forward kinematics; gravity is included when asked.
+// Newton-Euler at the configuration of the last forward kinematics, with ws.inertia updated to it; gravity is
+// included when asked.
 void newtonEulerAtCurrentPose(const Robot& robot, RobotWorkspace& ws, const JointVector& qd, const JointVector& qdd,
                               bool with_gravity, JointVector& tau) {
   const int n = robot.dof();
-  updateBodyInertias(robot, ws);
   const Eigen::Vector3d base_acc = with_gravity ? Eigen::Vector3d(-robot.gravity) : Eigen::Vector3d::Zero();
   Eigen::Vector3d omega = Eigen::Vector3d::Zero();
   Eigen::Vector3d omega_dot = Eigen::Vector3d::Zero();
@@ -60,9 +62,9 @@ void newtonEulerAtCurrentPose(const Robot& robot, RobotWorkspace& ws, const Join
   }
 }
 
+// The mass matrix at the last forward kinematics, with ws.inertia updated to it.
 void massMatrixAtCurrentPose(const Robot& robot, RobotWorkspace& ws, JointMatrix& mass) {
   const int n = robot.dof();
-  updateBodyInertias(robot, ws);
   mass.resize(n, n);
   // Composite body of joints j..n-1: mass, first moment, inertia about the base origin.
   double composite_mass = 0.0;
@@ -114,12 +116,14 @@ void inverseDynamics(const Robot& robot, RobotWorkspace& ws, const JointVector& 
   checkJointVector(robot, qdd, "qdd");
   forwardKinematics(robot, ws, q);
   tau.resize(robot.dof());
+  updateBodyInertias(robot, ws);
   newtonEulerAtCurrentPose(robot, ws, qd, qdd, true, tau);
 }
 
 void massMatrix(const Robot& robot, RobotWorkspace& ws, const JointVector& q, JointMatrix& mass) {
   requireInertials(robot);
   forwardKinematics(robot, ws, q);
+  updateBodyInertias(robot, ws);
   massMatrixAtCurrentPose(robot, ws, mass);
 }
 
@@ -137,14 +141,61 @@ void forwardDynamicsAtCurrentPose(const Robot& robot, RobotWorkspace& ws, const 
   const int n = robot.dof();
   qdd.setZero(n);
   ws.bias.resize(n);
+  updateBodyInertias(robot, ws);  // once for both: they depend on q only
   newtonEulerAtCurrentPose(robot, ws, qd, qdd, true, ws.bias);
   massMatrixAtCurrentPose(robot, ws, ws.mass_matrix);
-  ws.mass_llt.compute(ws.mass_matrix);
-  if (ws.mass_llt.info() != Eigen::Success) {
+  if (!choleskyFactor(ws.mass_matrix, ws.mass_factor)) {
     throw SolverError(robot.source + ": the mass matrix is not positive definite at this configuration");
   }
   qdd = tau - ws.bias;
-  ws.mass_llt.solveInPlace(qdd);
+  choleskySolveInPlace(ws.mass_factor, qdd);
+}
+
+// Eigen's unblocked LLT's arithmetic, in its order, so that the plant's results stay the same bits: the
+// diagonal less the sum of the row's squares, each entry less the sum of its products (both summed from
+// the first term on), divided by the root.
+bool choleskyFactor(const JointMatrix& matrix, JointMatrix& factor) {
+  const Eigen::Index n = matrix.rows();
+  factor.resize(n, n);
+  for (Eigen::Index j = 0; j < n; ++j) {
+    double diagonal = matrix(j, j);
+    if (j > 0) {
+      double squares = factor(j, 0) * factor(j, 0);
+      for (Eigen::Index k = 1; k < j; ++k) squares += factor(j, k) * factor(j, k);
+      diagonal -= squares;
+    }
+    if (!(diagonal > 0.0)) return false;  // not positive definite, or not a number
+    const double root = std::sqrt(diagonal);
+    factor(j, j) = root;
+    for (Eigen::Index i = j + 1; i < n; ++i) {
+      double value = matrix(i, j);
+      if (j > 0) {
+        double products = factor(i, 0) * factor(j, 0);
+        for (Eigen::Index k = 1; k < j; ++k) products += factor(i, k) * factor(j, k);
+        value -= products;
+      }
+      factor(i, j) = value / root;
+    }
+  }
+  return true;
+}
+
+// The two triangular solves in the order of Eigen's LLT::solveInPlace up to 8 joints (its panel width;
+// beyond, the sums are grouped differently, at the rounding level): forward, subtracting term by term;
+// backward, subtracting the dot product of L's column below the diagonal, which Eigen's own sum gives.
+void choleskySolveInPlace(const JointMatrix& factor, JointVector& x) {
+  const Eigen::Index n = factor.rows();
+  for (Eigen::Index i = 0; i < n; ++i) {  // L y = b
+    double value = x[i];
+    for (Eigen::Index k = 0; k < i; ++k) value -= factor(i, k) * x[k];
+    x[i] = value / factor(i, i);
+  }
+  for (Eigen::Index i = n - 1; i >= 0; --i) {  // L^T x = y
+    const Eigen::Index below = n - 1 - i;
+    double value = x[i];
+    if (below > 0) value -= factor.col(i).segment(i + 1, below).cwiseProduct(x.segment(i + 1, below)).sum();
+    x[i] = value / factor(i, i);
+  }
 }
 
 void wrenchTorquesAtCurrentPose(const Robot& robot, const RobotWorkspace& ws, const Vector6& wrench, JointVector& tau) {

@@ -28,6 +28,15 @@ void forwardDynamics(const Robot& robot, RobotWorkspace& ws, const JointVector& 
 void forwardDynamicsAtCurrentPose(const Robot& robot, RobotWorkspace& ws, const JointVector& qd, const JointVector& tau,
                                   JointVector& qdd);
 
+// The Cholesky factor L (M = L L^T, lower triangle of `factor`; the upper is left as it was) of a symmetric
+// positive definite matrix, reading its lower triangle; false when it is not positive definite (or holds a
+// value that is not a number). Eigen's LLT's arithmetic in plain loops: the same bits (its solve's up to 8
+// joints), without the dynamic-size block dispatch that cost several times the arithmetic at a serial arm's
+// sizes (checked against it in tests/robot/test_dynamics.cpp).
+bool choleskyFactor(const JointMatrix& matrix, JointMatrix& factor);
+// x <- M^-1 x with the factor of choleskyFactor.
+void choleskySolveInPlace(const JointMatrix& factor, JointVector& x);
+
 // tau = J^T w for a wrench w (force, then moment about the tool point; base frame): the joint torques
 // with which the tool exerts w on its surroundings, or equally those that hold the robot against a
 // wrench -w applied to the tool. At the last forwardKinematics call.

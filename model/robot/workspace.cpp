@@ -22,6 +22,7 @@ RobotWorkspace::RobotWorkspace(const Robot& robot) : dof(robot.dof()) {
     moment[i].setZero();
   }
   mass_matrix.setZero(dof, dof);
+  mass_factor.setZero(dof, dof);
   bias.setZero(dof);
 }
 

@@ -4,8 +4,6 @@
 
 #include <array>
 
-#include <Eigen/Cholesky>
-
 #include "model/robot/robot.hpp"
 
 namespace jointcomp {
@@ -26,7 +24,7 @@ struct RobotWorkspace {
   std::array<Eigen::Vector3d, kMaxJoints> omega, omega_dot, acc;  // per body
   std::array<Eigen::Vector3d, kMaxJoints> force, moment;          // transmitted by each joint
   JointMatrix mass_matrix;
-  Eigen::LLT<JointMatrix> mass_llt;
+  JointMatrix mass_factor;  // its Cholesky factor (lower triangle), by forwardDynamics
   JointVector bias;
 };
 

@@ -261,6 +261,33 @@ TEST(TransmissionError, AnchoredValueAndSlopeMatchTheDirectSums) {
   EXPECT_GT(reanchored, 0);  // the largest moves did leave the anchors
 }
 
+// The plant's one-pass evaluation gives addJointError's and addMotorSlope's bits (the plant's stored
+// regressions rest on it), at random motor angles over many turns, added onto values already there.
+TEST(TransmissionError, OnePassValueAndSlopeAreTheTwoCallsBitForBit) {
+  const JointErrorModel model = effects_test::rx170Model();
+  const Robot& robot = model.robot();
+  const auto& effect =
+      dynamic_cast<const TransmissionErrorEffect&>(model.effect(model.findEffect(TransmissionErrorEffect::kType)));
+  std::mt19937 rng(1717u);
+  std::uniform_real_distribution<double> motor_angle(-300.0, 300.0);
+  for (int sample = 0; sample < 200; ++sample) {
+    JointContext ctx(robot.dof());
+    JointVector start(robot.dof());
+    for (int j = 0; j < robot.dof(); ++j) {
+      ctx.motor[j] = motor_angle(rng);
+      start[j] = 1e-3 * motor_angle(rng);
+    }
+    JointVector dq = start, slope = -start;
+    effect.addJointErrorAndMotorSlope(ctx, dq, slope);
+    JointVector direct = start, direct_slope = -start;
+    effect.addJointError(robot, ctx, direct);
+    ASSERT_TRUE(effect.addMotorSlope(robot, ctx, direct_slope));
+    EXPECT_EQ(dq, direct) << "sample " << sample;
+    EXPECT_EQ(slope, direct_slope) << "sample " << sample;
+    EXPECT_NE(dq, start);  // the harmonics did add something
+  }
+}
+
 }  // namespace
 }  // namespace jointcomp
 

@@ -125,6 +125,37 @@ std::vector<double> movingState(FlexibleJointPlant& plant, const JointVector& co
   return y;
 }
 
+// The right-hand side's transmission rates without forming E = diag(s) G give the bits of the matrix
+// expressions they replaced (pd + E pd, tau + E^T tau), for every chain length, coupled gears and zeros;
+// the plant's stored regressions rest on it.
+TEST(PlantJacobian, TransmissionRatesWithoutTheMatrixKeepItsBits) {
+  std::mt19937 rng(1717u);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  for (int n = 1; n <= kMaxJoints; ++n) {
+    for (int sample = 0; sample < 200; ++sample) {
+      JointVector slope(n), pd(n), torque(n);
+      JointMatrix gears = JointMatrix::Zero(n, n);
+      for (int i = 0; i < n; ++i) {
+        slope[i] = sample % 10 == 0 && i % 2 == 0 ? 0.0 : 1e-3 * unit(rng);
+        pd[i] = unit(rng);
+        torque[i] = 1e3 * unit(rng);
+        gears(i, i) = 100.0 * unit(rng);
+      }
+      for (int c = 0; c < n; ++c) {
+        if (unit(rng) > 0.5) gears(static_cast<int>(rng() % static_cast<unsigned>(n)), c) = 50.0 * unit(rng);
+      }
+      const JointMatrix matrix = slope.asDiagonal() * gears;
+      const JointVector expected_rate = pd + matrix * pd;
+      const JointVector expected_reaction = torque + matrix.transpose() * torque;
+      JointVector rate, reaction;
+      transmissionOutputRate(slope, gears, pd, rate);
+      transmissionReaction(slope, gears, torque, reaction);
+      EXPECT_EQ(rate, expected_rate) << n << " joints, sample " << sample;
+      EXPECT_EQ(reaction, expected_reaction) << n << " joints, sample " << sample;
+    }
+  }
+}
+
 TEST(PlantJacobian, HasTheAnalyticJacobianWithTheShippedEffects) {
   Rx170 rx;
   FlexibleJointPlant plant(rx.model, rx.drives);

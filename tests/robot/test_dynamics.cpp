@@ -13,6 +13,7 @@
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
+#include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 
 #include "model/common/errors.hpp"
@@ -254,6 +255,54 @@ TEST(Dynamics, ForwardDynamicsInvertsInverseDynamics) {
       EXPECT_EQ(again, qdd) << robot->name;
     }
   }
+}
+
+// The plant's Cholesky in plain loops against Eigen's LLT: on the robots' mass matrices at random poses and on
+// random symmetric positive definite matrices of every size up to kMaxJoints, the factor reproduces the
+// matrix and the solves agree to 1e-12 (relative), and up to 8 joints they are Eigen's bits (what keeps the
+// plant's stored regressions); a matrix that is not positive definite, or holds a NaN, is refused.
+TEST(Dynamics, CholeskyInPlainLoopsAgreesWithEigensLlt) {
+  std::mt19937 rng(1717u);
+  auto check = [](const JointMatrix& matrix, const JointVector& b, const std::string& what) {
+    JointMatrix factor;
+    ASSERT_TRUE(choleskyFactor(matrix, factor)) << what;
+    const JointMatrix lower = factor.triangularView<Eigen::Lower>();
+    const double scale = matrix.cwiseAbs().maxCoeff();
+    EXPECT_LT((lower * lower.transpose() - matrix).cwiseAbs().maxCoeff(), 1e-13 * scale) << what;
+    JointVector x = b;
+    choleskySolveInPlace(factor, x);
+    const Eigen::LLT<JointMatrix> llt(matrix);
+    const JointVector expected = llt.solve(b);
+    EXPECT_LT((x - expected).cwiseAbs().maxCoeff(), 1e-12 * expected.cwiseAbs().maxCoeff()) << what;
+    const JointMatrix eigen_lower = llt.matrixL();
+    EXPECT_EQ(lower, eigen_lower) << what;
+    if (matrix.rows() <= 8) {
+      EXPECT_EQ(x, expected) << what;
+    }
+  };
+  for (const Robot* robot : bothRobots()) {
+    for (int sample = 0; sample < 50; ++sample) {
+      const JointVector q = testing_support::randomConfiguration(*robot, rng);
+      check(massAt(*robot, q), testing_support::randomVector(robot->dof(), rng, 100.0), robot->name);
+    }
+  }
+  for (int n = 1; n <= kMaxJoints; ++n) {
+    for (int sample = 0; sample < 20; ++sample) {
+      JointMatrix a(n, n);
+      for (int i = 0; i < n; ++i) a.col(i) = testing_support::randomVector(n, rng, 1.0);
+      const JointMatrix spd = a * a.transpose() + 0.1 * JointMatrix::Identity(n, n);
+      check(spd, testing_support::randomVector(n, rng, 1.0), "random " + std::to_string(n) + " x " + std::to_string(n));
+    }
+  }
+  JointMatrix factor;
+  JointMatrix indefinite = JointMatrix::Identity(3, 3);
+  indefinite(2, 2) = -1.0;
+  EXPECT_FALSE(choleskyFactor(indefinite, factor));
+  JointMatrix singular = JointMatrix::Ones(3, 3);
+  EXPECT_FALSE(choleskyFactor(singular, factor));
+  JointMatrix not_a_number = JointMatrix::Identity(3, 3);
+  not_a_number(1, 1) = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_FALSE(choleskyFactor(not_a_number, factor));
 }
 
 struct State {
