@@ -6,26 +6,20 @@
 #   ur10_study.sh <jointcomp> <scratch folder>        (needs JOINTCOMP_SHARED; exits 77, a skip, without it)
 set -euo pipefail
 jointcomp="$1" work="$2"
-data="${JOINTCOMP_SHARED:-}/data/ipa-ur10"
-if [ -z "${JOINTCOMP_SHARED:-}" ]; then
-  echo "skipped: the IPA UR10 data not found: JOINTCOMP_SHARED is not set"
-  exit 77
-fi
-if [ ! -f "$data/Series_B/measurements_joint_configurations.csv" ]; then
-  echo "skipped: the IPA UR10 data not found at $data"
-  exit 77
-fi
+source "$(dirname "$0")/../support/shared_data.sh"
+require_shared_file raw_b "the IPA UR10 data" data/ipa-ur10/Series_B/measurements_joint_configurations.csv
+data="$JOINTCOMP_SHARED/data/ipa-ur10"
 python=/usr/bin/python3
 rm -rf "$work" && mkdir -p "$work"
 "$jointcomp" import-ipa --in "$data/Series_A/measurements_grid.csv" --trafo "$data/Series_A/Trafo_TM_F_init.txt" \
   --out "$work/A.csv" >/dev/null
-"$jointcomp" import-ipa --in "$data/Series_B/measurements_joint_configurations.csv" \
+"$jointcomp" import-ipa --in "$raw_b" \
   --trafo "$data/Series_B/Trafo_TM_F_init.txt" --out "$work/B.csv" >/dev/null
 model="$(dirname "$0")/../../model/robots/ur10.urdf"
 "$jointcomp" calibrate --urdf "$model" --campaign "$work/A.csv" --holdout "$work/B.csv" --out "$work/calibrate" \
   --no-plot >/dev/null
 "$python" "$(dirname "$0")/../../examples/python/ur10_residual_study.py" "$work/calibrate" "$work/A.csv" "$work/B.csv" \
-  --max-order 30 --raw-b "$data/Series_B/measurements_joint_configurations.csv" \
+  --max-order 30 --raw-b "$raw_b" \
   --trafo-b "$data/Series_B/Trafo_TM_F_init.txt" >"$work/study.txt"
 cat "$work/study.txt"
 "$python" - "$work/study.txt" <<'PY'

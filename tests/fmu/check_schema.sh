@@ -5,14 +5,6 @@
 #   check_schema.sh <2|3> <modelDescription.xml>
 set -euo pipefail
 version="$1" description="$2"
-schema_relative="fmi-schema/fmi${version}/fmi${version}ModelDescription.xsd"
-if [ -z "${JOINTCOMP_SHARED:-}" ]; then
-  echo "skipped: the FMI $version schema not found: JOINTCOMP_SHARED is not set (a folder with $schema_relative)"
-  exit 77
-fi
-schema="$JOINTCOMP_SHARED/$schema_relative"
-if [ ! -f "$schema" ]; then
-  echo "skipped: the FMI $version schema not found at $schema"
-  exit 77
-fi
+source "$(dirname "$0")/../support/shared_data.sh"
+require_shared_file schema "the FMI $version schema" "fmi-schema/fmi${version}/fmi${version}ModelDescription.xsd"
 xmllint --noout --schema "$schema" "$description"
