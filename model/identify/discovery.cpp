@@ -528,34 +528,6 @@ const std::vector<std::string>& discoveryEffectTypes() {
   return types;
 }
 
-MeasurementCampaign concatenateCampaigns(const std::vector<MeasurementCampaign>& campaigns) {
-  if (campaigns.empty()) throw InvalidArgument("discover: no fitted campaign");
-  MeasurementCampaign all = campaigns.front();
-  for (std::size_t c = 1; c < campaigns.size(); ++c) {
-    const MeasurementCampaign& m = campaigns[c];
-    if (m.dof != all.dof || m.frame != all.frame || !m.has_position) {
-      throw InvalidArgument("discover: campaign '" + m.source + "' differs from '" + all.source +
-                            "' in joints, frame or positions; fitted campaigns must share one instrument set-up");
-    }
-    const double shift = (all.time.empty() ? 0.0 : all.time.back() + 1.0) - (m.time.empty() ? 0.0 : m.time.front());
-    for (std::size_t k = 0; k < m.size(); ++k) {
-      all.time.push_back(m.time[k] + shift);
-      all.command.push_back(m.command[k]);
-      all.position.push_back(m.position[k]);
-      all.temperature.push_back(k < m.temperature.size() ? m.temperature[k] : std::numeric_limits<double>::quiet_NaN());
-      all.wrench.push_back(k < m.wrench.size() ? m.wrench[k] : Vector6::Zero());
-      all.payload.push_back(k < m.payload.size() ? m.payload[k] : 0.0);
-      if (all.has_measured_angles) {
-        all.measured_angles.push_back(k < m.measured_angles.size()
-                                          ? m.measured_angles[k]
-                                          : JointVector::Constant(all.dof, std::numeric_limits<double>::quiet_NaN()));
-      }
-    }
-    all.source += "+" + m.source;
-  }
-  return all;
-}
-
 namespace {
 
 // One run of discovery: the fitted data, the candidates, and the model as it grows step by step.
@@ -1032,25 +1004,19 @@ namespace {
 void checkOneInstrumentSetUp(const JointErrorModel& prior, const std::vector<MeasurementCampaign>& fitted,
                              const DiscoveryOptions& options) {
   if (fitted.size() < 2 || fitted.front().frame != MeasurementFrame::Instrument) return;
-  std::vector<GeometricParameters> frames;
-  for (const MeasurementCampaign& c : fitted) {
-    frames.push_back(
-        evaluateOnCampaign(prior, nominalParameters(prior, c), c, /*refit_frame=*/true, options.calibration)
-            .parameters);
-  }
+  const InstrumentSetUps setups = instrumentSetUps(prior, fitted, options.calibration);
   for (std::size_t c = 1; c < fitted.size(); ++c) {
-    const Eigen::Isometry3d relative = frames[c].instrumentFromBase() * frames.front().instrumentFromBase().inverse();
-    const double apart_m = relative.translation().norm();
-    const double apart_rad = Eigen::AngleAxisd(relative.linear()).angle();
-    if (apart_m <= kSameSetUpDistance && apart_rad <= kSameSetUpAngle) continue;
+    if (setups.setup_of_campaign[c] == 0) continue;
+    const Eigen::Isometry3d relative = setups.frame_of_campaign[c] * setups.frame_of_campaign[0].inverse();
     char text[160];
-    std::snprintf(text, sizeof(text), "%.1f mm and %.2f deg", apart_m * 1e3, apart_rad * 180.0 / M_PI);
+    std::snprintf(text, sizeof(text), "%.1f mm and %.2f deg", relative.translation().norm() * 1e3,
+                  Eigen::AngleAxisd(relative.linear()).angle() * 180.0 / M_PI);
     throw InvalidArgument("discover: '" + fitted[c].source + "' was measured from another instrument set-up than '" +
                           fitted.front().source + "' (their instrument frames, each fitted on the prior, differ by " +
                           text +
                           "); discovery fits one instrument frame for all fitted campaigns: fit the campaigns "
                           "of one set-up together and hold the others out (--holdout), which re-fits their "
-                          "frames");
+                          "frames (jointcomp calibrate fits several set-ups, each with its own frame)");
   }
 }
 

@@ -128,17 +128,9 @@ struct DiscoveryResult {
   explicit DiscoveryResult(JointErrorModel m) : model(std::move(m)) {}
 };
 
-// Fitted campaigns in the instrument frame whose frames, each fitted alone on the prior, lie further apart than
-// this are from different set-ups (a nominal robot's frame fit moves by millimetres between campaigns of one).
-constexpr double kSameSetUpDistance = 0.05;       // m
-constexpr double kSameSetUpAngle = 0.0349065850;  // rad (2 deg)
-
 // Throws InvalidArgument for no fitted campaign, campaigns of another robot or in different frames, or fitted
 // campaigns from different instrument set-ups (kSameSetUpDistance, kSameSetUpAngle; named in the message).
 DiscoveryResult discoverEffects(const JointErrorModel& prior, const std::vector<MeasurementCampaign>& fitted,
                                 const std::vector<MeasurementCampaign>& heldout, const DiscoveryOptions& options = {});
-
-// The fitted campaigns as one (rows appended in order, times shifted to stay non-decreasing).
-MeasurementCampaign concatenateCampaigns(const std::vector<MeasurementCampaign>& campaigns);
 
 }  // namespace jointcomp

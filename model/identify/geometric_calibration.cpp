@@ -70,7 +70,7 @@ class CalibrationProblem {
 public:
   CalibrationProblem(const Robot& robot, const CalibrationData& data, const Eigen::VectorXd& base,
                      std::vector<int> free)
-      : robot_(robot), data_(data), base_(base), free_(std::move(free)), layout_(robot.dof()) {}
+      : robot_(robot), data_(data), base_(base), free_(std::move(free)), layout_(robot.dof(), data.setups) {}
 
   int residualCount() const { return 3 * static_cast<int>(data_.size()); }
   const std::vector<int>& freeIndices() const { return free_; }
@@ -88,11 +88,12 @@ public:
 
   // Residuals (and the Jacobian of the free parameters) at the full parameter vector `values`.
   void evaluateFull(const Eigen::VectorXd& values, Eigen::VectorXd& residual, Eigen::MatrixXd* jacobian) const {
-    const GeometricParameters parameters = GeometricParameters::fromVector(values, robot_.dof());
+    const GeometricParameters parameters = GeometricParameters::fromVector(values, robot_.dof(), data_.setups);
     Eigen::MatrixXd block(3, layout_.size());
     for (std::size_t k = 0; k < data_.size(); ++k) {
-      const Eigen::Vector3d predicted = predictMeasurement(robot_, parameters, data_.command[k], data_.load_torque[k],
-                                                           data_.other_error[k], jacobian ? &block : nullptr);
+      const Eigen::Vector3d predicted =
+          predictMeasurement(robot_, parameters, data_.command[k], data_.load_torque[k], data_.other_error[k],
+                             jacobian ? &block : nullptr, data_.setup[k]);
       const Eigen::Index row = 3 * static_cast<Eigen::Index>(k);
       residual.segment<3>(row) = predicted - data_.measured[k];
       if (jacobian) {
@@ -234,8 +235,58 @@ void GeometricParameters::setInstrumentFromBase(const Eigen::Isometry3d& transfo
   frame_rotation = logRotation(transform.linear());
 }
 
+GeometricParameters GeometricParameters::ofSetUp(int setup) const {
+  if (setup < 0 || setup >= setUpCount()) {
+    throw InvalidArgument("geometric parameters: no instrument set-up " + std::to_string(setup + 1) + " of " +
+                          std::to_string(setUpCount()));
+  }
+  GeometricParameters single = *this;
+  single.other_setups.clear();
+  if (setup > 0) {
+    const SetUp& other = other_setups[static_cast<std::size_t>(setup - 1)];
+    single.frame_translation = other.frame_translation;
+    single.frame_rotation = other.frame_rotation;
+    single.instrument_scale = other.instrument_scale;
+  }
+  return single;
+}
+
+void GeometricParameters::setSetUp(int setup, const GeometricParameters& single) {
+  if (setup < 0 || setup >= setUpCount()) {
+    throw InvalidArgument("geometric parameters: no instrument set-up " + std::to_string(setup + 1) + " of " +
+                          std::to_string(setUpCount()));
+  }
+  if (setup == 0) {
+    frame_translation = single.frame_translation;
+    frame_rotation = single.frame_rotation;
+    instrument_scale = single.instrument_scale;
+    return;
+  }
+  SetUp& other = other_setups[static_cast<std::size_t>(setup - 1)];
+  other.frame_translation = single.frame_translation;
+  other.frame_rotation = single.frame_rotation;
+  other.instrument_scale = single.instrument_scale;
+}
+
+int GeometricParameterLayout::setUpOf(int index) const {
+  if (index >= kFrame && index < kFrame + 6) return 0;
+  if (index == instrumentScale()) return 0;
+  if (index >= 10 + 8 * dof && index < size()) return 1 + (index - 10 - 8 * dof) / 7;
+  return -1;
+}
+
+bool GeometricParameterLayout::isFrame(int index) const {
+  const int setup = setUpOf(index);
+  return setup >= 0 && index >= frame(setup) && index < frame(setup) + 6;
+}
+
+bool GeometricParameterLayout::isInstrumentScale(int index) const {
+  const int setup = setUpOf(index);
+  return setup >= 0 && index == instrumentScale(setup);
+}
+
 Eigen::VectorXd GeometricParameters::toVector() const {
-  const GeometricParameterLayout layout(dof());
+  const GeometricParameterLayout layout(dof(), setUpCount());
   Eigen::VectorXd v(layout.size());
   v.segment<3>(0) = frame_translation;
   v.segment<3>(3) = frame_rotation;
@@ -246,11 +297,18 @@ Eigen::VectorXd GeometricParameters::toVector() const {
     v[layout.compliance(j)] = compliance[j];
   }
   v[layout.instrumentScale()] = instrument_scale;
+  for (int s = 1; s < setUpCount(); ++s) {
+    const SetUp& other = other_setups[static_cast<std::size_t>(s - 1)];
+    v.segment<3>(layout.frame(s)) = other.frame_translation;
+    v.segment<3>(layout.frame(s) + 3) = other.frame_rotation;
+    v[layout.instrumentScale(s)] = other.instrument_scale;
+  }
   return v;
 }
 
-GeometricParameters GeometricParameters::fromVector(const Eigen::VectorXd& v, int dof) {
-  const GeometricParameterLayout layout(dof);
+GeometricParameters GeometricParameters::fromVector(const Eigen::VectorXd& v, int dof, int setups) {
+  if (setups < 1) throw InvalidArgument("geometric parameters: " + std::to_string(setups) + " instrument set-ups");
+  const GeometricParameterLayout layout(dof, setups);
   if (v.size() != layout.size()) {
     throw InvalidArgument("geometric parameters: expected " + std::to_string(layout.size()) + " values, found " +
                           std::to_string(v.size()));
@@ -265,10 +323,17 @@ GeometricParameters GeometricParameters::fromVector(const Eigen::VectorXd& v, in
     p.compliance[j] = v[layout.compliance(j)];
   }
   p.instrument_scale = v[layout.instrumentScale()];
+  p.other_setups.resize(static_cast<std::size_t>(setups - 1));
+  for (int s = 1; s < setups; ++s) {
+    SetUp& other = p.other_setups[static_cast<std::size_t>(s - 1)];
+    other.frame_translation = v.segment<3>(layout.frame(s));
+    other.frame_rotation = v.segment<3>(layout.frame(s) + 3);
+    other.instrument_scale = v[layout.instrumentScale(s)];
+  }
   return p;
 }
 
-std::vector<std::string> geometricParameterNames(const Robot& robot) {
+std::vector<std::string> geometricParameterNames(const Robot& robot, int setups) {
   std::vector<std::string> names = {"frame.tx_m",   "frame.ty_m", "frame.tz_m", "frame.rx_rad", "frame.ry_rad",
                                     "frame.rz_rad", "target.x_m", "target.y_m", "target.z_m"};
   for (const Joint& joint : robot.joints) names.push_back(joint.name + ".offset_rad");
@@ -279,6 +344,11 @@ std::vector<std::string> geometricParameterNames(const Robot& robot) {
   }
   for (const Joint& joint : robot.joints) names.push_back(joint.name + ".compliance_rad_per_nm");
   names.push_back("instrument.scale");
+  for (int s = 1; s < setups; ++s) {
+    const std::string prefix = "setup" + std::to_string(s + 1) + ".";
+    for (int k = 0; k < 6; ++k) names.push_back(prefix + names[static_cast<std::size_t>(k)]);
+    names.push_back(prefix + "instrument.scale");
+  }
   return names;
 }
 
@@ -288,7 +358,7 @@ std::string geometricParameterUnit(const std::string& name) {
     return name.size() >= s.size() && name.compare(name.size() - s.size(), s.size(), s) == 0;
   };
   if (ends("_rad_per_nm")) return "rad/(N m)";
-  if (name == "instrument.scale") return "1";
+  if (ends("instrument.scale")) return "1";
   if (ends("_rad")) return "rad";
   return "m";
 }
@@ -381,15 +451,23 @@ CalibrationData prepareCalibrationData(const JointErrorModel& prior, const Measu
     data.approach.push_back(ctx.approach);
     data.other_error.push_back(other);
     data.measured.push_back(position);
+    data.setup.push_back(0);
   }
   return data;
 }
 
 Eigen::Vector3d predictMeasurement(const Robot& robot, const GeometricParameters& p, const JointVector& command,
                                    const JointVector& load_torque, const JointVector& other_error,
-                                   Eigen::MatrixXd* jacobian) {
+                                   Eigen::MatrixXd* jacobian, int setup) {
   const int n = robot.dof();
-  const GeometricParameterLayout layout(n);
+  const GeometricParameterLayout layout(n, p.setUpCount());
+  if (setup < 0 || setup >= p.setUpCount()) {
+    throw InvalidArgument("predictMeasurement: no instrument set-up " + std::to_string(setup + 1) + " of " +
+                          std::to_string(p.setUpCount()));
+  }
+  const GeometricParameters::SetUp* other = setup > 0 ? &p.other_setups[static_cast<std::size_t>(setup - 1)] : nullptr;
+  const Eigen::Vector3d& frame_r = other ? other->frame_rotation : p.frame_rotation;
+  const Eigen::Vector3d& frame_t = other ? other->frame_translation : p.frame_translation;
   // Forward kinematics with the corrections, keeping what the derivatives need.
   std::array<Eigen::Matrix3d, kMaxJoints> rotation_before;     // frame in which d_j is given
   std::array<Eigen::Matrix3d, kMaxJoints> rotation_corrected;  // frame in which r_j acts (and the joint turns)
@@ -413,15 +491,15 @@ Eigen::Vector3d predictMeasurement(const Robot& robot, const GeometricParameters
   }
   const Eigen::Matrix3d tool_rotation = rotation * robot.tool.linear();
   const Eigen::Vector3d point = position + rotation * robot.tool.translation() + tool_rotation * p.target;
-  const Eigen::Matrix3d frame_rotation = expRotation(p.frame_rotation);
-  const Eigen::Vector3d true_position = frame_rotation * point + p.frame_translation;
-  const double scale = 1.0 + p.instrument_scale;
+  const Eigen::Matrix3d frame_rotation = expRotation(frame_r);
+  const Eigen::Vector3d true_position = frame_rotation * point + frame_t;
+  const double scale = 1.0 + (other ? other->instrument_scale : p.instrument_scale);
   if (!jacobian) return scale * true_position;
 
   Eigen::MatrixXd& jac = *jacobian;
-  jac.resize(3, layout.size());
-  jac.block<3, 3>(0, 0).setIdentity();
-  jac.block<3, 3>(0, 3) = -frame_rotation * skew(point) * rightJacobian(p.frame_rotation);
+  jac.setZero(3, layout.size());
+  jac.block<3, 3>(0, layout.frame(setup)).setIdentity();
+  jac.block<3, 3>(0, layout.frame(setup) + 3) = -frame_rotation * skew(point) * rightJacobian(frame_r);
   jac.block<3, 3>(0, GeometricParameterLayout::kTarget) = frame_rotation * tool_rotation;
   for (int j = 0; j < n; ++j) {
     const Eigen::Vector3d lever = point - origin[j];
@@ -433,7 +511,7 @@ Eigen::Vector3d predictMeasurement(const Robot& robot, const GeometricParameters
                                                  rightJacobian(p.placement[static_cast<std::size_t>(j)].tail<3>());
   }
   jac *= scale;  // every column above is of the true position
-  jac.col(layout.instrumentScale()) = true_position;
+  jac.col(layout.instrumentScale(setup)) = true_position;
   return scale * true_position;
 }
 
@@ -508,7 +586,7 @@ namespace {
 
 std::vector<Eigen::Vector3d> basePoints(const Robot& robot, const GeometricParameters& parameters,
                                         const CalibrationData& data) {
-  GeometricParameters in_base = parameters;
+  GeometricParameters in_base = parameters.ofSetUp(0);
   in_base.frame_translation.setZero();
   in_base.frame_rotation.setZero();
   std::vector<Eigen::Vector3d> points;
@@ -519,7 +597,31 @@ std::vector<Eigen::Vector3d> basePoints(const Robot& robot, const GeometricParam
   return points;
 }
 
-std::vector<int> frameIndices() { return {0, 1, 2, 3, 4, 5}; }
+std::vector<int> frameIndices(const GeometricParameterLayout& layout) {
+  std::vector<int> indices;
+  for (int s = 0; s < layout.setups; ++s) {
+    for (int k = 0; k < 6; ++k) indices.push_back(layout.frame(s) + k);
+  }
+  return indices;
+}
+
+// The rows of one set-up.
+CalibrationData setUpRows(const CalibrationData& data, int setup) {
+  CalibrationData rows;
+  rows.source = data.source;
+  rows.torque_known = data.torque_known;
+  for (std::size_t k = 0; k < data.size(); ++k) {
+    if (data.setup[k] != setup) continue;
+    rows.row.push_back(data.row[k]);
+    rows.command.push_back(data.command[k]);
+    rows.load_torque.push_back(data.load_torque[k]);
+    rows.approach.push_back(data.approach[k]);
+    rows.other_error.push_back(data.other_error[k]);
+    rows.measured.push_back(data.measured[k]);
+    rows.setup.push_back(0);
+  }
+  return rows;
+}
 
 }  // namespace
 
@@ -541,21 +643,35 @@ struct ParameterChoice {
 // calibration ("before"). Fills the result's nominal and its errors before the calibration.
 GeometricParameters startingPoint(const JointErrorModel& prior, const MeasurementCampaign& campaign,
                                   const CalibrationData& data, const GeometricCalibrationOptions& options,
-                                  bool fit_frame, GeometricCalibrationResult& result) {
+                                  bool fit_frame, const std::vector<std::string>& setup_sources,
+                                  GeometricCalibrationResult& result) {
   const Robot& robot = prior.robot();
   const int n = robot.dof();
   const int rows = static_cast<int>(data.size());
-  const std::string& source = campaign.source;
   GeometricParameters start = nominalParameters(prior, campaign);
-  const std::vector<Eigen::Vector3d> points = basePoints(robot, start, data);
-  checkPoses(data, points, source);
-  if (fit_frame) start.setInstrumentFromBase(fitRigidTransform(points, data.measured));
+  start.other_setups.resize(static_cast<std::size_t>(data.setups - 1));
+  // Each set-up's frame from the closed-form rigid fit of its own rows.
+  for (int s = 0; s < data.setups; ++s) {
+    const CalibrationData own = setUpRows(data, s);
+    const std::string& source = setup_sources[static_cast<std::size_t>(s)];
+    if (own.size() < 3) {
+      throw InvalidArgument(source + ": too few points: " + std::to_string(own.size()) +
+                            " usable rows; an instrument set-up needs at least 3 to fix its frame");
+    }
+    const std::vector<Eigen::Vector3d> points = basePoints(robot, start, own);
+    checkPoses(own, points, source);
+    if (!fit_frame) continue;
+    GeometricParameters single = start.ofSetUp(s);
+    single.setInstrumentFromBase(fitRigidTransform(points, own.measured));
+    start.setSetUp(s, single);
+  }
 
-  // "Before": the nominal robot with only its frame fitted (robustly, like the calibration).
+  // "Before": the nominal robot with only its frames fitted (robustly, like the calibration).
   if (fit_frame) {
-    const FitOutcome frame_fit = fitSubset(robot, data, start.toVector(), frameIndices(), options, 0.0,
-                                           "fitting the instrument frame of the nominal robot");
-    start = GeometricParameters::fromVector(frame_fit.values, n);
+    const FitOutcome frame_fit =
+        fitSubset(robot, data, start.toVector(), frameIndices(GeometricParameterLayout(n, data.setups)), options, 0.0,
+                  "fitting the instrument frame of the nominal robot");
+    start = GeometricParameters::fromVector(frame_fit.values, n, data.setups);
   }
   result.nominal = start;
   result.nominal_frame_fit = start;
@@ -573,7 +689,7 @@ GeometricParameters startingPoint(const JointErrorModel& prior, const Measuremen
 ParameterChoice candidateParameters(const Robot& robot, const CalibrationData& data,
                                     const GeometricCalibrationOptions& options, bool fit_frame,
                                     const GeometricCalibrationResult& result, const std::string& source) {
-  const GeometricParameterLayout layout(robot.dof());
+  const GeometricParameterLayout layout(robot.dof(), data.setups);
   ParameterChoice choice;
   std::vector<int>& candidates = choice.candidates;
   std::vector<int>& priority = choice.priority;
@@ -591,9 +707,12 @@ ParameterChoice candidateParameters(const Robot& robot, const CalibrationData& d
     int group;
     bool enabled;
     double change;
-    if (i < 6) {
+    if (layout.isFrame(i)) {
       group = 0, enabled = fit_frame, change = 1e-3;  // m for the translations, rad for the rotations
       if (!fit_frame) reason[static_cast<std::size_t>(i)] = "the campaign is in the base frame: no frame to fit";
+    } else if (layout.isInstrumentScale(i)) {
+      group = 1, enabled = options.fit_instrument_scale, change = 1e-5;  // with the frame and target
+      if (!enabled) reason[static_cast<std::size_t>(i)] = "an instrument property: fitted only when asked";
     } else if (i < 9) {
       group = 1, enabled = options.fit_target, change = 1e-3;
     } else if (i < layout.placement(0, 0)) {
@@ -601,9 +720,6 @@ ParameterChoice candidateParameters(const Robot& robot, const CalibrationData& d
     } else if (i < layout.compliance(0)) {
       const int k = (i - layout.placement(0, 0)) % 6;
       group = k < 3 ? 3 : 4, enabled = options.fit_placements, change = 1e-3;
-    } else if (i == layout.instrumentScale()) {
-      group = 1, enabled = options.fit_instrument_scale, change = 1e-5;  // with the frame and target
-      if (!enabled) reason[static_cast<std::size_t>(i)] = "an instrument property: fitted only when asked";
     } else {
       group = 5, enabled = options.fit_compliance && data.torque_known, change = 1e-6;
       if (!data.torque_known) {
@@ -673,7 +789,7 @@ void chooseIdentifiable(const Robot& robot, const CalibrationData& data, const G
   }
   if (fit_frame) {
     std::string missing;
-    for (int i = 0; i < 6; ++i) {
+    for (int i : frameIndices(GeometricParameterLayout(robot.dof(), data.setups))) {
       if (std::find(free.begin(), free.end(), i) != free.end()) continue;
       missing += (missing.empty() ? "" : "; ") + result.names[static_cast<std::size_t>(i)] + ": " +
                  reason[static_cast<std::size_t>(i)];
@@ -795,12 +911,117 @@ void tabulateEstimates(const Robot& robot, const Eigen::VectorXd& nominal_values
 
 }  // namespace
 
+MeasurementCampaign concatenateCampaigns(const std::vector<MeasurementCampaign>& campaigns) {
+  if (campaigns.empty()) throw InvalidArgument("no campaign given");
+  MeasurementCampaign all = campaigns.front();
+  for (std::size_t c = 1; c < campaigns.size(); ++c) {
+    const MeasurementCampaign& m = campaigns[c];
+    if (m.dof != all.dof || m.frame != all.frame || !m.has_position) {
+      throw InvalidArgument("campaign '" + m.source + "' differs from '" + campaigns.front().source +
+                            "' in joints, frame (base or instrument) or positions; campaigns used together must "
+                            "agree in all three");
+    }
+    const double shift = (all.time.empty() ? 0.0 : all.time.back() + 1.0) - (m.time.empty() ? 0.0 : m.time.front());
+    for (std::size_t k = 0; k < m.size(); ++k) {
+      all.time.push_back(m.time[k] + shift);
+      all.command.push_back(m.command[k]);
+      all.position.push_back(m.position[k]);
+      all.temperature.push_back(k < m.temperature.size() ? m.temperature[k] : kNaN);
+      all.wrench.push_back(k < m.wrench.size() ? m.wrench[k] : Vector6::Zero());
+      all.payload.push_back(k < m.payload.size() ? m.payload[k] : 0.0);
+      if (all.has_measured_angles) {
+        all.measured_angles.push_back(k < m.measured_angles.size() ? m.measured_angles[k]
+                                                                   : JointVector::Constant(all.dof, kNaN));
+      }
+    }
+    all.source += "+" + m.source;
+  }
+  return all;
+}
+
+int InstrumentSetUps::count() const {
+  return setup_of_campaign.empty() ? 0 : 1 + *std::max_element(setup_of_campaign.begin(), setup_of_campaign.end());
+}
+
+InstrumentSetUps instrumentSetUps(const JointErrorModel& prior, const std::vector<MeasurementCampaign>& campaigns,
+                                  const GeometricCalibrationOptions& options) {
+  if (campaigns.empty()) throw InvalidArgument("no campaign given");
+  concatenateCampaigns(campaigns);  // the same joints, frame and positions, or a named error
+  InstrumentSetUps setups;
+  setups.setup_of_campaign.assign(campaigns.size(), 0);
+  setups.frame_of_campaign.assign(campaigns.size(), Eigen::Isometry3d::Identity());
+  if (campaigns.front().frame != MeasurementFrame::Instrument) return setups;
+  std::vector<int> first_campaign;  // of each set-up
+  for (std::size_t c = 0; c < campaigns.size(); ++c) {
+    const Eigen::Isometry3d frame =
+        evaluateOnCampaign(prior, nominalParameters(prior, campaigns[c]), campaigns[c], /*refit_frame=*/true, options)
+            .parameters.instrumentFromBase();
+    setups.frame_of_campaign[c] = frame;
+    int found = -1;
+    for (std::size_t s = 0; s < first_campaign.size() && found < 0; ++s) {
+      const Eigen::Isometry3d relative =
+          frame * setups.frame_of_campaign[static_cast<std::size_t>(first_campaign[s])].inverse();
+      if (relative.translation().norm() <= kSameSetUpDistance &&
+          Eigen::AngleAxisd(relative.linear()).angle() <= kSameSetUpAngle) {
+        found = static_cast<int>(s);
+      }
+    }
+    if (found < 0) {
+      found = static_cast<int>(first_campaign.size());
+      first_campaign.push_back(static_cast<int>(c));
+    }
+    setups.setup_of_campaign[c] = found;
+  }
+  return setups;
+}
+
 GeometricCalibrationResult calibrateGeometry(const JointErrorModel& prior, const MeasurementCampaign& campaign,
+                                             const GeometricCalibrationOptions& options) {
+  return calibrateGeometry(prior, std::vector<MeasurementCampaign>{campaign}, options);
+}
+
+GeometricCalibrationResult calibrateGeometry(const JointErrorModel& prior,
+                                             const std::vector<MeasurementCampaign>& campaigns,
                                              const GeometricCalibrationOptions& options) {
   const Robot& robot = prior.robot();
   const int n = robot.dof();
-  const std::string& source = campaign.source;
-  const CalibrationData data = prepareCalibrationData(prior, campaign);
+  const MeasurementCampaign whole = concatenateCampaigns(campaigns);
+  const std::string& source = whole.source;
+  for (const MeasurementCampaign& c : campaigns) {
+    if (c.has_target != whole.has_target || (c.has_target && c.target_in_flange != whole.target_in_flange)) {
+      throw InvalidArgument("campaign '" + c.source + "' names another target in the flange than '" +
+                            campaigns.front().source + "'; one calibration fits one target");
+    }
+  }
+  const std::vector<int> setup_of_campaign =
+      campaigns.size() == 1 ? std::vector<int>{0} : instrumentSetUps(prior, campaigns, options).setup_of_campaign;
+  const int setups = 1 + *std::max_element(setup_of_campaign.begin(), setup_of_campaign.end());
+  // Every campaign's rows, each with its set-up; the lost motion's memory starts again in each campaign.
+  CalibrationData data;
+  data.source = source;
+  data.setups = setups;
+  std::vector<std::string> setup_sources(static_cast<std::size_t>(setups));
+  GeometricCalibrationResult result;
+  for (std::size_t c = 0; c < campaigns.size(); ++c) {
+    const CalibrationData own = prepareCalibrationData(prior, campaigns[c]);
+    const int s = setup_of_campaign[c];
+    std::string& named = setup_sources[static_cast<std::size_t>(s)];
+    named += (named.empty() ? "" : "+") + campaigns[c].source;
+    data.torque_known = own.torque_known;
+    data.skipped_rows += own.skipped_rows;
+    for (std::size_t k = 0; k < own.size(); ++k) {
+      data.row.push_back(own.row[k]);
+      data.command.push_back(own.command[k]);
+      data.load_torque.push_back(own.load_torque[k]);
+      data.approach.push_back(own.approach[k]);
+      data.other_error.push_back(own.other_error[k]);
+      data.measured.push_back(own.measured[k]);
+      data.setup.push_back(s);
+      result.campaign_of_row.push_back(static_cast<int>(c));
+    }
+    result.sources.push_back(campaigns[c].source);
+  }
+  result.setup_of_campaign = setup_of_campaign;
   const int rows = static_cast<int>(data.size());
   if (rows < std::max(options.minimum_rows, 3)) {
     throw InvalidArgument(source + ": too few points: " + std::to_string(rows) + " usable rows (" +
@@ -809,23 +1030,23 @@ GeometricCalibrationResult calibrateGeometry(const JointErrorModel& prior, const
                           "at least " +
                           std::to_string(std::max(options.minimum_rows, 3)));
   }
-  const bool fit_frame = options.fit_frame && campaign.frame == MeasurementFrame::Instrument;
+  const bool fit_frame = options.fit_frame && whole.frame == MeasurementFrame::Instrument;
 
-  GeometricCalibrationResult result;
-  result.names = geometricParameterNames(robot);
+  result.names = geometricParameterNames(robot, setups);
   result.used_rows = rows;
   result.skipped_rows = data.skipped_rows;
   result.row = data.row;
   result.loss = options.loss;
 
-  const GeometricParameters start = startingPoint(prior, campaign, data, options, fit_frame, result);
+  const GeometricParameters start = startingPoint(prior, whole, data, options, fit_frame, setup_sources, result);
   ParameterChoice choice = candidateParameters(robot, data, options, fit_frame, result, source);
   chooseIdentifiable(robot, data, start, options, fit_frame, result, choice, source);
   report(options.progress, source + ": " + std::to_string(rows) + " rows, " + std::to_string(choice.free.size()) +
-                               " of " + std::to_string(choice.candidates.size()) + " parameters identifiable");
+                               " of " + std::to_string(choice.candidates.size()) + " parameters identifiable" +
+                               (setups > 1 ? ", " + std::to_string(setups) + " instrument set-ups" : std::string()));
   const Eigen::VectorXd nominal_values = start.toVector();
   const FitOutcome fit = fitKeepingCompliancePositive(robot, data, nominal_values, options, choice);
-  result.estimate = GeometricParameters::fromVector(fit.values, n);
+  result.estimate = GeometricParameters::fromVector(fit.values, n, setups);
   result.free = choice.free;
   result.loss_scale = fit.loss_scale;
   result.iterations = fit.solver.iterations;
@@ -846,7 +1067,7 @@ std::vector<RowResidual> rowResiduals(const JointErrorModel& model, const Geomet
   const int n = robot.dof();
   const GeometricParameterLayout layout(n);
   const CalibrationData data = prepareCalibrationData(model, campaign);
-  GeometricParameters used = parameters;
+  GeometricParameters used = parameters.ofSetUp(0);
   if (campaign.frame == MeasurementFrame::Base) {
     used.frame_translation.setZero();
     used.frame_rotation.setZero();
@@ -881,7 +1102,7 @@ HoldoutEvaluation evaluateOnCampaign(const JointErrorModel& prior, const Geometr
   evaluation.source = campaign.source;
   evaluation.row = data.row;
   evaluation.skipped_rows = data.skipped_rows;
-  GeometricParameters used = parameters;
+  GeometricParameters used = parameters.ofSetUp(0);
   used.instrument_scale = 0.0;  // another set-up: the fitted campaign's instrument scale is not its own
   const bool fit = refit_frame && campaign.frame == MeasurementFrame::Instrument;
   if (campaign.frame == MeasurementFrame::Base) {
@@ -899,7 +1120,8 @@ HoldoutEvaluation evaluateOnCampaign(const JointErrorModel& prior, const Geometr
     checkPoses(data, points, campaign.source);
     used.setInstrumentFromBase(fitRigidTransform(points, data.measured));
     const FitOutcome outcome =
-        fitSubset(robot, data, used.toVector(), frameIndices(), options, 0.0, "fitting the instrument frame");
+        fitSubset(robot, data, used.toVector(), frameIndices(GeometricParameterLayout(robot.dof())), options, 0.0,
+                  "fitting the instrument frame");
     used = GeometricParameters::fromVector(outcome.values, robot.dof());
     residual = outcome.solver.residual;
     weights = outcome.solver.block_weight;

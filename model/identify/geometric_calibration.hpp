@@ -19,8 +19,11 @@
 //   <joint>.placement_{dx,dy,dz}_m, <joint>.placement_{rx,ry,rz}_rad         per joint
 //   <joint>.compliance_rad_per_nm                                            per joint
 //
-// Procedure of calibrateGeometry: rows without a measured position are skipped (and counted); the
-// frame starts from the closed-form rigid fit of the nominal points to the measured ones; the Jacobian
+// Campaigns from several instrument set-ups (the tracker moved between them) are calibrated together:
+// the robot's parameters are shared, each set-up has its own frame (and scale), named setup<k>.frame.*.
+//
+// Procedure of calibrateGeometry: rows without a measured position are skipped (and counted); each
+// set-up's frame starts from the closed-form rigid fit of the nominal points to its measured ones; the Jacobian
 // at that start point decides the identifiable subset (identifiability.hpp, priorities: frame, target,
 // offsets, placement translations, placement rotations, compliance); Levenberg-Marquardt fits the subset
 // by least squares, then again with the robust loss whose scale comes from the least-squares residuals;
@@ -55,32 +58,56 @@ struct GeometricParameters {
   // measures (1 + instrument_scale) times the true coordinates. Fitted only on request (discovery's
   // instrument_scale candidate); a held-out campaign, another set-up, is evaluated without it.
   double instrument_scale = 0.0;
+  // The other instrument set-ups of a calibration on campaigns measured from several (the tracker moved
+  // between them): each its own frame and scale; the fields above are the first set-up's. Empty for one.
+  struct SetUp {
+    Eigen::Vector3d frame_translation = Eigen::Vector3d::Zero();
+    Eigen::Vector3d frame_rotation = Eigen::Vector3d::Zero();
+    double instrument_scale = 0.0;
+  };
+  std::vector<SetUp> other_setups;
 
   // Everything zero for a robot of `dof` joints.
   static GeometricParameters zero(int dof);
   int dof() const { return static_cast<int>(offset.size()); }
+  int setUpCount() const { return 1 + static_cast<int>(other_setups.size()); }
   Eigen::Isometry3d instrumentFromBase() const;
   void setInstrumentFromBase(const Eigen::Isometry3d& transform);
+  // The robot's parameters with set-up `setup`'s frame and scale as the only set-up: what one campaign of
+  // that set-up is predicted with.
+  GeometricParameters ofSetUp(int setup) const;
+  // Set-up `setup`'s frame and scale taken from single-set-up parameters (the others unchanged).
+  void setSetUp(int setup, const GeometricParameters& single);
 
   // The flat vector in the order of geometricParameterNames, and back.
   Eigen::VectorXd toVector() const;
-  static GeometricParameters fromVector(const Eigen::VectorXd& values, int dof);
+  static GeometricParameters fromVector(const Eigen::VectorXd& values, int dof, int setups = 1);
 };
 
-// Index of the first parameter of each group in the flat vector.
+// Index of the first parameter of each group in the flat vector. The first set-up's frame and scale come
+// first and last of the robot's parameters (as for one set-up); each further set-up appends its frame
+// (6) and scale (1).
 struct GeometricParameterLayout {
-  explicit GeometricParameterLayout(int dof_) : dof(dof_) {}
+  explicit GeometricParameterLayout(int dof_, int setups_ = 1) : dof(dof_), setups(setups_) {}
   int dof;
+  int setups;
   static constexpr int kFrame = 0;   // 6
   static constexpr int kTarget = 6;  // 3
   int offset(int joint) const { return 9 + joint; }
   int placement(int joint, int k) const { return 9 + dof + 6 * joint + k; }  // k: dx dy dz rx ry rz
   int compliance(int joint) const { return 9 + 7 * dof + joint; }
   int instrumentScale() const { return 9 + 8 * dof; }
-  int size() const { return 10 + 8 * dof; }
+  int frame(int setup) const { return setup == 0 ? kFrame : 10 + 8 * dof + 7 * (setup - 1); }
+  int instrumentScale(int setup) const { return setup == 0 ? instrumentScale() : frame(setup) + 6; }
+  // The set-up whose frame or scale parameter `index` is, or -1 for a parameter of the robot or target.
+  int setUpOf(int index) const;
+  bool isFrame(int index) const;
+  bool isInstrumentScale(int index) const;
+  int size() const { return 10 + 8 * dof + 7 * (setups - 1); }
 };
 
-std::vector<std::string> geometricParameterNames(const Robot& robot);
+// Set-up k > 0's parameters are named "setup<k+1>.frame.tx_m" ... "setup<k+1>.instrument.scale".
+std::vector<std::string> geometricParameterNames(const Robot& robot, int setups = 1);
 // The unit in the name: "m", "rad" or "rad/(N m)".
 std::string geometricParameterUnit(const std::string& name);
 
@@ -97,8 +124,10 @@ struct CalibrationData {
   std::vector<JointVector> approach;      // side of each joint's lost motion, remembered along all rows
   std::vector<JointVector> other_error;   // rad, the prior's other joint-error effects
   std::vector<Eigen::Vector3d> measured;  // m, in the campaign's frame
-  int skipped_rows = 0;                   // rows without a measured position (NaN / empty cells)
-  bool torque_known = true;               // false when the robot has no inertials (no compliance then)
+  std::vector<int> setup;                 // instrument set-up of each used row (0 for one campaign)
+  int setups = 1;
+  int skipped_rows = 0;      // rows without a measured position (NaN / empty cells)
+  bool torque_known = true;  // false when the robot has no inertials (no compliance then)
   std::size_t size() const { return row.size(); }
 };
 
@@ -106,11 +135,11 @@ struct CalibrationData {
 // robot's; never fails for a row with a NaN position (skipped and counted) or a NaN command (the same).
 CalibrationData prepareCalibrationData(const JointErrorModel& prior, const MeasurementCampaign& campaign);
 
-// The predicted instrument reading of a row and, when `jacobian` is not null, its derivative by every
-// parameter (3 x GeometricParameterLayout::size()).
+// The predicted instrument reading of a row measured from set-up `setup` and, when `jacobian` is not
+// null, its derivative by every parameter (3 x GeometricParameterLayout(dof, setUpCount()).size()).
 Eigen::Vector3d predictMeasurement(const Robot& nominal, const GeometricParameters& parameters,
                                    const JointVector& command, const JointVector& load_torque,
-                                   const JointVector& other_error, Eigen::MatrixXd* jacobian = nullptr);
+                                   const JointVector& other_error, Eigen::MatrixXd* jacobian = nullptr, int setup = 0);
 
 // The residual of one used row, measured - predicted, in the campaign's frame, and the same mapped to the
 // joints: the smallest joint errors dq that explain it to first order (damped least squares on the joint
@@ -120,6 +149,7 @@ struct RowResidual {
   Eigen::Vector3d error = Eigen::Vector3d::Zero();
   JointVector joint_error;  // rad
 };
+// The campaign is predicted with the first set-up's frame: pass parameters.ofSetUp(s) for set-up s.
 std::vector<RowResidual> rowResiduals(const JointErrorModel& model, const GeometricParameters& parameters,
                                       const MeasurementCampaign& campaign);
 
@@ -190,6 +220,11 @@ struct GeometricCalibrationResult {
   std::vector<std::string> compliance_left_out;  // "<joint>: reason" for the compliances not written
   int iterations = 0;
   std::string stop_reason;
+  // Several campaigns: `row` is each used row's row in its own campaign, `campaign_of_row` which campaign
+  // (index into the campaigns given), `setup_of_campaign` the instrument set-up each was measured from.
+  std::vector<std::string> sources;
+  std::vector<int> campaign_of_row;
+  std::vector<int> setup_of_campaign;
 };
 
 // Throws InvalidArgument for too few rows (fewer than options.minimum_rows usable, or fewer residuals
@@ -198,6 +233,35 @@ struct GeometricCalibrationResult {
 // of another robot, SolverError when Levenberg-Marquardt does not converge. Messages name the campaign.
 GeometricCalibrationResult calibrateGeometry(const JointErrorModel& prior, const MeasurementCampaign& campaign,
                                              const GeometricCalibrationOptions& options = {});
+
+// Campaigns in the instrument frame whose frames, each fitted alone on the prior, lie further apart than
+// this are from different set-ups (a nominal robot's frame fit moves by millimetres between campaigns of one).
+constexpr double kSameSetUpDistance = 0.05;       // m
+constexpr double kSameSetUpAngle = 0.0349065850;  // rad (2 deg)
+
+// The instrument set-up of each campaign (0, 1, ...; the first campaign's is 0): a campaign joins the first
+// set-up whose first campaign's frame, fitted on the prior, is within kSameSetUpDistance and
+// kSameSetUpAngle of its own, else starts a new one. Campaigns in the base frame are one set-up without a
+// frame. Throws InvalidArgument for campaigns in different frames (base and instrument) or of other joint
+// counts, naming them.
+struct InstrumentSetUps {
+  std::vector<int> setup_of_campaign;
+  std::vector<Eigen::Isometry3d> frame_of_campaign;  // instrument from base, fitted on the prior (identity: base)
+  int count() const;
+};
+InstrumentSetUps instrumentSetUps(const JointErrorModel& prior, const std::vector<MeasurementCampaign>& campaigns,
+                                  const GeometricCalibrationOptions& options = {});
+
+// One calibration of the robot on campaigns measured from one or several instrument set-ups: the robot's
+// parameters are shared, each set-up has its own frame (and scale, when fitted). With one campaign it is
+// calibrateGeometry above. Messages name the campaign (or "A+B" for the whole).
+GeometricCalibrationResult calibrateGeometry(const JointErrorModel& prior,
+                                             const std::vector<MeasurementCampaign>& campaigns,
+                                             const GeometricCalibrationOptions& options = {});
+
+// The campaigns as one (rows appended in order, times shifted to stay non-decreasing, sources joined by
+// '+'). Throws InvalidArgument for campaigns of other joint counts, frames or without positions.
+MeasurementCampaign concatenateCampaigns(const std::vector<MeasurementCampaign>& campaigns);
 
 // The nominal parameters a calibration starts from: offsets and compliance (1 / stiffness) of the prior's
 // "offset" and "compliance" effects (zero without them), the campaign's target (zero without one),
@@ -210,7 +274,7 @@ Eigen::Isometry3d fitRigidTransform(const std::vector<Eigen::Vector3d>& from, co
 
 // A held-out campaign checked with given robot parameters: only the six frame parameters are re-fitted
 // (each instrument set-up has its own), robustly as in the calibration; with refit_frame false the
-// frame of `parameters` is used as it is.
+// frame of `parameters` is used as it is (the first set-up's, when it has several).
 struct HoldoutEvaluation {
   std::string source;
   GeometricParameters parameters;  // with the frame used

@@ -27,7 +27,10 @@ using calibration_test::trackerFrame;
 using calibration_test::ur10;
 using calibration_test::ur10Model;
 
-const Eigen::Vector3d kNominalTarget(0.0, 0.0, 0.1);
+using calibration_test::identifiedOn;
+using calibration_test::kNominalTarget;
+using calibration_test::randomTruth;
+
 constexpr double kNoise = 20e-6;  // m per axis, a laser tracker at a few metres
 
 const ParameterEstimate& find(const GeometricCalibrationResult& result, const std::string& name) {
@@ -97,51 +100,6 @@ TEST(GeometricCalibration, ZeroCorrectionsPredictTheRobotsForwardKinematics) {
 }
 
 // The parameters a noise-free campaign on these poses identifies.
-std::vector<std::string> identifiedOn(const std::vector<JointVector>& poses) {
-  DeterministicRandom random(1);
-  GeometricParameters truth = GeometricParameters::zero(6);
-  truth.setInstrumentFromBase(trackerFrame(random));
-  truth.target = kNominalTarget;
-  const MeasurementCampaign campaign = simulateGeometricCampaign(ur10Model(), truth, poses, 1e-9, 1, kNominalTarget);
-  GeometricCalibrationOptions options;
-  options.loss = RobustLoss::None;
-  const GeometricCalibrationResult result = calibrateGeometry(ur10Model(), campaign, options);
-  std::vector<std::string> names;
-  for (const ParameterEstimate& p : result.parameters) {
-    // Zero true compliances come out of the noise-free fit as +-1e-12: those held for not being positive
-    // are identifiable all the same.
-    if (p.identified || p.fixed_because.find("not positive") != std::string::npos) names.push_back(p.name);
-  }
-  return names;
-}
-
-// The truth: a random tracker frame and target, and every identified robot parameter moved by a
-// realistic amount (the others stay nominal: what the data cannot see, no calibration can recover).
-GeometricParameters randomTruth(const std::vector<std::string>& identified, DeterministicRandom& random) {
-  const std::vector<std::string> names = geometricParameterNames(*ur10());
-  Eigen::VectorXd x = GeometricParameters::zero(6).toVector();
-  GeometricParameters frame = GeometricParameters::zero(6);
-  frame.setInstrumentFromBase(trackerFrame(random));
-  x.head<3>() = frame.frame_translation;
-  x.segment<3>(3) = frame.frame_rotation;
-  x.segment<3>(6) = kNominalTarget;
-  for (std::size_t i = 6; i < names.size(); ++i) {
-    if (std::find(identified.begin(), identified.end(), names[i]) == identified.end()) continue;
-    const std::string unit = geometricParameterUnit(names[i]);
-    const Eigen::Index k = static_cast<Eigen::Index>(i);
-    // Compliance: joints 2 and 3 as the UR10's (about 8e-6 rad/(N m)); the wrist joints, which carry
-    // little torque, softer, so that the truth stays many sigma above zero.
-    if (unit == "rad/(N m)")
-      x[k] = names[i].rfind("joint_2", 0) == 0 || names[i].rfind("joint_3", 0) == 0 ? random.uniform(4e-6, 1.2e-5)
-                                                                                    : random.uniform(2e-4, 4e-4);
-    else if (unit == "rad")
-      x[k] += random.uniform(-1e-3, 1e-3);
-    else
-      x[k] += random.uniform(-1e-3, 1e-3);
-  }
-  return GeometricParameters::fromVector(x, 6);
-}
-
 TEST(GeometricCalibration, RecoversTheTruthWithHonestUncertaintyOverSeeds) {
   const std::vector<JointVector> poses = randomPoses(250, 7);
   const std::vector<std::string> identified = identifiedOn(poses);
