@@ -1,5 +1,6 @@
 // `jointcomp calibrate`: kinematic calibration (instrument frame, target, joint offsets, joint placements,
-// joint compliance) from a measurement campaign, checked on held-out campaigns. Writes the calibrated
+// joint compliance) from one measurement campaign or several (from one or more instrument set-ups, a
+// frame each), checked on held-out campaigns. Writes the calibrated
 // URDF, the updated parameter file, report.json, summary.txt, residuals.csv and a plot.
 #include <chrono>
 #include <cmath>
@@ -29,13 +30,16 @@
 namespace jointcomp::cli {
 
 int runCalibrate(int argc, char** argv) {
-  // --holdout may be given more than once (and each may list files separated by commas).
-  std::vector<std::string> holdouts;
+  // --campaign and --holdout may be given more than once (and each may list files separated by commas).
+  std::vector<std::string> campaign_paths, holdouts;
   std::vector<char*> rest = {argv[0]};
   for (int i = 1; i < argc; ++i) {
-    if (std::string(argv[i]) == "--holdout") {
-      if (i + 1 >= argc) throw std::invalid_argument("option --holdout needs a value");
-      for (const std::string& item : splitCommaList(argv[++i])) holdouts.push_back(item);
+    const std::string arg = argv[i];
+    if (arg == "--campaign" || arg == "--holdout") {
+      if (i + 1 >= argc) throw std::invalid_argument("option " + arg + " needs a value");
+      for (const std::string& item : splitCommaList(argv[++i])) {
+        (arg == "--campaign" ? campaign_paths : holdouts).push_back(item);
+      }
       continue;
     }
     rest.push_back(argv[i]);
@@ -44,13 +48,15 @@ int runCalibrate(int argc, char** argv) {
                         {"urdf", "base-link", "tip-link", "campaign", "holdout", "params", "out", "loss",
                          "loss-scale-mm", "pivot-threshold", "fix", "no-plot", "quiet"},
                         {"no-plot", "quiet"});
-  if (!options.has("campaign") || !options.has("out")) {
+  if (campaign_paths.empty() || !options.has("out")) {
     throw std::invalid_argument(
-        "calibrate needs --campaign CAMPAIGN.csv and --out DIR (and --urdf FILE, --params FILE, --holdout FILE)");
+        "calibrate needs --campaign CAMPAIGN.csv[,MORE.csv] and --out DIR (and --urdf FILE, --params FILE, "
+        "--holdout FILE)");
   }
   const RobotSetup setup = loadRobotSetup(options, robotFile("ur10"));
   const std::string& urdf = setup.urdf;
-  const std::string campaign_path = options.get("campaign", "");
+  std::string campaign_path;  // as the reports name it
+  for (const std::string& path : campaign_paths) campaign_path += (campaign_path.empty() ? "" : ",") + path;
   const std::string out = options.get("out", "");
   prepareOutputFolder(out);
   const auto started = std::chrono::steady_clock::now();
@@ -68,10 +74,11 @@ int runCalibrate(int argc, char** argv) {
 
   std::printf("jointcomp calibrate: robot %s (%s), campaign %s\n", robot->name.c_str(), urdf.c_str(),
               campaign_path.c_str());
-  const MeasurementCampaign campaign = readCampaignFile(campaign_path);
+  std::vector<MeasurementCampaign> campaigns;
+  for (const std::string& path : campaign_paths) campaigns.push_back(readCampaignFile(path));
   std::vector<std::pair<std::string, MeasurementCampaign>> held;
   for (const std::string& path : holdouts) held.emplace_back(path, readCampaignFile(path));
-  const CalibrationRun run = runCalibration(prior, campaign, held, calibration);
+  const CalibrationRun run = runCalibration(prior, campaigns, held, calibration);
 
   const std::string urdf_out = out + "/" + robot->name + "_calibrated.urdf";
   saveRobotUrdf(*run.calibrated_robot, urdf_out,
@@ -89,9 +96,10 @@ int runCalibrate(int argc, char** argv) {
   sources.urdf = urdf;
   sources.parameters = setup.params;
   sources.campaign = campaign_path;
+  sources.campaigns = campaign_paths;
   sources.outputs = {{"urdf", urdf_out}, {"parameters", params_out}, {"residuals", out + "/residuals.csv"}};
   writeFileAtomically(out + "/residuals.csv", calibrationResidualsCsv(run, sources));
-  writeFileAtomically(out + "/report.json", calibrationReportJson(run, campaign, calibration, sources).dump(2) + "\n");
+  writeFileAtomically(out + "/report.json", calibrationReportJson(run, calibration, sources).dump(2) + "\n");
   const std::string summary = calibrationSummary(run, sources) + "\nWrote " + urdf_out + ", " + params_out + ", " +
                               out + "/report.json, " + out + "/residuals.csv\n";
   writeFileAtomically(out + "/summary.txt", summary);

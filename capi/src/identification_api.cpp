@@ -271,7 +271,7 @@ jc_status jc_calibrate(jc_robot* nominal, const char* campaign_path, const char*
     sources.urdf = robotSource(handle);
     sources.parameters = robotSource(handle);
     sources.campaign = path;
-    auto made = std::make_unique<jc_report>(calibrationReportJson(run, campaign, options, sources).dump(2),
+    auto made = std::make_unique<jc_report>(calibrationReportJson(run, options, sources).dump(2),
                                             calibrationSummary(run, sources));
     auto updated = std::make_unique<jc_robot>(run.calibrated_robot, std::move(run.calibrated), handle.drives);
     deliver(std::move(updated), calibrated, std::move(made), report);

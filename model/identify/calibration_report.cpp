@@ -58,8 +58,14 @@ nlohmann::ordered_json errorStatisticsJson(const ErrorStatistics& s) {
 CalibrationRun runCalibration(const JointErrorModel& prior, const MeasurementCampaign& campaign,
                               const std::vector<std::pair<std::string, MeasurementCampaign>>& holdouts,
                               const GeometricCalibrationOptions& options) {
+  return runCalibration(prior, std::vector<MeasurementCampaign>{campaign}, holdouts, options);
+}
+
+CalibrationRun runCalibration(const JointErrorModel& prior, const std::vector<MeasurementCampaign>& campaigns,
+                              const std::vector<std::pair<std::string, MeasurementCampaign>>& holdouts,
+                              const GeometricCalibrationOptions& options) {
   const auto started = std::chrono::steady_clock::now();
-  GeometricCalibrationResult result = calibrateGeometry(prior, campaign, options);
+  GeometricCalibrationResult result = calibrateGeometry(prior, campaigns, options);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
   std::vector<CalibrationHoldoutRun> runs;
   for (const auto& [name, held] : holdouts) {
@@ -74,23 +80,53 @@ CalibrationRun runCalibration(const JointErrorModel& prior, const MeasurementCam
   auto calibrated_robot = std::make_shared<const Robot>(correctedRobot(prior.robot(), result.estimate));
   std::vector<std::string> left_out;
   JointErrorModel calibrated = calibratedJointErrorModel(prior, calibrated_robot, result, left_out);
-  std::vector<RowResidual> residual = rowResiduals(prior, result.estimate, campaign);
+  // Each campaign's residual in its own set-up's frame; the pose analysis on all of them, in one time line.
+  const MeasurementCampaign whole = concatenateCampaigns(campaigns);
+  std::vector<RowResidual> residual;
   std::vector<JointVector> pose_q;
   std::vector<Eigen::Vector3d> pose_error;
   std::vector<double> pose_time;
-  for (const RowResidual& r : residual) {
-    pose_q.push_back(campaign.command[static_cast<std::size_t>(r.row)]);
-    pose_error.push_back(r.error);
-    pose_time.push_back(campaign.time[static_cast<std::size_t>(r.row)]);
+  std::vector<std::size_t> campaign_rows;
+  std::size_t first = 0;
+  for (std::size_t c = 0; c < campaigns.size(); ++c) {
+    const GeometricParameters own = result.estimate.ofSetUp(result.setup_of_campaign[c]);
+    for (const RowResidual& r : rowResiduals(prior, own, campaigns[c])) {
+      const std::size_t row = first + static_cast<std::size_t>(r.row);
+      pose_q.push_back(whole.command[row]);
+      pose_error.push_back(r.error);
+      pose_time.push_back(whole.time[row]);
+      residual.push_back(r);
+    }
+    campaign_rows.push_back(campaigns[c].size());
+    first += campaigns[c].size();
   }
   CalibrationRun run{
-      std::move(result),   std::move(runs), calibrated_robot,    std::move(calibrated),
-      std::move(left_out), seconds,         std::move(residual), posePredictability(pose_q, pose_error, pose_time)};
+      std::move(result),       std::move(runs), calibrated_robot,    std::move(calibrated),
+      std::move(left_out),     seconds,         std::move(residual), posePredictability(pose_q, pose_error, pose_time),
+      std::move(campaign_rows)};
   return run;
 }
 
-nlohmann::ordered_json calibrationReportJson(const CalibrationRun& run, const MeasurementCampaign& campaign,
-                                             const GeometricCalibrationOptions& options,
+namespace {
+
+std::vector<std::string> fittedFiles(const CalibrationSources& sources) {
+  return sources.campaigns.empty() ? std::vector<std::string>{sources.campaign} : sources.campaigns;
+}
+
+// The before/after statistics of the rows of fitted campaign `c`.
+std::pair<ErrorStatistics, ErrorStatistics> campaignStatistics(const GeometricCalibrationResult& result, int c) {
+  std::vector<double> before, after;
+  for (std::size_t k = 0; k < result.campaign_of_row.size(); ++k) {
+    if (result.campaign_of_row[k] != c) continue;
+    before.push_back(result.error_before[k]);
+    after.push_back(result.error_after[k]);
+  }
+  return {errorStatistics(before), errorStatistics(after)};
+}
+
+}  // namespace
+
+nlohmann::ordered_json calibrationReportJson(const CalibrationRun& run, const GeometricCalibrationOptions& options,
                                              const CalibrationSources& sources) {
   const GeometricCalibrationResult& result = run.result;
   nlohmann::ordered_json report;
@@ -107,7 +143,9 @@ nlohmann::ordered_json calibrationReportJson(const CalibrationRun& run, const Me
                       {"iterations", result.iterations},
                       {"stop_reason", result.stop_reason},
                       {"seconds", run.seconds}};
-  report["rows"] = {{"total", campaign.size()},
+  std::size_t total_rows = 0;
+  for (std::size_t rows : run.campaign_rows) total_rows += rows;
+  report["rows"] = {{"total", total_rows},
                     {"used", result.used_rows},
                     {"skipped_not_measured", result.skipped_rows},
                     {"downweighted", result.downweighted_rows},
@@ -153,13 +191,41 @@ nlohmann::ordered_json calibrationReportJson(const CalibrationRun& run, const Me
   }
   report["compliance_left_out"] = run.compliance_left_out;
   nlohmann::ordered_json campaigns = nlohmann::ordered_json::array();
-  campaigns.push_back({{"file", sources.campaign},
-                       {"role", "calibration"},
-                       {"rows", result.used_rows},
-                       {"before", errorStatisticsJson(result.before)},
-                       {"after", errorStatisticsJson(result.after)},
-                       {"downweighted_rows", result.downweighted_rows},
-                       {"downweighted_below_half_rows", result.outlier_rows}});
+  const std::vector<std::string> files = fittedFiles(sources);
+  const bool several = result.sources.size() > 1;
+  if (several) {
+    nlohmann::ordered_json setups = nlohmann::ordered_json::array();
+    for (int s = 0; s < result.estimate.setUpCount(); ++s) {
+      nlohmann::ordered_json members = nlohmann::ordered_json::array();
+      for (std::size_t c = 0; c < result.setup_of_campaign.size(); ++c) {
+        if (result.setup_of_campaign[c] == s) members.push_back(c < files.size() ? files[c] : result.sources[c]);
+      }
+      const GeometricParameters own = result.estimate.ofSetUp(s);
+      setups.push_back(
+          {{"setup", s + 1},
+           {"campaigns", members},
+           {"frame_translation_m", {own.frame_translation.x(), own.frame_translation.y(), own.frame_translation.z()}},
+           {"frame_rotation_vector_rad", {own.frame_rotation.x(), own.frame_rotation.y(), own.frame_rotation.z()}},
+           {"instrument_scale", own.instrument_scale}});
+    }
+    report["instrument_setups"] = setups;
+  }
+  for (std::size_t c = 0; c < result.sources.size(); ++c) {
+    const auto [before, after] =
+        several ? campaignStatistics(result, static_cast<int>(c)) : std::make_pair(result.before, result.after);
+    nlohmann::ordered_json entry = {{"file", c < files.size() ? files[c] : result.sources[c]},
+                                    {"role", "calibration"},
+                                    {"rows", after.rows},
+                                    {"before", errorStatisticsJson(before)},
+                                    {"after", errorStatisticsJson(after)}};
+    if (several) {
+      entry["setup"] = result.setup_of_campaign[c] + 1;
+    } else {
+      entry["downweighted_rows"] = result.downweighted_rows;
+      entry["downweighted_below_half_rows"] = result.outlier_rows;
+    }
+    campaigns.push_back(entry);
+  }
   for (const CalibrationHoldoutRun& held : run.holdouts) {
     campaigns.push_back({{"file", held.name},
                          {"role", "holdout (robot fixed, instrument frame re-fitted)"},
@@ -181,6 +247,22 @@ std::string calibrationSummary(const CalibrationRun& run, const CalibrationSourc
   const GeometricCalibrationResult& result = run.result;
   std::ostringstream summary;
   summary << "Kinematic calibration of " << run.calibrated_robot->name << " on " << sources.campaign << "\n";
+  const std::vector<std::string> files = fittedFiles(sources);
+  auto fileOf = [&](std::size_t c) { return baseName(c < files.size() ? files[c] : result.sources[c]); };
+  const int setups = result.estimate.setUpCount();
+  if (result.sources.size() > 1) {
+    summary << result.sources.size() << " campaigns from " << setups
+            << (setups == 1 ? " instrument set-up (one frame fitted for all)"
+                            : " instrument set-ups, each with its own frame (campaigns whose frames, fitted on "
+                              "the nominal robot, agree within 50 mm and 2 deg share one):");
+    for (int s = 0; s < setups && setups > 1; ++s) {
+      summary << (s ? ";" : "") << " set-up " << s + 1 << ":";
+      for (std::size_t c = 0; c < result.setup_of_campaign.size(); ++c) {
+        if (result.setup_of_campaign[c] == s) summary << " " << fileOf(c);
+      }
+    }
+    summary << "\n";
+  }
   char line[512];
   std::snprintf(line, sizeof(line),
                 "%d rows used, %d skipped (no measured position), %d down-weighted by the %s loss (scale %.3f mm), "
@@ -196,7 +278,15 @@ std::string calibrationSummary(const CalibrationRun& run, const CalibrationSourc
   summary << line;
   summary << "\n3-D error [mm]                      rows     before (nominal, frame fitted)   after (calibrated)\n";
   summary << "                                           mean     rms     max      mean     rms     max\n";
-  summary << tableRow(baseName(sources.campaign) + " (calibration)", result.used_rows, result.before, result.after);
+  if (result.sources.size() > 1) {
+    for (std::size_t c = 0; c < result.sources.size(); ++c) {
+      const auto [before, after] = campaignStatistics(result, static_cast<int>(c));
+      summary << tableRow(fileOf(c) + " (calibration)", after.rows, before, after);
+    }
+    summary << tableRow("all calibration rows", result.used_rows, result.before, result.after);
+  } else {
+    summary << tableRow(baseName(sources.campaign) + " (calibration)", result.used_rows, result.before, result.after);
+  }
   for (const CalibrationHoldoutRun& held : run.holdouts) {
     summary << tableRow(baseName(held.name) + " (held out, frame re-fitted)", held.after.statistics.rows,
                         held.before.statistics, held.after.statistics);
@@ -259,9 +349,11 @@ std::string calibrationResidualsCsv(const CalibrationRun& run, const Calibration
     for (int j = 0; j < r.joint_error.size(); ++j) csv << ',' << r.joint_error[j] * 1e3;
     csv << "\n";
   };
+  const std::vector<std::string> files = fittedFiles(sources);
   for (std::size_t k = 0; k < result.row.size(); ++k) {
-    csv << baseName(sources.campaign) << ",calibration," << result.row[k] << ',' << result.error_before[k] * 1e3 << ','
-        << result.error_after[k] * 1e3 << ',' << result.weight[k];
+    const std::size_t c = k < result.campaign_of_row.size() ? static_cast<std::size_t>(result.campaign_of_row[k]) : 0;
+    csv << baseName(c < files.size() ? files[c] : sources.campaign) << ",calibration," << result.row[k] << ','
+        << result.error_before[k] * 1e3 << ',' << result.error_after[k] * 1e3 << ',' << result.weight[k];
     residualColumns(run.residual[k]);
   }
   for (const CalibrationHoldoutRun& held : run.holdouts) {

@@ -1,6 +1,6 @@
 // A kinematic calibration run end to end, as the CLI (`jointcomp calibrate`) and the C API (jc_calibrate)
-// both do it: fit on one campaign, check on held-out ones, build the calibrated robot and joint-error
-// model; then its report (JSON, a readable summary, the per-row residuals as CSV).
+// both do it: fit on one campaign or on several (one instrument frame per set-up), check on held-out ones, build the
+// calibrated robot and joint-error model; then its report (JSON, a readable summary, the per-row residuals as CSV).
 #pragma once
 
 #include <memory>
@@ -32,22 +32,27 @@ struct CalibrationRun {
   double seconds = 0.0;                           // wall time of the fit
   std::vector<RowResidual> residual;              // calibrated, per used row of the campaign
   PosePredictability pose;                        // how much of that residual is a function of the pose
+  std::vector<std::size_t> campaign_rows;         // rows of each fitted campaign, used or not
 };
 
 CalibrationRun runCalibration(const JointErrorModel& prior, const MeasurementCampaign& campaign,
+                              const std::vector<std::pair<std::string, MeasurementCampaign>>& holdouts,
+                              const GeometricCalibrationOptions& options);
+// Fitted on several campaigns: one robot, one frame (and scale) per instrument set-up (calibrateGeometry).
+CalibrationRun runCalibration(const JointErrorModel& prior, const std::vector<MeasurementCampaign>& campaigns,
                               const std::vector<std::pair<std::string, MeasurementCampaign>>& holdouts,
                               const GeometricCalibrationOptions& options);
 
 // What the report names: the inputs as the user gave them and, when written, the outputs.
 struct CalibrationSources {
   std::string urdf;
-  std::string parameters;  // empty: no parameter file (no prior effects)
-  std::string campaign;
+  std::string parameters;              // empty: no parameter file (no prior effects)
+  std::string campaign;                // as the user gave it (several: the files joined by ',')
+  std::vector<std::string> campaigns;  // each fitted campaign's file; empty: {campaign}
   nlohmann::ordered_json outputs = nlohmann::ordered_json::object();
 };
 
-nlohmann::ordered_json calibrationReportJson(const CalibrationRun& run, const MeasurementCampaign& campaign,
-                                             const GeometricCalibrationOptions& options,
+nlohmann::ordered_json calibrationReportJson(const CalibrationRun& run, const GeometricCalibrationOptions& options,
                                              const CalibrationSources& sources);
 std::string calibrationSummary(const CalibrationRun& run, const CalibrationSources& sources);
 // campaign,role,row,before_mm,after_mm,weight, then the residual after calibration, measured - predicted:

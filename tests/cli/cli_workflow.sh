@@ -90,6 +90,22 @@ for r in rows:
     norm = math.sqrt(sum(float(r[k]) ** 2 for k in ("dx_mm", "dy_mm", "dz_mm")))
     assert abs(norm - float(r["after_mm"])) < 1e-6 * max(1.0, norm), r
 PY
+# Two campaigns in one calibration (--campaign given twice): one robot, each campaign in the reports.
+"$jointcomp" calibrate --urdf "$urdf" --params "$params" --campaign "$work/fit.csv" --campaign "$work/held.csv" \
+  --out "$work/calibrate_both" --no-plot >/dev/null
+"$python" - "$work/calibrate_both" <<'PY'
+import csv, json, sys
+report = json.load(open(sys.argv[1] + "/report.json"))
+fitted = [c for c in report["campaigns"] if c["role"] == "calibration"]
+assert [c["file"].split("/")[-1] for c in fitted] == ["fit.csv", "held.csv"], fitted
+assert sum(c["rows"] for c in fitted) == report["rows"]["used"] == 210, (fitted, report["rows"])
+# Simulated in the base frame: one set-up, no frame fitted for either.
+assert [s["campaigns"] for s in report["instrument_setups"]] == [[c["file"] for c in fitted]], report["instrument_setups"]
+rows = list(csv.DictReader(open(sys.argv[1] + "/residuals.csv")))
+assert {r["campaign"] for r in rows} == {"fit.csv", "held.csv"} and len(rows) == 210
+summary = open(sys.argv[1] + "/summary.txt").read()
+assert "2 campaigns from 1 instrument set-up" in summary and "held.csv (calibration)" in summary, summary[:600]
+PY
 test -s "$work/calibrate/rx170_calibrated.urdf" || fail "calibrate wrote no URDF"
 # The URDF's note says what the parameter file holds of the compliance, as report.json does.
 "$python" - "$work/calibrate/rx170_calibrated.urdf" "$work/calibrate/report.json" <<'PY'

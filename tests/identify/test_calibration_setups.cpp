@@ -14,6 +14,7 @@
 
 #include "calibration_test_support.hpp"
 #include "model/common/errors.hpp"
+#include "model/identify/calibration_report.hpp"
 
 namespace jointcomp {
 namespace {
@@ -293,6 +294,43 @@ TEST(CalibrationSetUps, CampaignsThatCannotBeCalibratedTogetherAreNamed) {
   few.campaigns[1].payload.resize(2);
   EXPECT_THROW(calibrateGeometry(ur10Model(), few.campaigns), InvalidArgument);
   EXPECT_THROW(calibrateGeometry(ur10Model(), std::vector<MeasurementCampaign>{}), InvalidArgument);
+}
+
+TEST(CalibrationSetUps, TheReportsNameEachCampaignAndSetUp) {
+  const TwoSetUps two = simulateTwoSetUps(51);
+  const CalibrationRun run = runCalibration(ur10Model(), two.campaigns, {}, {});
+  CalibrationSources sources;
+  sources.campaign = "data/A.csv,data/B.csv";
+  sources.campaigns = {"data/A.csv", "data/B.csv"};
+  // Each row's residual is in its own set-up's frame: its length is the row's error after the fit.
+  ASSERT_EQ(run.residual.size(), run.result.error_after.size());
+  for (std::size_t k = 0; k < run.residual.size(); ++k) {
+    EXPECT_NEAR(run.residual[k].error.norm(), run.result.error_after[k], 1e-9) << k;
+  }
+  const nlohmann::ordered_json report = calibrationReportJson(run, {}, sources);
+  ASSERT_EQ(report["instrument_setups"].size(), 2u);
+  EXPECT_EQ(report["instrument_setups"][1]["campaigns"][0], "data/B.csv");
+  const Eigen::Vector3d b_frame = run.result.estimate.ofSetUp(1).frame_translation;
+  EXPECT_DOUBLE_EQ(report["instrument_setups"][1]["frame_translation_m"][0].get<double>(), b_frame.x());
+  EXPECT_EQ(report["rows"]["total"], 350);
+  ASSERT_EQ(report["campaigns"].size(), 2u);
+  double squares = 0.0;
+  for (int c = 0; c < 2; ++c) {
+    const auto& entry = report["campaigns"][static_cast<std::size_t>(c)];
+    EXPECT_EQ(entry["setup"], c + 1);
+    EXPECT_EQ(entry["role"], "calibration");
+    const double rms = entry["after"]["rms_mm"].get<double>() * 1e-3;
+    squares += rms * rms * entry["rows"].get<double>();
+  }
+  // The campaigns' RMS figures make up the whole one.
+  EXPECT_NEAR(std::sqrt(squares / 350.0), run.result.after.rms, 1e-12);
+  const std::string summary = calibrationSummary(run, sources);
+  EXPECT_THAT(summary, ::testing::HasSubstr("2 campaigns from 2 instrument set-ups"));
+  EXPECT_THAT(summary, ::testing::HasSubstr("set-up 2: B.csv"));
+  EXPECT_THAT(summary, ::testing::HasSubstr("setup2.frame.tx_m"));
+  const std::string csv = calibrationResidualsCsv(run, sources);
+  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 351);
+  EXPECT_NE(csv.find("\nB.csv,calibration,149,"), std::string::npos);
 }
 
 }  // namespace

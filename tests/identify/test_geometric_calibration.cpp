@@ -315,7 +315,7 @@ TEST(GeometricCalibration, TheSummarySaysHowMuchOfWhatIsLeftIsAFunctionOfThePose
   const std::string summary = calibrationSummary(with_field, {});
   EXPECT_THAT(summary, ::testing::HasSubstr("What the calibration leaves. As a function of the pose"));
   EXPECT_THAT(summary, ::testing::HasSubstr("of its variance is a function of the pose"));
-  const nlohmann::ordered_json report = calibrationReportJson(with_field, campaign, {}, {});
+  const nlohmann::ordered_json report = calibrationReportJson(with_field, {}, {});
   EXPECT_NEAR(report["pose_predictability"]["smooth_share"].get<double>(), with_field.pose.smooth_share, 1e-15);
 }
 
