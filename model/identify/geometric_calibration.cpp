@@ -980,8 +980,41 @@ GeometricCalibrationResult calibrateGeometry(const JointErrorModel& prior, const
   return calibrateGeometry(prior, std::vector<MeasurementCampaign>{campaign}, options);
 }
 
+CalibrationData prepareCalibrationData(const JointErrorModel& prior, const std::vector<MeasurementCampaign>& campaigns,
+                                       const std::vector<int>& setup_of_campaign) {
+  const MeasurementCampaign whole = concatenateCampaigns(campaigns);
+  if (setup_of_campaign.size() != campaigns.size()) {
+    throw InvalidArgument(whole.source + ": " + std::to_string(setup_of_campaign.size()) + " set-ups given for " +
+                          std::to_string(campaigns.size()) + " campaigns");
+  }
+  CalibrationData data = prepareCalibrationData(prior, whole);
+  data.setups = 1 + *std::max_element(setup_of_campaign.begin(), setup_of_campaign.end());
+  for (int s = 0; s < data.setups; ++s) {
+    if (std::find(setup_of_campaign.begin(), setup_of_campaign.end(), s) == setup_of_campaign.end() ||
+        *std::min_element(setup_of_campaign.begin(), setup_of_campaign.end()) < 0) {
+      throw InvalidArgument(whole.source + ": instrument set-ups must be numbered 0, 1, ... without gaps");
+    }
+  }
+  std::size_t campaign = 0, end = campaigns.front().size();
+  for (std::size_t k = 0; k < data.size(); ++k) {
+    while (static_cast<std::size_t>(data.row[k]) >= end) end += campaigns[++campaign].size();
+    data.setup[k] = setup_of_campaign[campaign];
+  }
+  return data;
+}
+
 GeometricCalibrationResult calibrateGeometry(const JointErrorModel& prior,
                                              const std::vector<MeasurementCampaign>& campaigns,
+                                             const GeometricCalibrationOptions& options) {
+  return calibrateGeometry(
+      prior, campaigns,
+      campaigns.size() == 1 ? std::vector<int>{0} : instrumentSetUps(prior, campaigns, options).setup_of_campaign,
+      options);
+}
+
+GeometricCalibrationResult calibrateGeometry(const JointErrorModel& prior,
+                                             const std::vector<MeasurementCampaign>& campaigns,
+                                             const std::vector<int>& setup_of_campaign,
                                              const GeometricCalibrationOptions& options) {
   const Robot& robot = prior.robot();
   const int n = robot.dof();
@@ -993,34 +1026,28 @@ GeometricCalibrationResult calibrateGeometry(const JointErrorModel& prior,
                             campaigns.front().source + "'; one calibration fits one target");
     }
   }
-  const std::vector<int> setup_of_campaign =
-      campaigns.size() == 1 ? std::vector<int>{0} : instrumentSetUps(prior, campaigns, options).setup_of_campaign;
-  const int setups = 1 + *std::max_element(setup_of_campaign.begin(), setup_of_campaign.end());
-  // Every campaign's rows, each with its set-up; the lost motion's memory starts again in each campaign.
-  CalibrationData data;
+  CalibrationData data = prepareCalibrationData(prior, campaigns, setup_of_campaign);
   data.source = source;
-  data.setups = setups;
+  const int setups = data.setups;
   std::vector<std::string> setup_sources(static_cast<std::size_t>(setups));
-  GeometricCalibrationResult result;
   for (std::size_t c = 0; c < campaigns.size(); ++c) {
-    const CalibrationData own = prepareCalibrationData(prior, campaigns[c]);
-    const int s = setup_of_campaign[c];
-    std::string& named = setup_sources[static_cast<std::size_t>(s)];
+    std::string& named = setup_sources[static_cast<std::size_t>(setup_of_campaign[c])];
     named += (named.empty() ? "" : "+") + campaigns[c].source;
-    data.torque_known = own.torque_known;
-    data.skipped_rows += own.skipped_rows;
-    for (std::size_t k = 0; k < own.size(); ++k) {
-      data.row.push_back(own.row[k]);
-      data.command.push_back(own.command[k]);
-      data.load_torque.push_back(own.load_torque[k]);
-      data.approach.push_back(own.approach[k]);
-      data.other_error.push_back(own.other_error[k]);
-      data.measured.push_back(own.measured[k]);
-      data.setup.push_back(s);
-      result.campaign_of_row.push_back(static_cast<int>(c));
-    }
-    result.sources.push_back(campaigns[c].source);
   }
+  GeometricCalibrationResult result;
+  // Each used row's campaign and its row there.
+  std::vector<int> own_row;
+  {
+    std::size_t campaign = 0, first = 0;
+    for (std::size_t k = 0; k < data.size(); ++k) {
+      while (static_cast<std::size_t>(data.row[k]) >= first + campaigns[campaign].size()) {
+        first += campaigns[campaign++].size();
+      }
+      result.campaign_of_row.push_back(static_cast<int>(campaign));
+      own_row.push_back(data.row[k] - static_cast<int>(first));
+    }
+  }
+  for (const MeasurementCampaign& c : campaigns) result.sources.push_back(c.source);
   result.setup_of_campaign = setup_of_campaign;
   const int rows = static_cast<int>(data.size());
   if (rows < std::max(options.minimum_rows, 3)) {
@@ -1035,7 +1062,7 @@ GeometricCalibrationResult calibrateGeometry(const JointErrorModel& prior,
   result.names = geometricParameterNames(robot, setups);
   result.used_rows = rows;
   result.skipped_rows = data.skipped_rows;
-  result.row = data.row;
+  result.row = own_row;
   result.loss = options.loss;
 
   const GeometricParameters start = startingPoint(prior, whole, data, options, fit_frame, setup_sources, result);

@@ -134,6 +134,11 @@ struct CalibrationData {
 // Throws MeasurementError when the campaign has no position columns or its joint count differs from the
 // robot's; never fails for a row with a NaN position (skipped and counted) or a NaN command (the same).
 CalibrationData prepareCalibrationData(const JointErrorModel& prior, const MeasurementCampaign& campaign);
+// Several campaigns as one: the rows of their concatenation (concatenateCampaigns; `row` indexes it, and
+// the lost motion's memory runs on across campaigns, as for one campaign), each row with the set-up of
+// its campaign (setup_of_campaign, one per campaign, 0-based and without gaps).
+CalibrationData prepareCalibrationData(const JointErrorModel& prior, const std::vector<MeasurementCampaign>& campaigns,
+                                       const std::vector<int>& setup_of_campaign);
 
 // The predicted instrument reading of a row measured from set-up `setup` and, when `jacobian` is not
 // null, its derivative by every parameter (3 x GeometricParameterLayout(dof, setUpCount()).size()).
@@ -254,10 +259,15 @@ InstrumentSetUps instrumentSetUps(const JointErrorModel& prior, const std::vecto
 
 // One calibration of the robot on campaigns measured from one or several instrument set-ups: the robot's
 // parameters are shared, each set-up has its own frame (and scale, when fitted). With one campaign it is
-// calibrateGeometry above. Messages name the campaign (or "A+B" for the whole).
+// calibrateGeometry above. The set-ups are instrumentSetUps' unless given. Messages name the campaign (or
+// "A+B" for the whole).
 GeometricCalibrationResult calibrateGeometry(const JointErrorModel& prior,
                                              const std::vector<MeasurementCampaign>& campaigns,
                                              const GeometricCalibrationOptions& options = {});
+GeometricCalibrationResult calibrateGeometry(const JointErrorModel& prior,
+                                             const std::vector<MeasurementCampaign>& campaigns,
+                                             const std::vector<int>& setup_of_campaign,
+                                             const GeometricCalibrationOptions& options);
 
 // The campaigns as one (rows appended in order, times shifted to stay non-decreasing, sources joined by
 // '+'). Throws InvalidArgument for campaigns of other joint counts, frames or without positions.
