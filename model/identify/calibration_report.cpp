@@ -126,6 +126,41 @@ std::pair<ErrorStatistics, ErrorStatistics> campaignStatistics(const GeometricCa
 
 }  // namespace
 
+nlohmann::ordered_json instrumentSetUpsJson(const GeometricCalibrationResult& result,
+                                            const std::vector<std::string>& files) {
+  nlohmann::ordered_json setups = nlohmann::ordered_json::array();
+  for (int s = 0; s < result.estimate.setUpCount(); ++s) {
+    nlohmann::ordered_json members = nlohmann::ordered_json::array();
+    for (std::size_t c = 0; c < result.setup_of_campaign.size(); ++c) {
+      if (result.setup_of_campaign[c] == s) members.push_back(c < files.size() ? files[c] : result.sources[c]);
+    }
+    const GeometricParameters own = result.estimate.ofSetUp(s);
+    setups.push_back(
+        {{"setup", s + 1},
+         {"campaigns", members},
+         {"frame_translation_m", {own.frame_translation.x(), own.frame_translation.y(), own.frame_translation.z()}},
+         {"frame_rotation_vector_rad", {own.frame_rotation.x(), own.frame_rotation.y(), own.frame_rotation.z()}},
+         {"instrument_scale", own.instrument_scale}});
+  }
+  return setups;
+}
+
+std::string describeInstrumentSetUps(const GeometricCalibrationResult& result, const std::vector<std::string>& files) {
+  const int setups = result.estimate.setUpCount();
+  std::ostringstream text;
+  text << result.setup_of_campaign.size() << " campaigns from " << setups
+       << (setups == 1 ? " instrument set-up (one frame fitted for all)"
+                       : " instrument set-ups, each with its own frame (campaigns whose frames, fitted on the "
+                         "nominal robot, agree within 50 mm and 2 deg share one):");
+  for (int s = 0; s < setups && setups > 1; ++s) {
+    text << (s ? ";" : "") << " set-up " << s + 1 << ":";
+    for (std::size_t c = 0; c < result.setup_of_campaign.size(); ++c) {
+      if (result.setup_of_campaign[c] == s) text << " " << baseName(c < files.size() ? files[c] : result.sources[c]);
+    }
+  }
+  return text.str();
+}
+
 nlohmann::ordered_json calibrationReportJson(const CalibrationRun& run, const GeometricCalibrationOptions& options,
                                              const CalibrationSources& sources) {
   const GeometricCalibrationResult& result = run.result;
@@ -193,23 +228,7 @@ nlohmann::ordered_json calibrationReportJson(const CalibrationRun& run, const Ge
   nlohmann::ordered_json campaigns = nlohmann::ordered_json::array();
   const std::vector<std::string> files = fittedFiles(sources);
   const bool several = result.sources.size() > 1;
-  if (several) {
-    nlohmann::ordered_json setups = nlohmann::ordered_json::array();
-    for (int s = 0; s < result.estimate.setUpCount(); ++s) {
-      nlohmann::ordered_json members = nlohmann::ordered_json::array();
-      for (std::size_t c = 0; c < result.setup_of_campaign.size(); ++c) {
-        if (result.setup_of_campaign[c] == s) members.push_back(c < files.size() ? files[c] : result.sources[c]);
-      }
-      const GeometricParameters own = result.estimate.ofSetUp(s);
-      setups.push_back(
-          {{"setup", s + 1},
-           {"campaigns", members},
-           {"frame_translation_m", {own.frame_translation.x(), own.frame_translation.y(), own.frame_translation.z()}},
-           {"frame_rotation_vector_rad", {own.frame_rotation.x(), own.frame_rotation.y(), own.frame_rotation.z()}},
-           {"instrument_scale", own.instrument_scale}});
-    }
-    report["instrument_setups"] = setups;
-  }
+  if (several) report["instrument_setups"] = instrumentSetUpsJson(result, files);
   for (std::size_t c = 0; c < result.sources.size(); ++c) {
     const auto [before, after] =
         several ? campaignStatistics(result, static_cast<int>(c)) : std::make_pair(result.before, result.after);
@@ -249,20 +268,7 @@ std::string calibrationSummary(const CalibrationRun& run, const CalibrationSourc
   summary << "Kinematic calibration of " << run.calibrated_robot->name << " on " << sources.campaign << "\n";
   const std::vector<std::string> files = fittedFiles(sources);
   auto fileOf = [&](std::size_t c) { return baseName(c < files.size() ? files[c] : result.sources[c]); };
-  const int setups = result.estimate.setUpCount();
-  if (result.sources.size() > 1) {
-    summary << result.sources.size() << " campaigns from " << setups
-            << (setups == 1 ? " instrument set-up (one frame fitted for all)"
-                            : " instrument set-ups, each with its own frame (campaigns whose frames, fitted on "
-                              "the nominal robot, agree within 50 mm and 2 deg share one):");
-    for (int s = 0; s < setups && setups > 1; ++s) {
-      summary << (s ? ";" : "") << " set-up " << s + 1 << ":";
-      for (std::size_t c = 0; c < result.setup_of_campaign.size(); ++c) {
-        if (result.setup_of_campaign[c] == s) summary << " " << fileOf(c);
-      }
-    }
-    summary << "\n";
-  }
+  if (result.sources.size() > 1) summary << describeInstrumentSetUps(result, files) << "\n";
   char line[512];
   std::snprintf(line, sizeof(line),
                 "%d rows used, %d skipped (no measured position), %d down-weighted by the %s loss (scale %.3f mm), "

@@ -60,6 +60,12 @@ std::string calibrationSummary(const CalibrationRun& run, const CalibrationSourc
 // per used row of every campaign.
 std::string calibrationResidualsCsv(const CalibrationRun& run, const CalibrationSources& sources);
 
+// The instrument set-ups of a calibration on several campaigns (`files`: each campaign's file, as given):
+// each set-up's campaigns, frame and scale; and the sentence the summaries print.
+nlohmann::ordered_json instrumentSetUpsJson(const GeometricCalibrationResult& result,
+                                            const std::vector<std::string>& files);
+std::string describeInstrumentSetUps(const GeometricCalibrationResult& result, const std::vector<std::string>& files);
+
 // Statistics in the units people read (mm), as every report writes them.
 nlohmann::ordered_json errorStatisticsJson(const ErrorStatistics& statistics);
 // residual_analysis.hpp's PosePredictability in report units (mm, rad); null when not computed.

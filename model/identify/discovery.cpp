@@ -82,7 +82,9 @@ std::vector<int> layoutIndices(const DiscoveryCandidate& candidate, const Geomet
   for (CalibrationParameter parameter : candidate.releases) {
     if (parameter == CalibrationParameter::Offset) indices.push_back(layout.offset(candidate.joint));
     if (parameter == CalibrationParameter::Compliance) indices.push_back(layout.compliance(candidate.joint));
-    if (parameter == CalibrationParameter::InstrumentScale) indices.push_back(layout.instrumentScale());
+    if (parameter == CalibrationParameter::InstrumentScale) {
+      for (int s = 0; s < layout.setups; ++s) indices.push_back(layout.instrumentScale(s));  // each set-up's
+    }
     if (parameter == CalibrationParameter::Placement) {
       for (int k = 0; k < 6; ++k) indices.push_back(layout.placement(candidate.joint, k));
     }
@@ -90,14 +92,14 @@ std::vector<int> layoutIndices(const DiscoveryCandidate& candidate, const Geomet
   return indices;
 }
 
-Features offerCandidates(const DiscoveryData& data, const DiscoveryOptions& options) {
+Features offerCandidates(const DiscoveryData& data, int setups, const DiscoveryOptions& options) {
   Features f;
   std::vector<const DiscoveryFamily*> families;
   for (const auto& family : registryOf(options).discoveryFamilies()) {
     if (wanted(options, family->name())) families.push_back(family.get());
   }
   const int n = data.robot->dof();
-  const GeometricParameterLayout layout(n);
+  const GeometricParameterLayout layout(n, setups);
   for (int joint = 0; joint <= n; ++joint) {
     for (const DiscoveryFamily* family : families) {
       const std::size_t first = f.candidates.size();
@@ -255,13 +257,13 @@ void accumulateSpaceParts(Linearised& lin, const std::vector<int>& part, int par
   }
 }
 
-Linearised linearise(const JointErrorModel& model, const MeasurementCampaign& campaign,
-                     const GeometricCalibrationResult& cal, const Features& f, const std::vector<Active>& active,
-                     const std::vector<bool>& offered, int folds, bool map_joints) {
+// `data`: the fitted rows prepared with `model` (each with its instrument set-up).
+Linearised linearise(const JointErrorModel& model, const CalibrationData& data, const GeometricCalibrationResult& cal,
+                     const Features& f, const std::vector<Active>& active, const std::vector<bool>& offered, int folds,
+                     bool map_joints) {
   const Robot& robot = model.robot();
   const int n = robot.dof();
-  GeometricParameterLayout layout(n);
-  const CalibrationData data = prepareCalibrationData(model, campaign);
+  GeometricParameterLayout layout(n, data.setups);
   const int rows = static_cast<int>(data.size());
   Linearised lin;
   std::set<int> free(cal.free.begin(), cal.free.end());
@@ -314,8 +316,8 @@ Linearised linearise(const JointErrorModel& model, const MeasurementCampaign& ca
   }
   Eigen::MatrixXd J;
   for (int i = 0; i < rows; ++i) {
-    const Eigen::Vector3d m =
-        predictMeasurement(robot, cal.estimate, data.command[i], data.load_torque[i], data.other_error[i], &J);
+    const Eigen::Vector3d m = predictMeasurement(robot, cal.estimate, data.command[i], data.load_torque[i],
+                                                 data.other_error[i], &J, data.setup[i]);
     const double w = std::sqrt(i < static_cast<int>(cal.weight.size()) ? cal.weight[i] : 1.0);
     lin.r.segment<3>(3 * i) = w * (m - data.measured[i]);
     for (int c = 0; c < cols; ++c) {
@@ -473,18 +475,19 @@ std::vector<std::string> fixedNames(const std::vector<std::string>& names, const
   return fixed;
 }
 
-// Z errors (base frame, measured - predicted) of the rows of a campaign under given parameters, with the
-// campaign row of each.
+// Z errors (base frame, measured - predicted) of prepared rows under given parameters, each in the frame
+// of its set-up.
 std::vector<double> zErrors(const JointErrorModel& model, const GeometricParameters& parameters,
-                            const MeasurementCampaign& campaign, std::vector<int>& rows) {
-  const CalibrationData data = prepareCalibrationData(model, campaign);
-  const Eigen::Matrix3d base_from_instrument = parameters.instrumentFromBase().linear().transpose();
+                            const CalibrationData& data) {
+  std::vector<Eigen::Matrix3d> base_from_instrument;
+  for (int s = 0; s < parameters.setUpCount(); ++s) {
+    base_from_instrument.push_back(parameters.ofSetUp(s).instrumentFromBase().linear().transpose());
+  }
   std::vector<double> z;
-  rows = data.row;
   for (std::size_t i = 0; i < data.size(); ++i) {
-    const Eigen::Vector3d m =
-        predictMeasurement(model.robot(), parameters, data.command[i], data.load_torque[i], data.other_error[i]);
-    z.push_back((base_from_instrument * (data.measured[i] - m)).z());
+    const Eigen::Vector3d m = predictMeasurement(model.robot(), parameters, data.command[i], data.load_torque[i],
+                                                 data.other_error[i], nullptr, data.setup[i]);
+    z.push_back((base_from_instrument[static_cast<std::size_t>(data.setup[i])] * (data.measured[i] - m)).z());
   }
   return z;
 }
@@ -534,14 +537,17 @@ namespace {
 class DiscoveryRun {
 public:
   DiscoveryRun(const JointErrorModel& prior, const std::vector<MeasurementCampaign>& fitted,
-               const std::vector<MeasurementCampaign>& heldout, const DiscoveryOptions& options)
+               const std::vector<int>& setup_of_campaign, const std::vector<MeasurementCampaign>& heldout,
+               const DiscoveryOptions& options)
       : prior_(prior),
         fitted_(fitted),
+        setup_of_campaign_(setup_of_campaign),
         heldout_(heldout),
         options_(options),
         campaign_(concatenateCampaigns(fitted)),
-        names_(geometricParameterNames(prior.robot())),
-        data_(discoveryData(prior, campaign_, prepareCalibrationData(prior, campaign_), options)),
+        names_(geometricParameterNames(prior.robot(),
+                                       1 + *std::max_element(setup_of_campaign.begin(), setup_of_campaign.end()))),
+        data_(discoveryData(prior, campaign_, fittedRows(prior), options)),
         model_(prior),
         result_(prior) {
     std::size_t first = 0;
@@ -558,7 +564,7 @@ public:
     measureCoverage();
     cal_ = calibrate(model_);
     offerFamiliesCandidates();
-    lin_ = linearise(model_, campaign_, cal_, features_, active_, offered_, options_.folds, true);
+    lin_ = linearise(model_, fittedRows(model_), cal_, features_, active_, offered_, options_.folds, true);
     result_.joint_residual_rms_initial = jointRms(lin_);
     residuals_ = static_cast<int>(lin_.r.size());
     current_ = lin_.base_columns;
@@ -640,8 +646,9 @@ private:
 
   // The families' candidates, offered once the base fit's residual is known (families may scan it).
   void offerFamiliesCandidates() {
-    data_.joint_residual = linearise(model_, campaign_, cal_, Features(), {}, {}, options_.folds, true).joint_residual;
-    features_ = offerCandidates(data_, options_);
+    data_.joint_residual =
+        linearise(model_, fittedRows(model_), cal_, Features(), {}, {}, options_.folds, true).joint_residual;
+    features_ = offerCandidates(data_, cal_.estimate.setUpCount(), options_);
     offered_.assign(features_.candidates.size(), true);
     if (options_.base_geometry) {
       // The textbook base frees the calibration's parameters from the start: only feature columns compete.
@@ -670,7 +677,12 @@ private:
   }
 
   GeometricCalibrationResult calibrate(const JointErrorModel& model) {
-    return calibrateGeometry(model, campaign_, calibrationOptions());
+    return calibrateGeometry(model, fitted_, setup_of_campaign_, calibrationOptions());
+  }
+
+  // The fitted rows as `model` predicts them: the campaigns' concatenation, each row with its set-up.
+  CalibrationData fittedRows(const JointErrorModel& model) const {
+    return prepareCalibrationData(model, fitted_, setup_of_campaign_);
   }
 
   // Errors on the fitted rows, on every held-out campaign (frame re-fitted) and the paths' Ra and Rz.
@@ -678,13 +690,13 @@ private:
     DiscoveryState state;
     state.fitted = cal_.after;
     if (fitted_path_) {
-      std::vector<int> rows;
-      const std::vector<double> z = zErrors(model_, cal_.estimate, campaign_, rows);
+      const CalibrationData data = fittedRows(model_);
+      const std::vector<double> z = zErrors(model_, cal_.estimate, data);
       for (std::size_t c = 0; c < fitted_.size(); ++c) {
         if (!isPathCampaign(fitted_[c])) continue;
         std::vector<double> part;
         for (std::size_t i = 0; i < z.size(); ++i) {
-          const std::size_t row = static_cast<std::size_t>(rows[i]);
+          const std::size_t row = static_cast<std::size_t>(data.row[i]);
           if (row >= first_row_[c] && row < first_row_[c + 1]) part.push_back(z[i]);
         }
         state.paths.push_back(roughness(part, false, static_cast<int>(c)));
@@ -695,8 +707,8 @@ private:
       const HoldoutEvaluation e = evaluateOnCampaign(model_, cal_.estimate, heldout_[k], true, cal_options);
       state.heldout.push_back(e.statistics);
       if (isPathCampaign(heldout_[k])) {
-        std::vector<int> rows;
-        state.paths.push_back(roughness(zErrors(model_, e.parameters, heldout_[k], rows), true, static_cast<int>(k)));
+        state.paths.push_back(roughness(zErrors(model_, e.parameters, prepareCalibrationData(model_, heldout_[k])),
+                                        true, static_cast<int>(k)));
       }
     }
     state.cv_rms = std::sqrt(cv_sse / std::max(1, residuals_));
@@ -863,7 +875,7 @@ private:
       model_ = buildModel(prior_, active_, features_, data_, options_);
       cal_ = calibrate(model_);
       if (active_.empty()) break;
-      lin_ = linearise(model_, campaign_, cal_, features_, active_, none, options_.folds, false);
+      lin_ = linearise(model_, fittedRows(model_), cal_, features_, active_, none, options_.folds, false);
       std::vector<int> s = lin_.base_columns;
       s.insert(s.end(), lin_.active_columns.begin(), lin_.active_columns.end());
       const Fit fit = fitColumns(lin_, s, false, activePenalty(s));
@@ -874,7 +886,7 @@ private:
     }
     model_ = buildModel(prior_, active_, features_, data_, options_);
     cal_ = calibrate(model_);
-    lin_ = linearise(model_, campaign_, cal_, features_, active_, offered_, options_.folds, false);
+    lin_ = linearise(model_, fittedRows(model_), cal_, features_, active_, offered_, options_.folds, false);
     current_ = lin_.base_columns;
     current_.insert(current_.end(), lin_.active_columns.begin(), lin_.active_columns.end());
     base_fit_ = fitColumns(lin_, current_, true, activePenalty(current_));
@@ -955,8 +967,8 @@ private:
 
   // The joint-space residual and the calibrated model.
   void finish() {
-    lin_ = linearise(model_, campaign_, cal_, features_, active_, std::vector<bool>(features_.candidates.size(), false),
-                     options_.folds, true);
+    lin_ = linearise(model_, fittedRows(model_), cal_, features_, active_,
+                     std::vector<bool>(features_.candidates.size(), false), options_.folds, true);
     result_.joint_residual_rms_final = jointRms(lin_);
     // Where what is left lies (reported when it is well above the noise floor).
     const ResidualRows rows{lin_.joint_residual, lin_.joint_lever, data_.command, data_.motor,
@@ -973,6 +985,7 @@ private:
 
   const JointErrorModel& prior_;
   const std::vector<MeasurementCampaign>& fitted_;
+  const std::vector<int> setup_of_campaign_;  // instrument set-up of each fitted campaign
   const std::vector<MeasurementCampaign>& heldout_;
   const DiscoveryOptions& options_;
   const MeasurementCampaign campaign_;
@@ -996,32 +1009,6 @@ private:
 
 }  // namespace
 
-namespace {
-
-// Fitted campaigns share one instrument frame. Campaigns from different tracker set-ups do not, and fitted
-// together they make a calibration that cannot converge (seconds later, with a message about iterations):
-// each campaign's frame is fitted alone on the prior first, and frames far apart are named at once.
-void checkOneInstrumentSetUp(const JointErrorModel& prior, const std::vector<MeasurementCampaign>& fitted,
-                             const DiscoveryOptions& options) {
-  if (fitted.size() < 2 || fitted.front().frame != MeasurementFrame::Instrument) return;
-  const InstrumentSetUps setups = instrumentSetUps(prior, fitted, options.calibration);
-  for (std::size_t c = 1; c < fitted.size(); ++c) {
-    if (setups.setup_of_campaign[c] == 0) continue;
-    const Eigen::Isometry3d relative = setups.frame_of_campaign[c] * setups.frame_of_campaign[0].inverse();
-    char text[160];
-    std::snprintf(text, sizeof(text), "%.1f mm and %.2f deg", relative.translation().norm() * 1e3,
-                  Eigen::AngleAxisd(relative.linear()).angle() * 180.0 / M_PI);
-    throw InvalidArgument("discover: '" + fitted[c].source + "' was measured from another instrument set-up than '" +
-                          fitted.front().source + "' (their instrument frames, each fitted on the prior, differ by " +
-                          text +
-                          "); discovery fits one instrument frame for all fitted campaigns: fit the campaigns "
-                          "of one set-up together and hold the others out (--holdout), which re-fits their "
-                          "frames (jointcomp calibrate fits several set-ups, each with its own frame)");
-  }
-}
-
-}  // namespace
-
 DiscoveryResult discoverEffects(const JointErrorModel& prior, const std::vector<MeasurementCampaign>& fitted,
                                 const std::vector<MeasurementCampaign>& heldout, const DiscoveryOptions& options) {
   if (options.folds < 2) throw InvalidArgument("discover: folds must be at least 2");
@@ -1029,8 +1016,11 @@ DiscoveryResult discoverEffects(const JointErrorModel& prior, const std::vector<
     throw InvalidArgument("discover: max_prior_weight is " + std::to_string(options.max_prior_weight) +
                           "; it must be finite and >= 0 (0: no prior)");
   }
-  checkOneInstrumentSetUp(prior, fitted, options);
-  return DiscoveryRun(prior, fitted, heldout, options).run();
+  if (fitted.empty()) throw InvalidArgument("discover: no fitted campaign");
+  // Fitted campaigns from several tracker set-ups are fitted together, each set-up with its own frame.
+  const std::vector<int> setups =
+      fitted.size() == 1 ? std::vector<int>{0} : instrumentSetUps(prior, fitted, options.calibration).setup_of_campaign;
+  return DiscoveryRun(prior, fitted, setups, heldout, options).run();
 }
 
 }  // namespace jointcomp

@@ -128,8 +128,9 @@ struct DiscoveryResult {
   explicit DiscoveryResult(JointErrorModel m) : model(std::move(m)) {}
 };
 
-// Throws InvalidArgument for no fitted campaign, campaigns of another robot or in different frames, or fitted
-// campaigns from different instrument set-ups (kSameSetUpDistance, kSameSetUpAngle; named in the message).
+// Fitted campaigns from different instrument set-ups (instrumentSetUps) are fitted together, each set-up
+// with its own frame (and scale, once the instrument_scale candidate is accepted). Throws InvalidArgument
+// for no fitted campaign, campaigns of another robot or in different frames (base and instrument).
 DiscoveryResult discoverEffects(const JointErrorModel& prior, const std::vector<MeasurementCampaign>& fitted,
                                 const std::vector<MeasurementCampaign>& heldout, const DiscoveryOptions& options = {});
 

@@ -132,6 +132,8 @@ nlohmann::ordered_json discoveryReportJson(const DiscoveryResult& result, const 
                          {"max_harmonic_order", options.max_harmonic_order},
                          {"candidates", result.candidates}};
   report["fitted_rows"] = result.fitted_rows;
+  if (sources.campaigns.size() > 1)
+    report["instrument_setups"] = instrumentSetUpsJson(result.calibration, sources.campaigns);
   report["coverage"] = coverageJson(result, sources);
   report["initial"] = stateJson(result.initial, sources);
   report["initial"]["joint_residual_rms_rad"] = result.joint_residual_rms_initial;
@@ -182,6 +184,7 @@ std::string discoverySummary(const DiscoveryResult& result, const DiscoveryOptio
   std::ostringstream summary;
   summary << "jointcomp discover: " << result.model.robot().name << ", " << result.fitted_rows << " fitted rows, "
           << result.candidates << " candidates, base " << baseName(options) << "\n";
+  if (sources.campaigns.size() > 1) summary << describeInstrumentSetUps(result.calibration, sources.campaigns) << "\n";
   char line[512];
   std::snprintf(line, sizeof(line), "base model: fitted RMS %.4f mm, held-out RMS [mm] %s\n",
                 result.initial.fitted.rms * 1e3, heldRms(result.initial, sources).c_str());
