@@ -70,9 +70,10 @@ std::string JointCoverage::describe(int joint) const {
 }
 
 double medianDistanceToNearest(const std::vector<JointVector>& fitted, const std::vector<JointVector>& rows,
-                               int max_rows) {
-  if (fitted.empty() || rows.empty() || max_rows < 1)
-    throw InvalidArgument("distance to the nearest fitted pose: no fitted rows, no rows or max_rows < 1");
+                               int max_rows, int max_fitted) {
+  if (fitted.empty() || rows.empty() || max_rows < 1 || max_fitted < 1)
+    throw InvalidArgument(
+        "distance to the nearest fitted pose: no fitted rows, no rows, or max_rows or max_fitted below 1");
   const Eigen::Index n = fitted.front().size();
   const auto check = [n](const std::vector<JointVector>& v, const char* what) {
     for (std::size_t k = 0; k < v.size(); ++k) {
@@ -85,10 +86,14 @@ double medianDistanceToNearest(const std::vector<JointVector>& fitted, const std
   check(rows, "held-out");
   const std::size_t stride =
       (rows.size() + static_cast<std::size_t>(max_rows) - 1) / static_cast<std::size_t>(max_rows);
+  const std::size_t fitted_stride =
+      (fitted.size() + static_cast<std::size_t>(max_fitted) - 1) / static_cast<std::size_t>(max_fitted);
   std::vector<double> nearest;
   for (std::size_t i = 0; i < rows.size(); i += stride) {
     double best = std::numeric_limits<double>::infinity();
-    for (const JointVector& f : fitted) best = std::min(best, (f - rows[i]).squaredNorm());
+    for (std::size_t f = 0; f < fitted.size(); f += fitted_stride) {
+      best = std::min(best, (fitted[f] - rows[i]).squaredNorm());
+    }
     nearest.push_back(std::sqrt(best));
   }
   return median(std::move(nearest));

@@ -29,9 +29,11 @@ JointCoverage jointCoverage(const std::vector<JointVector>& rows, double half_wi
 
 // The median over `rows` of the distance (rad, joint space, all joints) to the nearest of `fitted`: every joint
 // inside its coverage does not make a pose near the fitted ones (a held-out campaign that reaches its goals in
-// other configurations combines visited angles into unvisited poses). At most max_rows rows are scored (a
-// stride). Throws InvalidArgument for empty inputs, rows of different sizes or non-finite angles.
+// other configurations combines visited angles into unvisited poses). At most max_rows rows are scored and
+// at most max_fitted fitted rows searched (strides: the work stays bounded for campaigns of millions of rows;
+// with fewer fitted rows searched the distance can only come out larger). Throws InvalidArgument for empty
+// inputs, rows of different sizes, non-finite angles or limits below 1.
 double medianDistanceToNearest(const std::vector<JointVector>& fitted, const std::vector<JointVector>& rows,
-                               int max_rows = 4000);
+                               int max_rows = 4000, int max_fitted = 50000);
 
 }  // namespace jointcomp

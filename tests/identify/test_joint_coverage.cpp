@@ -53,6 +53,10 @@ TEST(JointCoverage, MedianDistanceToTheNearestFittedPose) {
   EXPECT_DOUBLE_EQ(medianDistanceToNearest(fitted, combined), 1.0);
   // A stride of at most max_rows rows: 1 of 3 scored, the first.
   EXPECT_DOUBLE_EQ(medianDistanceToNearest(fitted, rows, 1), 0.1);
+  // At most max_fitted fitted rows searched: 1 of 3 (the first, (0, 0)); the distances can only grow.
+  EXPECT_DOUBLE_EQ(medianDistanceToNearest(fitted, rows, 4000, 1), std::hypot(1.0, 0.2));
+  EXPECT_GE(medianDistanceToNearest(fitted, rows, 4000, 2), medianDistanceToNearest(fitted, rows));
+  EXPECT_THROW(medianDistanceToNearest(fitted, rows, 4000, 0), InvalidArgument);
   EXPECT_THROW(medianDistanceToNearest({}, rows), InvalidArgument);
   EXPECT_THROW(medianDistanceToNearest(fitted, {Eigen::Vector3d::Zero()}), InvalidArgument);
   EXPECT_THROW(medianDistanceToNearest(fitted, {Eigen::Vector2d(std::nan(""), 0.0)}), InvalidArgument);
