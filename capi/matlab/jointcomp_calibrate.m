@@ -2,7 +2,8 @@ function [calibrated, report] = jointcomp_calibrate(robot, campaign_path, holdou
 %JOINTCOMP_CALIBRATE Kinematic calibration of ROBOT from a measurement campaign file.
 %   [CALIBRATED, REPORT] = JOINTCOMP_CALIBRATE(ROBOT, CAMPAIGN_PATH, HOLDOUT_PATHS, OPTIONS) fits the
 %   instrument frame, target, joint offsets, joint placements and compliance (the identifiable subset) on
-%   CAMPAIGN_PATH and checks the result on HOLDOUT_PATHS (a cell array of campaign files, may be {}).
+%   CAMPAIGN_PATH (one file, or a cell array of files: campaigns from different instrument set-ups each
+%   get their own frame) and checks the result on HOLDOUT_PATHS (a cell array of campaign files, may be {}).
 %   OPTIONS is a struct with the fields of jc_calibrate's options_json (loss, loss_scale_mm,
 %   pivot_threshold, fixed), may be omitted. CALIBRATED is a new robot handle (free it with
 %   JOINTCOMP_ROBOT_FREE); REPORT is the report decoded from JSON (jsondecode).
@@ -13,6 +14,9 @@ if nargin < 4
     options = struct();
 end
 holdouts = strjoin(holdout_paths, newline);
+if iscell(campaign_path)
+    campaign_path = strjoin(campaign_path, newline);
+end
 calibrated_handle = libpointer('voidPtrPtr');
 report_handle = libpointer('voidPtrPtr');
 jointcomp_check(calllib('jointcomp', 'jc_calibrate', robot, campaign_path, holdouts, jsonencode(options), ...

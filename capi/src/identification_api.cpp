@@ -251,7 +251,8 @@ jc_status jc_calibrate(jc_robot* nominal, const char* campaign_path, const char*
                        const char* options_json, jc_robot** calibrated, jc_report** report) {
   return CAPI_ENTRY({
     const jc_robot& handle = robotHandle(nominal, "nominal");
-    const std::string path = requireText(campaign_path, "campaign_path");
+    // One path, or several separated by newlines (campaigns from one or several instrument set-ups).
+    const std::vector<std::string> paths = pathList(campaign_path, "campaign_path", true);
     const std::vector<std::string> holdouts = pathList(holdout_paths, "holdout_paths", false);
     GeometricCalibrationOptions options;
     readOptions(options_json, [&](JsonFields& fields) {
@@ -262,15 +263,21 @@ jc_status jc_calibrate(jc_robot* nominal, const char* campaign_path, const char*
       }
       if (fields.has("fixed")) options.fixed = textList(fields, "fixed");
     });
-    const MeasurementCampaign campaign = readCampaignFile(path);
+    std::vector<MeasurementCampaign> campaigns;
+    std::string joined;
+    for (const std::string& path : paths) {
+      campaigns.push_back(readCampaignFile(path));
+      joined += (joined.empty() ? "" : ",") + path;
+    }
     std::vector<std::pair<std::string, MeasurementCampaign>> held;
     for (const std::string& name : holdouts) held.emplace_back(name, readCampaignFile(name));
     options.progress = threadProgress();
-    CalibrationRun run = runCalibration(handle.model, campaign, held, options);
+    CalibrationRun run = runCalibration(handle.model, campaigns, held, options);
     CalibrationSources sources;
     sources.urdf = robotSource(handle);
     sources.parameters = robotSource(handle);
-    sources.campaign = path;
+    sources.campaign = joined;
+    sources.campaigns = paths;
     auto made = std::make_unique<jc_report>(calibrationReportJson(run, options, sources).dump(2),
                                             calibrationSummary(run, sources));
     auto updated = std::make_unique<jc_robot>(run.calibrated_robot, std::move(run.calibrated), handle.drives);

@@ -282,8 +282,9 @@ JOINTCOMP_API jc_status jc_identify_transmission_error(jc_robot* nominal, const 
                                                        const char* options_json, jc_robot** identified,
                                                        jc_report** report);
 /* Kinematic calibration: instrument frame, target, joint offsets, joint placements and compliance (the
-   identifiable subset) from one campaign; held-out campaigns (holdout_paths, may be NULL) are checked
-   with only their instrument frame re-fitted. options: "loss": "huber" (default), "cauchy" or "none";
+   identifiable subset) from one campaign, or several (campaign_path: paths separated by newlines; campaigns
+   from different instrument set-ups each get their own frame); held-out campaigns (holdout_paths, may be NULL) are
+   checked with only their instrument frame re-fitted. options: "loss": "huber" (default), "cauchy" or "none";
    "loss_scale_mm" (> 0; default: from the residuals); "pivot_threshold" (default 1e-4); "fixed" (names of
    parameters held at nominal, as the report names them). *calibrated: the corrected robot. */
 JOINTCOMP_API jc_status jc_calibrate(jc_robot* nominal, const char* campaign_path, const char* holdout_paths,

@@ -109,10 +109,13 @@ def identify_transmission_error(nominal, campaign_path, **options):
                 _native.text(campaign_path, "campaign_path"), _options(options))
 
 
-def calibrate(nominal, campaign_path, holdouts=None, **options):
-    """Kinematic calibration on one campaign, checked on ``holdouts`` (paths; their instrument frame
-    re-fitted). Options: loss ("huber", "cauchy", "none"), loss_scale_mm, pivot_threshold, fixed (names)."""
-    return _run(_native.lib.jc_calibrate, nominal.handle, _native.text(campaign_path, "campaign_path"),
+def calibrate(nominal, campaigns, holdouts=None, **options):
+    """Kinematic calibration on ``campaigns`` (one path or several: campaigns from different instrument
+    set-ups each get their own frame), checked on ``holdouts`` (paths; their instrument frame re-fitted).
+    Options: loss ("huber", "cauchy", "none"), loss_scale_mm, pivot_threshold, fixed (names)."""
+    if campaigns is None:
+        raise TypeError("campaigns: a path or a sequence of paths is needed, not None")
+    return _run(_native.lib.jc_calibrate, nominal.handle, _paths(campaigns, "campaigns"),
                 _paths(holdouts, "holdouts"), _options(options))
 
 
