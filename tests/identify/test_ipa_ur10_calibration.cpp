@@ -17,6 +17,18 @@ namespace {
 
 std::string ipa(const std::string& file) { return test::sharedFile("data/ipa-ur10/" + file); }
 
+// Imported once for all tests of this file.
+const MeasurementCampaign& seriesA() {
+  static const MeasurementCampaign a =
+      importIpaUr10(ipa("Series_A/measurements_grid.csv"), ipa("Series_A/Trafo_TM_F_init.txt"));
+  return a;
+}
+const MeasurementCampaign& seriesB() {
+  static const MeasurementCampaign b =
+      importIpaUr10(ipa("Series_B/measurements_joint_configurations.csv"), ipa("Series_B/Trafo_TM_F_init.txt"));
+  return b;
+}
+
 const ParameterEstimate& find(const GeometricCalibrationResult& result, const std::string& name) {
   for (const ParameterEstimate& p : result.parameters) {
     if (p.name == name) return p;
@@ -26,10 +38,8 @@ const ParameterEstimate& find(const GeometricCalibrationResult& result, const st
 
 TEST(IpaUr10Calibration, SeriesACalibrationCarriesOverToSeriesB) {
   JOINTCOMP_REQUIRE_SHARED_FILE("the IPA UR10 data", "data/ipa-ur10/Series_A/measurements_grid.csv");
-  const MeasurementCampaign a =
-      importIpaUr10(ipa("Series_A/measurements_grid.csv"), ipa("Series_A/Trafo_TM_F_init.txt"));
-  const MeasurementCampaign b =
-      importIpaUr10(ipa("Series_B/measurements_joint_configurations.csv"), ipa("Series_B/Trafo_TM_F_init.txt"));
+  const MeasurementCampaign& a = seriesA();
+  const MeasurementCampaign& b = seriesB();
   const JointErrorModel prior = calibration_test::ur10Model();
   const GeometricCalibrationResult result = calibrateGeometry(prior, a);
   const HoldoutEvaluation before = evaluateOnCampaign(prior, nominalParameters(prior, b), b, true);
@@ -75,10 +85,8 @@ TEST(IpaUr10Calibration, SeriesACalibrationCarriesOverToSeriesB) {
 // out 0.427), and B's frame comes out where B's held-out re-fit puts it.
 TEST(IpaUr10Calibration, BothSeriesTogetherEachWithItsTrackerFrame) {
   JOINTCOMP_REQUIRE_SHARED_FILE("the IPA UR10 data", "data/ipa-ur10/Series_A/measurements_grid.csv");
-  const MeasurementCampaign a =
-      importIpaUr10(ipa("Series_A/measurements_grid.csv"), ipa("Series_A/Trafo_TM_F_init.txt"));
-  const MeasurementCampaign b =
-      importIpaUr10(ipa("Series_B/measurements_joint_configurations.csv"), ipa("Series_B/Trafo_TM_F_init.txt"));
+  const MeasurementCampaign& a = seriesA();
+  const MeasurementCampaign& b = seriesB();
   const JointErrorModel prior = calibration_test::ur10Model();
   const GeometricCalibrationResult both = calibrateGeometry(prior, std::vector<MeasurementCampaign>{a, b});
   const GeometricCalibrationResult alone = calibrateGeometry(prior, a);
