@@ -7,6 +7,10 @@
    residual of the nearest A poses (rotated into B's frame) does to B.
 3. The T-Mac's orientations (optional, from the raw IPA file): what a full kinematic orientation model leaves,
    how repeatable it is, and how much of it the configurations reaching one T-Mac pose share.
+4. The tracker's own errors: the residual along the line of sight (distance) and across it (angles), and
+   what a smooth function of the direction from the tracker (harmonics of azimuth and elevation, the form
+   of a tracker's encoder and axis errors) takes of it. The campaigns' frame is the tracker's own, origin at
+   the tracker head, as in the IPA files.
 
 Usage, after `jointcomp import-ipa` of both series and
 `jointcomp calibrate --urdf model/robots/ur10.urdf --campaign A.csv --holdout B.csv --out DIR`:
@@ -236,6 +240,41 @@ def orientations(raw_path, trafo_path):
           "(median, %d pairs)" % (1e3 * rms(best), 1e3 * rms(left), 1e3 * repeat, len(same_q)))
 
 
+def tracker_direction_columns(measured, order):
+    """Per row 3 x k columns: errors across the beam that grow with range (angle errors) and along it,
+    each a harmonic of the azimuth or elevation up to `order`."""
+    r = np.linalg.norm(measured, axis=1)
+    along = measured / r[:, None]
+    azimuth = np.arctan2(measured[:, 1], measured[:, 0])
+    elevation = np.arcsin(measured[:, 2] / r)
+    across_azimuth = np.stack([-np.sin(azimuth), np.cos(azimuth), np.zeros_like(azimuth)], 1)
+    across_elevation = np.cross(along, across_azimuth)
+    shapes = [np.ones_like(r)]
+    for k in range(1, order + 1):
+        shapes += [np.sin(k * azimuth), np.cos(k * azimuth), np.sin(k * elevation), np.cos(k * elevation)]
+    columns = []
+    for shape in shapes:
+        for direction, scale in ((across_azimuth, r), (across_elevation, r), (along, np.ones_like(r))):
+            columns.append((shape * scale)[:, None] * direction)
+    return np.stack(columns, axis=2).reshape(-1, len(columns))
+
+
+def tracker(a, b, order):
+    _, ma, _, ra = a
+    _, mb, _, rb = b
+    for name, measured, residual in (("A", ma, ra), ("B", mb, rb)):
+        along = np.sum(residual * measured, axis=1) / np.linalg.norm(measured, axis=1)
+        across = np.sqrt(np.maximum(np.sum(residual ** 2, axis=1) - along ** 2, 0.0))
+        print("4. %s: along the line of sight %.4f mm RMS, across it %.4f mm RMS per axis" %
+              (name, np.sqrt(np.mean(along ** 2)), np.sqrt(np.mean(across ** 2) / 2)))
+    columns = tracker_direction_columns(ma, order)
+    coefficients = np.linalg.lstsq(columns, ra.reshape(-1), rcond=None)[0]
+    left = (ra.reshape(-1) - columns @ coefficients).reshape(-1, 3)
+    print("   a function of the direction from the tracker (orders 1..%d, %d parameters) fitted on A: A %.4f -> "
+          "%.4f mm, %.1f %% of its squares" % (order, columns.shape[1], rms(ra), rms(left), 100 * gain(ra, columns,
+                                                                                                   coefficients)))
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("calibration", help="output folder of jointcomp calibrate (A fitted, B held out)")
@@ -259,6 +298,7 @@ def main():
         if not arguments.trafo_b:
             sys.exit("--raw-b needs --trafo-b")
         orientations(arguments.raw_b, arguments.trafo_b)
+    tracker(a, b, 3)
 
 
 if __name__ == "__main__":

@@ -2,7 +2,8 @@
 # The README's statements on the real UR10 (why Series B stays near 0.43 mm), measured again from the data by
 # examples/python/ur10_residual_study.py after jointcomp's own import and calibration:
 # B's poses lie far from A's, A's residual field makes B worse, no output harmonic fitted on A helps B much,
-# and the T-Mac's orientation residual is repeatable but not explained by a full kinematic orientation model.
+# the T-Mac's orientation residual is repeatable but not explained by a full kinematic orientation model, and
+# the residual lies across the tracker's beam without being a function of the direction from the tracker.
 #   ur10_study.sh <jointcomp> <scratch folder>        (needs JOINTCOMP_SHARED; exits 77, a skip, without it)
 set -euo pipefail
 jointcomp="$1" work="$2"
@@ -33,10 +34,15 @@ best_b = number(r"best on B of all: ([-+0-9.]+) %")
 first = [float(x) for x in re.findall(r"first session ([-+0-9. ]+) %", text)]
 after_frames = number(r"([0-9.]+) mrad after every small rotation")
 repeat = number(r"agree to ([0-9.]+) mrad")
+along_a = number(r"4\. A: along the line of sight ([0-9.]+) mm")
+across_a = number(r"4\. A: .* across it ([0-9.]+) mm")
+tracker_share = number(r"fitted on A: .* mm, ([-0-9.]+) % of its squares")
 assert distance > 1.0, distance            # B reaches its goals in other configurations than A
 assert b_after > b_rms, (b_after, b_rms)   # A's residual field does not carry to B
 assert max(first) > 20.0, first            # a harmonic fits A's first session...
 assert best_b < 15.0, best_b               # ...but none helps B much
 assert after_frames > 5.0 * repeat, (after_frames, repeat)  # repeatable, and not kinematic
+assert across_a > 1.5 * along_a, (across_a, along_a)  # A's residual lies across the beam: angles...
+assert tracker_share < 10.0, tracker_share             # ...but not the tracker's: no function of its direction
 print("the UR10 study holds")
 PY
