@@ -6,6 +6,7 @@
 // form), stopping when the fixed-point map moves the reference by no more than the tolerance.
 #pragma once
 
+#include <array>
 #include <vector>
 
 #include "model/effects/joint_error_model.hpp"
@@ -63,8 +64,15 @@ private:
   bool anchors_set_ = false;  // by an earlier call (each harmonic's sine and cosine at some phase, from libm)
   std::vector<int> other_command_effects_;
   JointVector fixed_dq_, dq_, slope_;
-  std::vector<int> gear_row_start_, gear_columns_;  // G's nonzero entries, row by row
-  std::vector<double> gear_values_;
+  // G's nonzero entries row by row, and its diagonal, in place: the iteration reads them without a pointer chase.
+  int gear_entry_count_ = 0;
+  std::array<int, kMaxJoints + 1> gear_row_start_{};
+  std::array<int, kMaxJoints * kMaxJoints> gear_columns_{};
+  std::array<double, kMaxJoints * kMaxJoints> gear_values_{};
+  std::array<double, kMaxJoints> gear_diagonal_{};
+  // The rows with an entry off the diagonal (a coupled wrist): the others are their diagonal term alone.
+  int coupled_row_count_ = 0;
+  std::array<int, kMaxJoints> coupled_rows_{};
 };
 
 struct TrajectoryCompensationReport {

@@ -34,7 +34,13 @@ void forwardKinematics(const Robot& robot, RobotWorkspace& ws, const JointVector
     const Joint& joint = robot.joints[i];
     position += rotation * joint.placement.translation();
     rotation = rotation * joint.placement.linear();
-    ws.axis[i] = rotation * joint.axis;  // the axis is fixed by the joint's own rotation
+    // The axis is fixed by the joint's own rotation. The usual z axis is the rotation's last column: the
+    // product's other terms are exact zeros, so this equals it (a zero's sign aside), for 15 fewer operations.
+    if (joint.axis.x() == 0.0 && joint.axis.y() == 0.0 && joint.axis.z() == 1.0) {
+      ws.axis[i] = rotation.col(2);
+    } else {
+      ws.axis[i] = rotation * joint.axis;
+    }
     rotateAboutAxis(rotation, joint.axis, q[i]);
     ws.joint_pose[i].linear() = rotation;
     ws.joint_pose[i].translation() = position;
