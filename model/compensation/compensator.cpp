@@ -72,17 +72,18 @@ namespace {
 constexpr double kLargestNewtonSlope = 0.5;
 }  // namespace
 
-void Compensator::prepare(JointContext& ctx) {
+void Compensator::prepare(JointContext& ctx, bool continue_path) {
   const Robot& robot = model_.robot();
   checkJointVector(robot, ctx.q, "planned q");
-  computeLoadTorque(model_, mask_, ws_, ctx);
+  forwardKinematicsNear(robot, ws_.robot, ctx.q, joint_anchors_, continue_path);
+  loadTorqueAtCurrentPose(model_, mask_, ws_, ctx);
   // Errors that do not read the command (compliance at ctx.q's load) are the same at every iteration.
   fixed_dq_.setZero(ctx.q.size());
   for (const int i : fixed_effects_) model_.effect(i).addJointError(robot, ctx, fixed_dq_);
 }
 
 FixedPointReport Compensator::compensate(JointContext& ctx, JointVector& reference) {
-  prepare(ctx);
+  prepare(ctx, false);
   ctx.command.resize(ctx.q.size());
   for (Eigen::Index j = 0; j < ctx.q.size(); ++j) ctx.command[j] = ctx.q[j] - fixed_dq_[j];
   anchors_set_ = true;
@@ -91,14 +92,14 @@ FixedPointReport Compensator::compensate(JointContext& ctx, JointVector& referen
 
 FixedPointReport Compensator::compensateFrom(JointContext& ctx, const JointVector& correction_guess,
                                              JointVector& reference) {
-  prepare(ctx);
+  const bool continue_anchors = anchors_set_;
+  prepare(ctx, continue_anchors);
   checkJointVector(model_.robot(), correction_guess, "correction guess");
   ctx.command.resize(ctx.q.size());
   // Without command-dependent errors the answer is closed: the guess has nothing to add.
   for (Eigen::Index j = 0; j < ctx.q.size(); ++j) {
     ctx.command[j] = ctx.q[j] - (iterate_ ? correction_guess[j] : fixed_dq_[j]);
   }
-  const bool continue_anchors = anchors_set_;
   anchors_set_ = true;
   return iterate(ctx, reference, continue_anchors);
 }

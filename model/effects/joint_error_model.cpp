@@ -58,6 +58,11 @@ JointErrorWorkspace::JointErrorWorkspace(const Robot& robot_model)
 
 void computeLoadTorque(const JointErrorModel& model, EffectMask mask, JointErrorWorkspace& ws, JointContext& ctx) {
   forwardKinematics(model.robot(), ws.robot, ctx.q);
+  loadTorqueAtCurrentPose(model, mask, ws, ctx);
+}
+
+void loadTorqueAtCurrentPose(const JointErrorModel& model, EffectMask mask, JointErrorWorkspace& ws,
+                             JointContext& ctx) {
   gravityTorquesAtCurrentPose(model.robot(), ws.robot, ctx.load_torque);
   addNonGravityLoadsAtCurrentPose(model, mask, ws, ctx);
   if (ctx.inertial_torque.size() == ctx.load_torque.size()) ctx.load_torque += ctx.inertial_torque;

@@ -60,6 +60,8 @@ struct JointErrorWorkspace {
 // ctx.load_torque at ctx.q: gravity, payload, minus J^T of the tool wrench, plus the selected loads.
 // Runs forward kinematics at ctx.q into ws.robot.
 void computeLoadTorque(const JointErrorModel& model, EffectMask mask, JointErrorWorkspace& ws, JointContext& ctx);
+// The same at the pose of the last forward kinematics in ws.robot (which must be of ctx.q).
+void loadTorqueAtCurrentPose(const JointErrorModel& model, EffectMask mask, JointErrorWorkspace& ws, JointContext& ctx);
 
 // The same without gravity and without forward kinematics: adds payload, wrench and the selected load
 // effects to ctx.load_torque, at the pose of the last forward kinematics in ws.robot.
