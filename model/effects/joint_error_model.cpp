@@ -85,6 +85,29 @@ void addNonGravityLoadsAtCurrentPose(const JointErrorModel& model, EffectMask ma
   }
 }
 
+bool loadTorqueRateAtCurrentPose(const JointErrorModel& model, EffectMask mask, const JointErrorWorkspace& ws,
+                                 const JointContext& ctx, const JointVector& qd, JointVector& rate) {
+  const Robot& robot = model.robot();
+  rate.setZero(robot.dof());
+  addGravityTorqueRateAtCurrentPose(robot, ws.robot, qd, rate);
+  if (ctx.payload_mass != 0.0) {
+    addPointForceTorqueRateAtCurrentPose(robot, ws.robot, ws.robot.tool_pose * ctx.payload_com,
+                                         -ctx.payload_mass * robot.gravity, qd, rate);
+  }
+  if (!ctx.tool_wrench.isZero(0.0)) {
+    // load_torque -= J^T w: the rate with the opposite wrench.
+    addWrenchTorqueRateAtCurrentPose(robot, ws.robot, -ctx.tool_wrench, qd, rate);
+  }
+  bool known = true;
+  for (int i = 0; i < model.effectCount() && known; ++i) {
+    const Effect& effect = model.effect(i);
+    if (((mask >> i) & 1U) && effect.role() == EffectRole::Load) {
+      known = effect.addLoadTorqueRate(robot, ws.robot, ctx, qd, rate);
+    }
+  }
+  return known;
+}
+
 void addSelectedJointErrors(const JointErrorModel& model, EffectMask mask, const JointContext& ctx, JointVector& dq) {
   for (int i = 0; i < model.effectCount(); ++i) {
     if (((mask >> i) & 1U) && model.effect(i).role() == EffectRole::JointError) {

@@ -30,9 +30,9 @@ inline void sinCosNear(double angle, bool reuse, SinCosAnchor& anchor, double& s
     } else {
       sin_d = d * (1.0 - d2 * (1.0 / 6.0) *
                              (1.0 - d2 * (1.0 / 20.0) * (1.0 - d2 * (1.0 / 42.0) * (1.0 - d2 * (1.0 / 72.0)))));
-      cos_d_minus_1 = -d2 * (1.0 / 2.0) *
-                      (1.0 - d2 * (1.0 / 12.0) *
-                                 (1.0 - d2 * (1.0 / 30.0) * (1.0 - d2 * (1.0 / 56.0) * (1.0 - d2 * (1.0 / 90.0)))));
+      cos_d_minus_1 =
+          -d2 * (1.0 / 2.0) *
+          (1.0 - d2 * (1.0 / 12.0) * (1.0 - d2 * (1.0 / 30.0) * (1.0 - d2 * (1.0 / 56.0) * (1.0 - d2 * (1.0 / 90.0)))));
     }
     // sin(a + d) = sin a + (sin a (cos d - 1) + cos a sin d): the small correction added last; cosine alike.
     sine = anchor.sin + (anchor.sin * cos_d_minus_1 + anchor.cos * sin_d);
