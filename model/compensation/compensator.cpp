@@ -72,10 +72,17 @@ namespace {
 constexpr double kLargestNewtonSlope = 0.5;
 }  // namespace
 
-void Compensator::prepare(JointContext& ctx, bool continue_path) {
+void Compensator::prepare(JointContext& ctx, bool along_path) {
   const Robot& robot = model_.robot();
   checkJointVector(robot, ctx.q, "planned q");
-  forwardKinematicsNear(robot, ws_.robot, ctx.q, joint_anchors_, continue_path);
+  // compensate() keeps the plain FK (libm's bits, and no anchors to store); compensateFrom() starts the
+  // anchors with its first call.
+  if (along_path) {
+    forwardKinematicsNear(robot, ws_.robot, ctx.q, joint_anchors_, joint_anchors_set_);
+    joint_anchors_set_ = true;
+  } else {
+    forwardKinematics(robot, ws_.robot, ctx.q);
+  }
   loadTorqueAtCurrentPose(model_, mask_, ws_, ctx);
   // Errors that do not read the command (compliance at ctx.q's load) are the same at every iteration.
   fixed_dq_.setZero(ctx.q.size());
@@ -92,9 +99,9 @@ FixedPointReport Compensator::compensate(JointContext& ctx, JointVector& referen
 
 FixedPointReport Compensator::compensateFrom(JointContext& ctx, const JointVector& correction_guess,
                                              JointVector& reference) {
-  const bool continue_anchors = anchors_set_;
-  prepare(ctx, continue_anchors);
+  prepare(ctx, true);
   checkJointVector(model_.robot(), correction_guess, "correction guess");
+  const bool continue_anchors = anchors_set_;
   ctx.command.resize(ctx.q.size());
   // Without command-dependent errors the answer is closed: the guess has nothing to add.
   for (Eigen::Index j = 0; j < ctx.q.size(); ++j) {

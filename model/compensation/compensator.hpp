@@ -40,9 +40,9 @@ public:
   EffectMask mask() const { return mask_; }
 
 private:
-  // Load torque at ctx.q and the command-independent errors into fixed_dq_; continue_path: the joint
-  // angles' anchors of the previous call are a valid start for the forward kinematics' sines.
-  void prepare(JointContext& ctx, bool continue_path);
+  // Load torque at ctx.q and the command-independent errors into fixed_dq_; along_path: the forward
+  // kinematics' sines from the joint angles' anchors (set by the previous call along the path, or here).
+  void prepare(JointContext& ctx, bool along_path);
   // From the start in ctx.command to the fixed point; continue_anchors: the harmonics' anchors of the
   // previous call are a valid start.
   FixedPointReport iterate(JointContext& ctx, JointVector& reference, bool continue_anchors);
@@ -65,7 +65,8 @@ private:
   std::vector<Transmission> transmission_errors_;
   std::vector<TransmissionErrorEffect::Anchor> anchors_;
   bool anchors_set_ = false;         // by an earlier call (each harmonic's sine and cosine at some phase, from libm)
-  JointAngleAnchors joint_anchors_;  // the joint angles' sines and cosines, set with the harmonics' anchors
+  JointAngleAnchors joint_anchors_;  // the joint angles' sines and cosines, by compensateFrom
+  bool joint_anchors_set_ = false;
   std::vector<int> other_command_effects_;
   JointVector fixed_dq_, dq_, slope_;
   // G's nonzero entries row by row, and its diagonal, in place: the iteration reads them without a pointer chase.
