@@ -29,27 +29,38 @@ Compensator::Compensator(const JointErrorModel& model, EffectMask mask, FixedPoi
   }
   // G's nonzero entries row by row (the diagonal and the few couplings of a 6 x 6 matrix).
   const JointMatrix& g = model.gears().motorFromJoint();
-  gear_row_start_.push_back(0);
+  gear_row_start_[0] = 0;
   for (Eigen::Index i = 0; i < g.rows(); ++i) {
     for (Eigen::Index j = 0; j < g.cols(); ++j) {
       if (g(i, j) == 0.0) continue;
-      gear_columns_.push_back(static_cast<int>(j));
-      gear_values_.push_back(g(i, j));
+      gear_columns_[gear_entry_count_] = static_cast<int>(j);
+      gear_values_[gear_entry_count_] = g(i, j);
+      ++gear_entry_count_;
     }
-    gear_row_start_.push_back(static_cast<int>(gear_columns_.size()));
+    gear_row_start_[i + 1] = gear_entry_count_;
+    gear_diagonal_[i] = g(i, i);
+    const int entries = gear_row_start_[i + 1] - gear_row_start_[i];
+    if (entries > 1 || (entries == 1 && gear_columns_[gear_row_start_[i]] != i)) {
+      coupled_rows_[coupled_row_count_++] = static_cast<int>(i);
+    }
   }
 }
 
-// The sums of GearTrain::motorAngles, column by column, without the zero terms (which add nothing but +-0)
-// and without Eigen's general matrix-vector dispatch, which costs more than the product.
+// The sums of GearTrain::motorAngles, column by column from 0.0, without the zero terms (which add nothing
+// but +-0) and without Eigen's general matrix-vector dispatch, which costs more than the product. A row
+// with its diagonal term alone is 0.0 + that term, all rows in one pass the compiler vectorises; the few
+// coupled rows are then summed again in full, so every row has the same bits as the full sum.
 void Compensator::motorAngles(const JointVector& command, JointVector& motor) const {
-  const Eigen::Index n = static_cast<Eigen::Index>(gear_row_start_.size()) - 1;
+  const Eigen::Index n = command.size();
   motor.resize(n);
-  for (Eigen::Index i = 0; i < n; ++i) {
+  const double* in = command.data();
+  double* out = motor.data();
+  for (Eigen::Index i = 0; i < n; ++i) out[i] = 0.0 + gear_diagonal_[i] * in[i];
+  for (int r = 0; r < coupled_row_count_; ++r) {
+    const int i = coupled_rows_[r];
     double sum = 0.0;  // in a register: no store-to-load chain through motor
-    for (int e = gear_row_start_[i]; e < gear_row_start_[i + 1]; ++e)
-      sum += gear_values_[e] * command[gear_columns_[e]];
-    motor[i] = sum;
+    for (int e = gear_row_start_[i]; e < gear_row_start_[i + 1]; ++e) sum += gear_values_[e] * in[gear_columns_[e]];
+    out[i] = sum;
   }
 }
 
@@ -61,17 +72,25 @@ namespace {
 constexpr double kLargestNewtonSlope = 0.5;
 }  // namespace
 
-void Compensator::prepare(JointContext& ctx) {
+void Compensator::prepare(JointContext& ctx, bool along_path) {
   const Robot& robot = model_.robot();
   checkJointVector(robot, ctx.q, "planned q");
-  computeLoadTorque(model_, mask_, ws_, ctx);
+  // compensate() keeps the plain FK (libm's bits, and no anchors to store); compensateFrom() starts the
+  // anchors with its first call.
+  if (along_path) {
+    forwardKinematicsNear(robot, ws_.robot, ctx.q, joint_anchors_, joint_anchors_set_);
+    joint_anchors_set_ = true;
+  } else {
+    forwardKinematics(robot, ws_.robot, ctx.q);
+  }
+  loadTorqueAtCurrentPose(model_, mask_, ws_, ctx);
   // Errors that do not read the command (compliance at ctx.q's load) are the same at every iteration.
   fixed_dq_.setZero(ctx.q.size());
   for (const int i : fixed_effects_) model_.effect(i).addJointError(robot, ctx, fixed_dq_);
 }
 
 FixedPointReport Compensator::compensate(JointContext& ctx, JointVector& reference) {
-  prepare(ctx);
+  prepare(ctx, false);
   ctx.command.resize(ctx.q.size());
   for (Eigen::Index j = 0; j < ctx.q.size(); ++j) ctx.command[j] = ctx.q[j] - fixed_dq_[j];
   anchors_set_ = true;
@@ -80,21 +99,20 @@ FixedPointReport Compensator::compensate(JointContext& ctx, JointVector& referen
 
 FixedPointReport Compensator::compensateFrom(JointContext& ctx, const JointVector& correction_guess,
                                              JointVector& reference) {
-  prepare(ctx);
+  prepare(ctx, true);
   checkJointVector(model_.robot(), correction_guess, "correction guess");
+  const bool continue_anchors = anchors_set_;
   ctx.command.resize(ctx.q.size());
   // Without command-dependent errors the answer is closed: the guess has nothing to add.
   for (Eigen::Index j = 0; j < ctx.q.size(); ++j) {
     ctx.command[j] = ctx.q[j] - (iterate_ ? correction_guess[j] : fixed_dq_[j]);
   }
-  const bool continue_anchors = anchors_set_;
   anchors_set_ = true;
   return iterate(ctx, reference, continue_anchors);
 }
 
 FixedPointReport Compensator::iterate(JointContext& ctx, JointVector& reference, bool continue_anchors) {
   const Robot& robot = model_.robot();
-  const JointMatrix& g = model_.gears().motorFromJoint();
   const Eigen::Index n = ctx.q.size();
   dq_.resize(n);
   slope_.resize(n);
@@ -118,17 +136,26 @@ FixedPointReport Compensator::iterate(JointContext& ctx, JointVector& reference,
       slopes_known = model_.effect(i).addMotorSlope(robot, ctx, slope_) && slopes_known;
     }
     // The stopping test of the plain fixed point: how far its map Q_theo - dQ(command) moves the command.
-    double residual = 0.0, non_finite = 0.0;
-    bool finite = true;
+    // Their sum is finite when every change is (without a branch per joint); only when it is not are the
+    // changes searched for the first that is not (a finite sum's overflow is no such change).
+    double residual = 0.0, change_sum = 0.0;
     for (Eigen::Index j = 0; j < n; ++j) {
       const double next = ctx.q[j] - dq_[j];
       const double change = std::abs(next - ctx.command[j]);
-      if (finite && !std::isfinite(change)) non_finite = change;
-      finite = finite && std::isfinite(change);
       residual = std::max(residual, change);
+      change_sum += change;
       reference[j] = next;
     }
-    report.residual = finite ? residual : non_finite;
+    bool finite = true;
+    for (Eigen::Index j = 0; j < n && !std::isfinite(change_sum); ++j) {
+      const double change = std::abs(reference[j] - ctx.command[j]);
+      if (!std::isfinite(change)) {
+        finite = false;
+        residual = change;
+        break;
+      }
+    }
+    report.residual = residual;
     if (!iterate_ || report.residual <= options_.tolerance) {
       report.converged = finite;
       break;
@@ -137,7 +164,7 @@ FixedPointReport Compensator::iterate(JointContext& ctx, JointVector& reference,
     // Newton on each joint: the error of joint j moves with its command by slope_j * G_jj (through its own
     // motor; a coupled motor's other terms are left to the iteration, which they slow only by their size).
     for (Eigen::Index j = 0; j < n; ++j) {
-      const double error_per_command = slopes_known ? slope_[j] * g(j, j) : 0.0;
+      const double error_per_command = slopes_known ? slope_[j] * gear_diagonal_[j] : 0.0;
       const double step = reference[j] - ctx.command[j];
       // (not a number fails the test: the plain step)
       ctx.command[j] += std::abs(error_per_command) <= kLargestNewtonSlope ? step / (1.0 + error_per_command) : step;

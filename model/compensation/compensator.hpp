@@ -6,10 +6,12 @@
 // form), stopping when the fixed-point map moves the reference by no more than the tolerance.
 #pragma once
 
+#include <array>
 #include <vector>
 
 #include "model/effects/joint_error_model.hpp"
 #include "model/effects/transmission_error.hpp"
+#include "model/robot/kinematics.hpp"
 
 namespace jointcomp {
 
@@ -29,16 +31,18 @@ public:
   // Q_theo less the command-independent errors. Along a dense path the previous point's correction is
   // within a fraction of a microradian of this one's, and one Newton step then meets the tolerance: half
   // the evaluations. The stopping test is the same, so the result is compensate()'s up to rounding. The
-  // harmonics' sines continue from those of the previous call where it was near, so the result depends
-  // on earlier calls at the rounding level (1e-19 rad in the error), not beyond.
+  // harmonics' sines, and the joint angles' in the forward kinematics, continue from those of the previous
+  // call where it was near, so the result depends on earlier calls at the rounding level (1e-19 rad in the
+  // error, 1e-19 in a sine of the pose), not beyond.
   FixedPointReport compensateFrom(JointContext& ctx, const JointVector& correction_guess, JointVector& reference);
 
   const JointErrorModel& model() const { return model_; }
   EffectMask mask() const { return mask_; }
 
 private:
-  // Load torque at ctx.q and the command-independent errors into fixed_dq_.
-  void prepare(JointContext& ctx);
+  // Load torque at ctx.q and the command-independent errors into fixed_dq_; along_path: the forward
+  // kinematics' sines from the joint angles' anchors (set by the previous call along the path, or here).
+  void prepare(JointContext& ctx, bool along_path);
   // From the start in ctx.command to the fixed point; continue_anchors: the harmonics' anchors of the
   // previous call are a valid start.
   FixedPointReport iterate(JointContext& ctx, JointVector& reference, bool continue_anchors);
@@ -60,11 +64,20 @@ private:
   };
   std::vector<Transmission> transmission_errors_;
   std::vector<TransmissionErrorEffect::Anchor> anchors_;
-  bool anchors_set_ = false;  // by an earlier call (each harmonic's sine and cosine at some phase, from libm)
+  bool anchors_set_ = false;         // by an earlier call (each harmonic's sine and cosine at some phase, from libm)
+  JointAngleAnchors joint_anchors_;  // the joint angles' sines and cosines, by compensateFrom
+  bool joint_anchors_set_ = false;
   std::vector<int> other_command_effects_;
   JointVector fixed_dq_, dq_, slope_;
-  std::vector<int> gear_row_start_, gear_columns_;  // G's nonzero entries, row by row
-  std::vector<double> gear_values_;
+  // G's nonzero entries row by row, and its diagonal, in place: the iteration reads them without a pointer chase.
+  int gear_entry_count_ = 0;
+  std::array<int, kMaxJoints + 1> gear_row_start_{};
+  std::array<int, kMaxJoints * kMaxJoints> gear_columns_{};
+  std::array<double, kMaxJoints * kMaxJoints> gear_values_{};
+  std::array<double, kMaxJoints> gear_diagonal_{};
+  // The rows with an entry off the diagonal (a coupled wrist): the others are their diagonal term alone.
+  int coupled_row_count_ = 0;
+  std::array<int, kMaxJoints> coupled_rows_{};
 };
 
 struct TrajectoryCompensationReport {

@@ -13,6 +13,11 @@ JointContext::JointContext(int dof)
 
 void Effect::addLoadTorque(const Robot&, const RobotWorkspace&, JointContext&) const {}
 
+bool Effect::addLoadTorqueRate(const Robot&, const RobotWorkspace&, const JointContext&, const JointVector&,
+                               JointVector&) const {
+  return false;
+}
+
 void Effect::addJointError(const Robot&, const JointContext&, JointVector&) const {}
 
 bool Effect::addMotorSlope(const Robot&, const JointContext&, JointVector&) const { return false; }

@@ -72,6 +72,11 @@ public:
 
   // Load effects: add this effect's contribution to ctx.load_torque (ws holds forward kinematics at ctx.q).
   virtual void addLoadTorque(const Robot& robot, const RobotWorkspace& ws, JointContext& ctx) const;
+  // Load effects: add the rate of this effect's contribution along the joint velocity qd, (d tau/dq) qd, to
+  // `rate` and return true; false when the effect does not know it (the plant's feed-forward then takes a
+  // difference quotient). At ctx.q, with ws at it.
+  virtual bool addLoadTorqueRate(const Robot& robot, const RobotWorkspace& ws, const JointContext& ctx,
+                                 const JointVector& qd, JointVector& rate) const;
   // Joint-error effects: add the predicted link-minus-command error to dq.
   virtual void addJointError(const Robot& robot, const JointContext& ctx, JointVector& dq) const;
   // True when the error depends on ctx.command or ctx.motor (so compensation must iterate on it).

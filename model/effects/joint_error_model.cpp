@@ -58,6 +58,11 @@ JointErrorWorkspace::JointErrorWorkspace(const Robot& robot_model)
 
 void computeLoadTorque(const JointErrorModel& model, EffectMask mask, JointErrorWorkspace& ws, JointContext& ctx) {
   forwardKinematics(model.robot(), ws.robot, ctx.q);
+  loadTorqueAtCurrentPose(model, mask, ws, ctx);
+}
+
+void loadTorqueAtCurrentPose(const JointErrorModel& model, EffectMask mask, JointErrorWorkspace& ws,
+                             JointContext& ctx) {
   gravityTorquesAtCurrentPose(model.robot(), ws.robot, ctx.load_torque);
   addNonGravityLoadsAtCurrentPose(model, mask, ws, ctx);
   if (ctx.inertial_torque.size() == ctx.load_torque.size()) ctx.load_torque += ctx.inertial_torque;
@@ -78,6 +83,29 @@ void addNonGravityLoadsAtCurrentPose(const JointErrorModel& model, EffectMask ma
   for (int i = 0; i < model.effectCount(); ++i) {
     if ((mask >> i) & 1U) model.effect(i).addLoadTorque(robot, ws.robot, ctx);
   }
+}
+
+bool loadTorqueRateAtCurrentPose(const JointErrorModel& model, EffectMask mask, const JointErrorWorkspace& ws,
+                                 const JointContext& ctx, const JointVector& qd, JointVector& rate) {
+  const Robot& robot = model.robot();
+  rate.setZero(robot.dof());
+  addGravityTorqueRateAtCurrentPose(robot, ws.robot, qd, rate);
+  if (ctx.payload_mass != 0.0) {
+    addPointForceTorqueRateAtCurrentPose(robot, ws.robot, ws.robot.tool_pose * ctx.payload_com,
+                                         -ctx.payload_mass * robot.gravity, qd, rate);
+  }
+  if (!ctx.tool_wrench.isZero(0.0)) {
+    // load_torque -= J^T w: the rate with the opposite wrench.
+    addWrenchTorqueRateAtCurrentPose(robot, ws.robot, -ctx.tool_wrench, qd, rate);
+  }
+  bool known = true;
+  for (int i = 0; i < model.effectCount() && known; ++i) {
+    const Effect& effect = model.effect(i);
+    if (((mask >> i) & 1U) && effect.role() == EffectRole::Load) {
+      known = effect.addLoadTorqueRate(robot, ws.robot, ctx, qd, rate);
+    }
+  }
+  return known;
 }
 
 void addSelectedJointErrors(const JointErrorModel& model, EffectMask mask, const JointContext& ctx, JointVector& dq) {

@@ -60,6 +60,13 @@ struct JointErrorWorkspace {
 // ctx.load_torque at ctx.q: gravity, payload, minus J^T of the tool wrench, plus the selected loads.
 // Runs forward kinematics at ctx.q into ws.robot.
 void computeLoadTorque(const JointErrorModel& model, EffectMask mask, JointErrorWorkspace& ws, JointContext& ctx);
+// The same at the pose of the last forward kinematics in ws.robot (which must be of ctx.q).
+void loadTorqueAtCurrentPose(const JointErrorModel& model, EffectMask mask, JointErrorWorkspace& ws, JointContext& ctx);
+// The rate of that load torque along the joint velocity qd, (d load_torque / dq) qd, into `rate` (ctx's
+// inertial torque held), at the last forward kinematics in ws.robot (of ctx.q); false when a selected load
+// effect does not know its rate (`rate` is then incomplete).
+bool loadTorqueRateAtCurrentPose(const JointErrorModel& model, EffectMask mask, const JointErrorWorkspace& ws,
+                                 const JointContext& ctx, const JointVector& qd, JointVector& rate);
 
 // The same without gravity and without forward kinematics: adds payload, wrench and the selected load
 // effects to ctx.load_torque, at the pose of the last forward kinematics in ws.robot.

@@ -7,6 +7,7 @@
 #include "model/common/errors.hpp"
 #include "model/common/json_fields.hpp"
 #include "model/effects/joint_error_model.hpp"
+#include "model/robot/dynamics.hpp"
 #include "model/robot/kinematics.hpp"
 
 namespace jointcomp {
@@ -39,6 +40,14 @@ void PayloadEffect::addTorque(const Robot& robot, const RobotWorkspace& ws, doub
 void PayloadEffect::addLoadTorque(const Robot& robot, const RobotWorkspace& ws, JointContext& ctx) const {
   if (mass_ == 0.0) return;
   addTorque(robot, ws, mass_, com_, ctx.load_torque);
+}
+
+bool PayloadEffect::addLoadTorqueRate(const Robot& robot, const RobotWorkspace& ws, const JointContext&,
+                                      const JointVector& qd, JointVector& rate) const {
+  if (mass_ != 0.0) {
+    addPointForceTorqueRateAtCurrentPose(robot, ws, ws.tool_pose * com_, -mass_ * robot.gravity, qd, rate);
+  }
+  return true;
 }
 
 std::vector<std::string> PayloadEffect::parameterNames() const {

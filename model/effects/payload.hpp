@@ -26,6 +26,8 @@ public:
   std::string type() const override { return kType; }
   EffectRole role() const override { return EffectRole::Load; }
   void addLoadTorque(const Robot& robot, const RobotWorkspace& ws, JointContext& ctx) const override;
+  bool addLoadTorqueRate(const Robot& robot, const RobotWorkspace& ws, const JointContext& ctx, const JointVector& qd,
+                         JointVector& rate) const override;
   // "payload.mass_kg", "payload.com_x_m", "payload.com_y_m", "payload.com_z_m"
   std::vector<std::string> parameterNames() const override;
   std::vector<double> parameters() const override;

@@ -58,8 +58,27 @@ double SpringBalancerEffect::torque(double q) const {
   return force * length_rate;
 }
 
+// torque = F(L) L' with L' = a b sin(theta) / L: its slope is k L'^2 + F L'', L'' = (a b cos(theta) - L'^2) / L.
+double SpringBalancerEffect::torqueSlope(double q) const {
+  const double a = geometry_.anchor_distance_before_m;
+  const double b = geometry_.anchor_distance_after_m;
+  const double length = springLength(q);
+  if (length < 1e-12) return 0.0;  // as torque(): no lever arm
+  const double force = geometry_.preload_n + geometry_.stiffness_n_per_m * (length - geometry_.free_length_m);
+  const double angle = geometry_.angle_at_zero_rad + q;
+  const double length_rate = a * b * std::sin(angle) / length;
+  const double length_curvature = (a * b * std::cos(angle) - length_rate * length_rate) / length;
+  return geometry_.stiffness_n_per_m * length_rate * length_rate + force * length_curvature;
+}
+
 void SpringBalancerEffect::addLoadTorque(const Robot&, const RobotWorkspace&, JointContext& ctx) const {
   ctx.load_torque[joint_] += torque(ctx.q[joint_]);
+}
+
+bool SpringBalancerEffect::addLoadTorqueRate(const Robot&, const RobotWorkspace&, const JointContext& ctx,
+                                             const JointVector& qd, JointVector& rate) const {
+  rate[joint_] += torqueSlope(ctx.q[joint_]) * qd[joint_];
+  return true;
 }
 
 std::vector<std::string> SpringBalancerEffect::parameterNames() const {

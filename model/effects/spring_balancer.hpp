@@ -28,6 +28,8 @@ public:
   std::string type() const override { return kType; }
   EffectRole role() const override { return EffectRole::Load; }
   void addLoadTorque(const Robot& robot, const RobotWorkspace& ws, JointContext& ctx) const override;
+  bool addLoadTorqueRate(const Robot& robot, const RobotWorkspace& ws, const JointContext& ctx, const JointVector& qd,
+                         JointVector& rate) const override;
   std::vector<std::string> parameterNames() const override;
   std::vector<double> parameters() const override;
   void setParameters(const std::vector<double>& values) override;
@@ -39,6 +41,8 @@ public:
   double potentialEnergy(double q) const;
   // dV/dq: what the spring adds to the torque the joint carries.
   double torque(double q) const;
+  // d(torque)/dq.
+  double torqueSlope(double q) const;
 
 private:
   int joint_;

@@ -94,32 +94,8 @@ void TransmissionErrorEffect::addJointErrorAndMotorSlope(const JointContext& ctx
     const Harmonic& h = harmonics_[i];
     Anchor& anchor = anchors[i];
     const double phase = ctx.motor[h.joint] * phase_per_motor_[i] + h.phase_rad;
-    const double d = phase - anchor.phase;
     double sine, cosine;
-    const double distance = std::abs(d);
-    if (reuse_anchors && distance <= kNearAnchor) {
-      // Within 1/16 rad, Taylor terms to d^9 (sine) and d^10 (cosine) leave less than 1e-20; within 1/128
-      // rad (one point's iterations), terms to d^5 and d^6 leave less than 4e-19.
-      const double d2 = d * d;
-      double sin_d, cos_d_minus_1;
-      if (distance <= 0.0078125) {
-        sin_d = d * (1.0 - d2 * (1.0 / 6.0) * (1.0 - d2 * (1.0 / 20.0)));
-        cos_d_minus_1 = -d2 * (1.0 / 2.0) * (1.0 - d2 * (1.0 / 12.0) * (1.0 - d2 * (1.0 / 30.0)));
-      } else {
-        sin_d = d * (1.0 - d2 * (1.0 / 6.0) *
-                               (1.0 - d2 * (1.0 / 20.0) * (1.0 - d2 * (1.0 / 42.0) * (1.0 - d2 * (1.0 / 72.0)))));
-        cos_d_minus_1 = -d2 * (1.0 / 2.0) *
-                        (1.0 - d2 * (1.0 / 12.0) *
-                                   (1.0 - d2 * (1.0 / 30.0) * (1.0 - d2 * (1.0 / 56.0) * (1.0 - d2 * (1.0 / 90.0)))));
-      }
-      // sin(a + d) = sin a + (sin a (cos d - 1) + cos a sin d): the small correction added last; cosine alike.
-      sine = anchor.sin + (anchor.sin * cos_d_minus_1 + anchor.cos * sin_d);
-      cosine = anchor.cos + (anchor.cos * cos_d_minus_1 - anchor.sin * sin_d);
-    } else {
-      sine = std::sin(phase);
-      cosine = std::cos(phase);
-      anchor = {phase, sine, cosine};
-    }
+    sinCosNear(phase, reuse_anchors, anchor, sine, cosine);
     dq[h.joint] += h.amplitude_rad * sine;
     slope[h.joint] += h.amplitude_rad * phase_per_motor_[i] * cosine;
   }

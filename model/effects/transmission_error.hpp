@@ -8,6 +8,7 @@
 #include "model/effects/discovery_family.hpp"
 #include "model/effects/effect.hpp"
 #include "model/effects/gear_train.hpp"
+#include "model/robot/sin_cos_near.hpp"
 
 namespace jointcomp {
 
@@ -38,10 +39,8 @@ public:
   // its anchor gets its sine and cosine by the angle-addition formula with Taylor series of the difference
   // (no libm call), the others are re-anchored. The same values as addJointError and addMotorSlope to
   // rounding (a few 1e-20 rad).
-  struct Anchor {
-    double phase = 0.0, sin = 0.0, cos = 1.0;
-  };
-  static constexpr double kNearAnchor = 0.0625;  // rad of phase
+  using Anchor = SinCosAnchor;                              // its angle is the harmonic's phase
+  static constexpr double kNearAnchor = kSinCosNearAnchor;  // rad of phase
   void addJointErrorAndMotorSlope(const JointContext& ctx, Anchor* anchors, bool reuse_anchors, JointVector& dq,
                                   JointVector& slope) const;
   // For the plant's right-hand side: addJointError and addMotorSlope in one pass with their own arithmetic

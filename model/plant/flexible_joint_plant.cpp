@@ -447,10 +447,14 @@ void FlexibleJointPlant::setReference(const JointVector& position, const JointVe
   reference_velocity_ = velocity;
   reference_time_ = time_;
   staticFeedforward(position, feedforward_);
-  constexpr double kRateStep = 1e-4;  // s
-  JointVector ahead;
-  staticFeedforward(position + velocity * kRateStep, ahead);
-  feedforward_rate_ = (ahead - feedforward_) / kRateStep;
+  // Its rate along the motion in closed form at the same pose; a difference quotient only when a load effect
+  // does not know its rate.
+  if (!loadTorqueRateAtCurrentPose(truth_, load_mask_, ws_, ctx_, velocity, feedforward_rate_)) {
+    constexpr double kRateStep = 1e-4;  // s
+    JointVector ahead;
+    staticFeedforward(position + velocity * kRateStep, ahead);
+    feedforward_rate_ = (ahead - feedforward_) / kRateStep;
+  }
   // The new extrapolation takes over from the old one over the interval the last update took (the next
   // one is expected as long); a second update at the same time keeps the blend's duration.
   if (!options_.smooth_reference) {

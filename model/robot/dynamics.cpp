@@ -2,6 +2,7 @@
 // coordinates, which keeps the recursions short and lets the mass matrix use composite bodies directly.
 #include "model/robot/dynamics.hpp"
 
+#include <array>
 #include <cmath>
 
 #include "model/common/errors.hpp"
@@ -102,6 +103,73 @@ void gravityTorquesAtCurrentPose(const Robot& robot, RobotWorkspace& ws, JointVe
     distal_moment += m * ws.com[i];
     tau[i] = -ws.axis[i].dot((distal_moment - distal_mass * ws.origin[i]).cross(robot.gravity));
   }
+}
+
+namespace {
+
+// The velocities the torque rates need, from the last forward kinematics and qd: each axis turns with the
+// bodies before its joint, each joint origin moves with them (a joint's own rotation moves neither).
+struct ChainRates {
+  std::array<Eigen::Vector3d, kMaxJoints> axis_rate;        // d(axis_i)/dt
+  std::array<Eigen::Vector3d, kMaxJoints> origin_velocity;  // d(o_i)/dt
+  std::array<Eigen::Vector3d, kMaxJoints> omega;            // angular velocity of body i
+};
+
+void chainRates(const Robot& robot, const RobotWorkspace& ws, const JointVector& qd, ChainRates& rates) {
+  Eigen::Vector3d omega = Eigen::Vector3d::Zero();
+  Eigen::Vector3d velocity = Eigen::Vector3d::Zero();  // of the previous joint's origin (the base's is still)
+  for (int i = 0; i < robot.dof(); ++i) {
+    if (i > 0) velocity += omega.cross(ws.origin[i] - ws.origin[i - 1]);
+    rates.origin_velocity[i] = velocity;
+    rates.axis_rate[i] = omega.cross(ws.axis[i]);
+    omega += ws.axis[i] * qd[i];
+    rates.omega[i] = omega;
+  }
+}
+
+}  // namespace
+
+void addGravityTorqueRateAtCurrentPose(const Robot& robot, const RobotWorkspace& ws, const JointVector& qd,
+                                       JointVector& rate) {
+  requireInertials(robot);
+  ChainRates rates;
+  chainRates(robot, ws, qd, rates);
+  // tau_i = -axis_i . (lever_i x g), lever_i = sum_{j >= i} m_j (c_j - o_i): the product rule on both factors.
+  double distal_mass = 0.0;
+  Eigen::Vector3d distal_moment = Eigen::Vector3d::Zero(), distal_moment_rate = Eigen::Vector3d::Zero();
+  for (int i = robot.dof() - 1; i >= 0; --i) {
+    const double m = robot.joints[i].body.mass;
+    const Eigen::Vector3d com_velocity = rates.origin_velocity[i] + rates.omega[i].cross(ws.com[i] - ws.origin[i]);
+    distal_mass += m;
+    distal_moment += m * ws.com[i];
+    distal_moment_rate += m * com_velocity;
+    const Eigen::Vector3d lever = distal_moment - distal_mass * ws.origin[i];
+    const Eigen::Vector3d lever_rate = distal_moment_rate - distal_mass * rates.origin_velocity[i];
+    rate[i] -= rates.axis_rate[i].dot(lever.cross(robot.gravity)) + ws.axis[i].dot(lever_rate.cross(robot.gravity));
+  }
+}
+
+void addPointForceTorqueRateAtCurrentPose(const Robot& robot, const RobotWorkspace& ws, const Eigen::Vector3d& point,
+                                          const Eigen::Vector3d& force, const JointVector& qd, JointVector& rate) {
+  const int n = robot.dof();
+  if (n == 0) return;
+  ChainRates rates;
+  chainRates(robot, ws, qd, rates);
+  const Eigen::Vector3d point_velocity =
+      rates.origin_velocity[n - 1] + rates.omega[n - 1].cross(point - ws.origin[n - 1]);
+  // tau_i = axis_i . ((p - o_i) x f).
+  for (int i = 0; i < n; ++i) {
+    rate[i] += rates.axis_rate[i].dot((point - ws.origin[i]).cross(force)) +
+               ws.axis[i].dot((point_velocity - rates.origin_velocity[i]).cross(force));
+  }
+}
+
+void addWrenchTorqueRateAtCurrentPose(const Robot& robot, const RobotWorkspace& ws, const Vector6& wrench,
+                                      const JointVector& qd, JointVector& rate) {
+  addPointForceTorqueRateAtCurrentPose(robot, ws, ws.tool_pose.translation(), wrench.head<3>(), qd, rate);
+  ChainRates rates;
+  chainRates(robot, ws, qd, rates);
+  for (int i = 0; i < robot.dof(); ++i) rate[i] += rates.axis_rate[i].dot(wrench.tail<3>());
 }
 
 void gravityTorques(const Robot& robot, RobotWorkspace& ws, const JointVector& q, JointVector& tau) {

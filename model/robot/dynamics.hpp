@@ -12,6 +12,19 @@ void gravityTorques(const Robot& robot, RobotWorkspace& ws, const JointVector& q
 // The same at the configuration of the last forwardKinematics call.
 void gravityTorquesAtCurrentPose(const Robot& robot, RobotWorkspace& ws, JointVector& tau);
 
+// The rates of static torques along a motion, (d tau / dq) qd, for a feed-forward that follows the motion
+// without a second evaluation at q + qd dt; each at the last forwardKinematics call and added to `rate`.
+// gravityTorquesAtCurrentPose's:
+void addGravityTorqueRateAtCurrentPose(const Robot& robot, const RobotWorkspace& ws, const JointVector& qd,
+                                       JointVector& rate);
+// Those of a force fixed in the base frame acting at a point fixed to the last body (given in the base frame):
+// the rate of J_p^T force, J_p the point's Jacobian (pointJacobian's top rows).
+void addPointForceTorqueRateAtCurrentPose(const Robot& robot, const RobotWorkspace& ws, const Eigen::Vector3d& point,
+                                          const Eigen::Vector3d& force, const JointVector& qd, JointVector& rate);
+// wrenchTorquesAtCurrentPose's, for a wrench fixed in the base frame.
+void addWrenchTorqueRateAtCurrentPose(const Robot& robot, const RobotWorkspace& ws, const Vector6& wrench,
+                                      const JointVector& qd, JointVector& rate);
+
 // Inverse dynamics by recursive Newton-Euler: tau = M(q) qdd + C(q, qd) qd + g(q).
 void inverseDynamics(const Robot& robot, RobotWorkspace& ws, const JointVector& q, const JointVector& qd,
                      const JointVector& qdd, JointVector& tau);

@@ -1,6 +1,7 @@
 // Forward kinematics and the geometric Jacobian.
 #pragma once
 
+#include "model/robot/sin_cos_near.hpp"
 #include "model/robot/workspace.hpp"
 
 namespace jointcomp {
@@ -8,6 +9,15 @@ namespace jointcomp {
 // Fills ws.joint_pose, ws.axis, ws.origin, ws.com and ws.tool_pose for the configuration q.
 // Throws InvalidArgument for a q of the wrong size or with non-finite values. Allocates nothing.
 void forwardKinematics(const Robot& robot, RobotWorkspace& ws, const JointVector& q);
+
+// Each joint angle with its sine and cosine, for forwardKinematicsNear (caller-owned, one per path).
+using JointAngleAnchors = std::array<SinCosAnchor, kMaxJoints>;
+// forwardKinematics with each joint's sine and cosine by sinCosNear: with reuse_anchors, a joint within
+// kSinCosNearAnchor of its anchor gets them without libm (along a dense path, where libm's six sincos are a
+// third of the FK), equal to libm's to about 1e-19; without, libm's (the same bits as forwardKinematics) and
+// the anchors move to q. Same checks as forwardKinematics; allocates nothing.
+void forwardKinematicsNear(const Robot& robot, RobotWorkspace& ws, const JointVector& q, JointAngleAnchors& anchors,
+                           bool reuse_anchors);
 
 // Geometric Jacobian of the tool frame at the configuration of the last forwardKinematics call:
 // rows 0-2 map qd to the tool point's linear velocity, rows 3-5 to the angular velocity, base frame.

@@ -25,7 +25,7 @@ int Robot::jointIndex(const std::string& joint_name) const {
   throw InvalidArgument("robot '" + name + "' has no moving joint named '" + joint_name + "'");
 }
 
-void checkJointVector(const Robot& robot, const JointVector& q, const char* what) {
+void throwBadJointVector(const Robot& robot, const JointVector& q, const char* what) {
   if (q.size() != robot.dof()) {
     throw InvalidArgument(std::string(what) + " has " + std::to_string(q.size()) + " values, robot '" + robot.name +
                           "' has " + std::to_string(robot.dof()) + " joints");
@@ -36,6 +36,7 @@ void checkJointVector(const Robot& robot, const JointVector& q, const char* what
                             "') is not finite");
     }
   }
+  throw InvalidArgument(std::string(what) + ": throwBadJointVector called on a good vector (a caller's bug)");
 }
 
 }  // namespace jointcomp

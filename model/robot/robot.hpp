@@ -53,6 +53,15 @@ struct Robot {
 };
 
 // Throws InvalidArgument unless q has the robot's dof and only finite values. `what` names the argument.
-void checkJointVector(const Robot& robot, const JointVector& q, const char* what);
+// Inline, one branch for a good vector: the hot paths check every input (the messages are out of line).
+[[noreturn]] void throwBadJointVector(const Robot& robot, const JointVector& q, const char* what);
+inline void checkJointVector(const Robot& robot, const JointVector& q, const char* what) {
+  if (q.size() == robot.dof()) {
+    double zeros = 0.0;  // q_i * 0 is 0 for every finite q_i and not a number for the others
+    for (Eigen::Index i = 0; i < q.size(); ++i) zeros += q[i] * 0.0;
+    if (zeros == 0.0) return;
+  }
+  throwBadJointVector(robot, q, what);
+}
 
 }  // namespace jointcomp

@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include "effects_test_support.hpp"
+#include "model/effects/payload.hpp"
 #include "model/robot/dynamics.hpp"
 #include "model/robot/kinematics.hpp"
 
@@ -155,4 +156,63 @@ TEST(ToolWrench, PushingUpOnTheToolIsLikeLighterGravity) {
 }
 
 }  // namespace
+// The load torque's rate along a motion (what the plant's feed-forward follows) against central differences
+// of computeLoadTorque at q -+ h qd: gravity, the spring balancer of the parameter file, a payload in the
+// context, a payload effect and a tool wrench together, to 1e-6 of the rate's size; true, all being known.
+TEST(LoadTorqueRate, IsTheDerivativeOfTheLoadTorqueAlongTheMotion) {
+  JointErrorModel model = effects_test::rx170Model();
+  model.addEffect(std::make_unique<PayloadEffect>(model.robot(), 4.0, Eigen::Vector3d(0.02, -0.05, 0.12)));
+  const Robot& robot = model.robot();
+  const EffectMask mask = model.allEffects();
+  std::mt19937 rng(1728u);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  const double h = 1e-6;
+  JointErrorWorkspace ws(robot);
+  for (int sample = 0; sample < 50; ++sample) {
+    JointContext ctx(robot.dof());
+    ctx.q = effects_test::randomConfiguration(robot, rng);
+    ctx.payload_mass = 7.5;
+    ctx.payload_com = Eigen::Vector3d(0.1 * unit(rng), 0.1 * unit(rng), 0.2);
+    for (int k = 0; k < 6; ++k) ctx.tool_wrench[k] = 100.0 * unit(rng);
+    JointVector qd(robot.dof());
+    for (int j = 0; j < robot.dof(); ++j) qd[j] = 2.0 * unit(rng);
+    JointContext plus = ctx, minus = ctx;
+    plus.q += h * qd;
+    minus.q -= h * qd;
+    const JointVector expected = (loadTorque(model, mask, plus) - loadTorque(model, mask, minus)) / (2.0 * h);
+    computeLoadTorque(model, mask, ws, ctx);
+    JointVector rate;
+    ASSERT_TRUE(loadTorqueRateAtCurrentPose(model, mask, ws, ctx, qd, rate));
+    const double scale = std::max(1.0, expected.cwiseAbs().maxCoeff());
+    EXPECT_LT((rate - expected).cwiseAbs().maxCoeff(), 1e-6 * scale) << "sample " << sample;
+  }
+}
+
+// A load effect that does not know its rate: the model says so (the plant then takes a difference quotient).
+TEST(LoadTorqueRate, AnEffectWithoutItsRateIsReported) {
+  struct ConstantLoad : Effect {
+    std::string type() const override { return "constant_load"; }
+    EffectRole role() const override { return EffectRole::Load; }
+    void addLoadTorque(const Robot&, const RobotWorkspace&, JointContext& ctx) const override {
+      ctx.load_torque[0] += 1.0;
+    }
+    std::vector<std::string> parameterNames() const override { return {}; }
+    std::vector<double> parameters() const override { return {}; }
+    void setParameters(const std::vector<double>&) override {}
+    nlohmann::json toJson() const override { return {{"type", type()}}; }
+    std::unique_ptr<Effect> clone() const override { return std::make_unique<ConstantLoad>(*this); }
+  };
+  JointErrorModel model = effects_test::rx170Model();
+  const EffectMask without = model.allEffects();
+  model.addEffect(std::make_unique<ConstantLoad>());
+  JointErrorWorkspace ws(model.robot());
+  JointContext ctx(model.robot().dof());
+  ctx.q = JointVector::Constant(6, 0.3);
+  computeLoadTorque(model, model.allEffects(), ws, ctx);
+  JointVector rate;
+  const JointVector qd = JointVector::Constant(6, 0.5);
+  EXPECT_FALSE(loadTorqueRateAtCurrentPose(model, model.allEffects(), ws, ctx, qd, rate));
+  EXPECT_TRUE(loadTorqueRateAtCurrentPose(model, without, ws, ctx, qd, rate));
+}
+
 }  // namespace jointcomp

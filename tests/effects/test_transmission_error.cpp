@@ -246,7 +246,7 @@ TEST(TransmissionError, AnchoredValueAndSlopeMatchTheDirectSums) {
       const std::vector<TransmissionErrorEffect::Anchor> before = anchors;
       JointVector dq = JointVector::Zero(robot.dof()), slope = JointVector::Zero(robot.dof());
       effect.addJointErrorAndMotorSlope(moved, anchors.data(), move != 0.0, dq, slope);
-      for (std::size_t i = 0; i < anchors.size(); ++i) reanchored += move != 0.0 && anchors[i].phase != before[i].phase;
+      for (std::size_t i = 0; i < anchors.size(); ++i) reanchored += move != 0.0 && anchors[i].angle != before[i].angle;
       JointVector direct = JointVector::Zero(robot.dof()), direct_slope = JointVector::Zero(robot.dof());
       effect.addJointError(robot, moved, direct);
       ASSERT_TRUE(effect.addMotorSlope(robot, moved, direct_slope));

@@ -415,6 +415,53 @@ TEST(Dynamics, PayloadGravityIsTheWrenchOfItsWeight) {
   }
 }
 
+// The torque rates along a motion, (d tau / dq) qd, against central differences of the torques at
+// q -+ h qd (h = 1e-6, truncation about 1e-12 of the values): gravity, a force at a point of the last body
+// (J_p^T f through pointJacobian) and a tool wrench, to 1e-6 of the rate's size.
+TEST(Dynamics, StaticTorqueRatesAreTheDerivativesAlongTheMotion) {
+  for (const Robot* robot : bothRobots()) {
+    RobotWorkspace ws(*robot);
+    std::mt19937 rng(1727u);
+    const double h = 1e-6;
+    for (int sample = 0; sample < 50; ++sample) {
+      const JointVector q = testing_support::randomConfiguration(*robot, rng);
+      const JointVector qd = testing_support::randomVector(robot->dof(), rng, 2.0);
+      const Eigen::Vector3d offset = testing_support::randomVector(3, rng, 0.3).head<3>();
+      const Eigen::Vector3d force = testing_support::randomVector(3, rng, 200.0).head<3>();
+      Vector6 wrench;
+      for (int k = 0; k < 6; ++k) wrench[k] = testing_support::randomVector(1, rng, 200.0)[0];
+      // The three torques at a configuration, the point fixed to the tool at `offset` in the tool frame.
+      const auto torques = [&](const JointVector& at, JointVector& gravity, JointVector& point, JointVector& tool) {
+        gravityTorques(*robot, ws, at, gravity);
+        Jacobian jacobian;
+        pointJacobian(*robot, ws, ws.tool_pose * offset, jacobian);
+        point = jacobian.topRows<3>().transpose() * force;
+        wrenchTorquesAtCurrentPose(*robot, ws, wrench, tool);
+      };
+      JointVector g_plus, p_plus, w_plus, g_minus, p_minus, w_minus, unused_g, unused_p, unused_w;
+      torques(q + h * qd, g_plus, p_plus, w_plus);
+      torques(q - h * qd, g_minus, p_minus, w_minus);
+      torques(q, unused_g, unused_p, unused_w);  // the pose the rates are taken at
+      JointVector gravity_rate = JointVector::Zero(robot->dof());
+      JointVector point_rate = JointVector::Zero(robot->dof());
+      JointVector wrench_rate = JointVector::Constant(robot->dof(), 1.0);  // added to: starts at 1
+      addGravityTorqueRateAtCurrentPose(*robot, ws, qd, gravity_rate);
+      addPointForceTorqueRateAtCurrentPose(*robot, ws, ws.tool_pose * offset, force, qd, point_rate);
+      addWrenchTorqueRateAtCurrentPose(*robot, ws, wrench, qd, wrench_rate);
+      const JointVector gravity_expected = (g_plus - g_minus) / (2.0 * h);
+      const JointVector point_expected = (p_plus - p_minus) / (2.0 * h);
+      const JointVector wrench_expected = (w_plus - w_minus) / (2.0 * h) + JointVector::Constant(robot->dof(), 1.0);
+      const auto scale = [](const JointVector& v) { return std::max(1.0, v.cwiseAbs().maxCoeff()); };
+      EXPECT_LT((gravity_rate - gravity_expected).cwiseAbs().maxCoeff(), 1e-6 * scale(gravity_expected))
+          << robot->name << " sample " << sample;
+      EXPECT_LT((point_rate - point_expected).cwiseAbs().maxCoeff(), 1e-6 * scale(point_expected))
+          << robot->name << " sample " << sample;
+      EXPECT_LT((wrench_rate - wrench_expected).cwiseAbs().maxCoeff(), 1e-6 * scale(wrench_expected))
+          << robot->name << " sample " << sample;
+    }
+  }
+}
+
 TEST(Dynamics, MissingInertialThrowsOnEveryDynamicsCallNamingTheLink) {
   const Robot robot = loadRobotFromUrdfFile(testing_support::urdfTestFile("missing_inertial.urdf"));
   ASSERT_FALSE(robot.hasInertials());

@@ -245,6 +245,81 @@ TEST(ForwardKinematics, NonFiniteConfigurationThrowsInvalidArgumentNamingTheJoin
   EXPECT_THROW(forwardKinematics(robot, ws, q), InvalidArgument);
 }
 
+// The check's one-branch test (the sum of q_i * 0) against the values it must pass and stop: the largest
+// finite values pass (their products with 0 are 0, their sum too), every non-finite value at every joint
+// stops, named by its joint.
+TEST(ForwardKinematics, CheckPassesEveryFiniteValueAndStopsEveryOtherAtEveryJoint) {
+  const Robot& robot = testing_support::rx170();
+  RobotWorkspace ws(robot);
+  const double largest = std::numeric_limits<double>::max();
+  for (const double value : {largest, -largest, std::numeric_limits<double>::denorm_min(), -0.0}) {
+    const JointVector q = JointVector::Constant(6, value);
+    EXPECT_NO_THROW(checkJointVector(robot, q, "q")) << value;
+  }
+  for (int joint = 0; joint < 6; ++joint) {
+    for (const double bad : {std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::infinity(),
+                             -std::numeric_limits<double>::infinity()}) {
+      JointVector q = JointVector::Constant(6, 0.5);
+      q[joint] = bad;
+      try {
+        forwardKinematics(robot, ws, q);
+        ADD_FAILURE() << "no exception for " << bad << " at joint " << joint;
+      } catch (const InvalidArgument& error) {
+        EXPECT_THAT(error.what(), HasSubstr(robot.joints[static_cast<std::size_t>(joint)].name));
+      }
+    }
+  }
+}
+
+// forwardKinematicsNear: without reuse, forwardKinematics' bits (and the anchors at q); with reuse, poses
+// within 1e-15 of forwardKinematics' at configurations moved 1e-9 .. 5e-2 rad from the anchors (the
+// Taylor series), and its bits again beyond kSinCosNearAnchor, where every joint is re-anchored by libm.
+TEST(ForwardKinematics, NearAnchorsGivesTheSamePosesWithoutLibm) {
+  for (const Robot* robot : {&testing_support::rx170(), &testing_support::ur10()}) {
+    RobotWorkspace direct(*robot), near(*robot);
+    std::mt19937 rng(1726u);
+    std::uniform_real_distribution<double> unit(-1.0, 1.0);
+    double largest = 0.0;
+    for (int sample = 0; sample < 100; ++sample) {
+      JointAngleAnchors anchors;
+      const JointVector start = testing_support::randomConfiguration(*robot, rng);
+      forwardKinematicsNear(*robot, near, start, anchors, false);
+      forwardKinematics(*robot, direct, start);
+      ASSERT_TRUE(near.tool_pose.matrix() == direct.tool_pose.matrix());
+      for (int j = 0; j < robot->dof(); ++j) {
+        ASSERT_EQ(anchors[static_cast<std::size_t>(j)].angle, start[j]);
+        ASSERT_TRUE(near.com[static_cast<std::size_t>(j)] == direct.com[static_cast<std::size_t>(j)]);
+      }
+      for (const double move : {1e-9, 1e-6, 1e-3, 5e-2, 0.1}) {
+        JointVector q = start;
+        for (int j = 0; j < robot->dof(); ++j) {
+          // At 0.1 every joint moves by 0.07 .. 0.1 rad, beyond kSinCosNearAnchor: libm again.
+          q[j] += move == 0.1 ? 0.07 + 0.03 * std::abs(unit(rng)) : move * unit(rng);
+        }
+        JointAngleAnchors moved_anchors = anchors;
+        forwardKinematicsNear(*robot, near, q, moved_anchors, true);
+        forwardKinematics(*robot, direct, q);
+        if (move == 0.1) {
+          EXPECT_TRUE(near.tool_pose.matrix() == direct.tool_pose.matrix()) << "sample " << sample;
+          for (int j = 0; j < robot->dof(); ++j) EXPECT_EQ(moved_anchors[static_cast<std::size_t>(j)].angle, q[j]);
+          continue;
+        }
+        for (int j = 0; j < robot->dof(); ++j) {
+          EXPECT_EQ(moved_anchors[static_cast<std::size_t>(j)].angle, start[j]);  // kept
+          const std::size_t i = static_cast<std::size_t>(j);
+          largest =
+              std::max(largest, (near.joint_pose[i].matrix() - direct.joint_pose[i].matrix()).cwiseAbs().maxCoeff());
+          largest = std::max(largest, (near.com[i] - direct.com[i]).cwiseAbs().maxCoeff());
+          largest = std::max(largest, (near.axis[i] - direct.axis[i]).cwiseAbs().maxCoeff());
+        }
+        largest = std::max(largest, (near.tool_pose.matrix() - direct.tool_pose.matrix()).cwiseAbs().maxCoeff());
+      }
+    }
+    EXPECT_LT(largest, 1e-15) << robot->name;
+    EXPECT_GT(largest, 0.0) << robot->name << ": the Taylor path was not taken";
+  }
+}
+
 TEST(PoseError, IsThePositionDifferenceAndTheRotationVectorFromTo) {
   std::mt19937 rng(11u);
   std::uniform_real_distribution<double> uniform(-1.0, 1.0);
