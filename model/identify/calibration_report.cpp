@@ -80,26 +80,22 @@ CalibrationRun runCalibration(const JointErrorModel& prior, const std::vector<Me
   auto calibrated_robot = std::make_shared<const Robot>(correctedRobot(prior.robot(), result.estimate));
   std::vector<std::string> left_out;
   JointErrorModel calibrated = calibratedJointErrorModel(prior, calibrated_robot, result, left_out);
-  // Each campaign's residual in its own set-up's frame; the pose analysis on all of them, in one time line.
+  // Each row's residual in its own set-up's frame, from the rows the fit saw; the pose analysis on all of
+  // them, in one time line.
   const MeasurementCampaign whole = concatenateCampaigns(campaigns);
-  std::vector<RowResidual> residual;
+  std::vector<RowResidual> residual = rowResiduals(prior, result.estimate, campaigns, result.setup_of_campaign);
   std::vector<JointVector> pose_q;
   std::vector<Eigen::Vector3d> pose_error;
   std::vector<double> pose_time;
-  std::vector<std::size_t> campaign_rows;
-  std::size_t first = 0;
-  for (std::size_t c = 0; c < campaigns.size(); ++c) {
-    const GeometricParameters own = result.estimate.ofSetUp(result.setup_of_campaign[c]);
-    for (const RowResidual& r : rowResiduals(prior, own, campaigns[c])) {
-      const std::size_t row = first + static_cast<std::size_t>(r.row);
-      pose_q.push_back(whole.command[row]);
-      pose_error.push_back(r.error);
-      pose_time.push_back(whole.time[row]);
-      residual.push_back(r);
-    }
-    campaign_rows.push_back(campaigns[c].size());
-    first += campaigns[c].size();
+  for (std::size_t k = 0; k < residual.size(); ++k) {
+    const std::size_t row = static_cast<std::size_t>(residual[k].row);
+    pose_q.push_back(whole.command[row]);
+    pose_error.push_back(residual[k].error);
+    pose_time.push_back(whole.time[row]);
+    residual[k].row = result.row[k];  // its row in its own campaign, as the report names it
   }
+  std::vector<std::size_t> campaign_rows;
+  for (const MeasurementCampaign& c : campaigns) campaign_rows.push_back(c.size());
   CalibrationRun run{
       std::move(result),       std::move(runs), calibrated_robot,    std::move(calibrated),
       std::move(left_out),     seconds,         std::move(residual), posePredictability(pose_q, pose_error, pose_time),

@@ -1088,24 +1088,19 @@ GeometricCalibrationResult calibrateGeometry(const JointErrorModel& prior,
   return result;
 }
 
-std::vector<RowResidual> rowResiduals(const JointErrorModel& model, const GeometricParameters& parameters,
-                                      const MeasurementCampaign& campaign) {
-  const Robot& robot = model.robot();
+namespace {
+
+// Each prepared row's residual in its set-up's frame, and mapped to the joints.
+std::vector<RowResidual> residualsOf(const Robot& robot, const GeometricParameters& used, const CalibrationData& data) {
   const int n = robot.dof();
-  const GeometricParameterLayout layout(n);
-  const CalibrationData data = prepareCalibrationData(model, campaign);
-  GeometricParameters used = parameters.ofSetUp(0);
-  if (campaign.frame == MeasurementFrame::Base) {
-    used.frame_translation.setZero();
-    used.frame_rotation.setZero();
-  }
+  const GeometricParameterLayout layout(n, used.setUpCount());
   std::vector<RowResidual> out(data.size());
   constexpr double kDamping = 1e-3;  // m per rad
   Eigen::MatrixXd jacobian;
   Eigen::Matrix<double, 3, Eigen::Dynamic> joint_columns(3, n);
   for (std::size_t k = 0; k < data.size(); ++k) {
-    const Eigen::Vector3d predicted =
-        predictMeasurement(robot, used, data.command[k], data.load_torque[k], data.other_error[k], &jacobian);
+    const Eigen::Vector3d predicted = predictMeasurement(robot, used, data.command[k], data.load_torque[k],
+                                                         data.other_error[k], &jacobian, data.setup[k]);
     RowResidual& r = out[k];
     r.row = data.row[k];
     r.error = data.measured[k] - predicted;
@@ -1117,6 +1112,38 @@ std::vector<RowResidual> rowResiduals(const JointErrorModel& model, const Geomet
     r.joint_error = joint_columns.transpose() * gram.ldlt().solve(r.error);
   }
   return out;
+}
+
+// In the base frame there is no frame: whatever the parameters hold, the rows are predicted without one.
+GeometricParameters withoutFrames(GeometricParameters used) {
+  used.frame_translation.setZero();
+  used.frame_rotation.setZero();
+  for (GeometricParameters::SetUp& other : used.other_setups) {
+    other.frame_translation.setZero();
+    other.frame_rotation.setZero();
+  }
+  return used;
+}
+
+}  // namespace
+
+std::vector<RowResidual> rowResiduals(const JointErrorModel& model, const GeometricParameters& parameters,
+                                      const MeasurementCampaign& campaign) {
+  const CalibrationData data = prepareCalibrationData(model, campaign);
+  const GeometricParameters used = parameters.ofSetUp(0);
+  return residualsOf(model.robot(), campaign.frame == MeasurementFrame::Base ? withoutFrames(used) : used, data);
+}
+
+std::vector<RowResidual> rowResiduals(const JointErrorModel& model, const GeometricParameters& parameters,
+                                      const std::vector<MeasurementCampaign>& campaigns,
+                                      const std::vector<int>& setup_of_campaign) {
+  const CalibrationData data = prepareCalibrationData(model, campaigns, setup_of_campaign);
+  if (parameters.setUpCount() < data.setups) {
+    throw InvalidArgument(data.source + ": parameters of " + std::to_string(parameters.setUpCount()) +
+                          " instrument set-ups for campaigns from " + std::to_string(data.setups));
+  }
+  const bool base = campaigns.front().frame == MeasurementFrame::Base;
+  return residualsOf(model.robot(), base ? withoutFrames(parameters) : parameters, data);
 }
 
 HoldoutEvaluation evaluateOnCampaign(const JointErrorModel& prior, const GeometricParameters& parameters,

@@ -157,6 +157,11 @@ struct RowResidual {
 // The campaign is predicted with the first set-up's frame: pass parameters.ofSetUp(s) for set-up s.
 std::vector<RowResidual> rowResiduals(const JointErrorModel& model, const GeometricParameters& parameters,
                                       const MeasurementCampaign& campaign);
+// The rows of several campaigns as one calibration saw them (prepareCalibrationData's concatenation: `row`
+// indexes it), each in its set-up's frame.
+std::vector<RowResidual> rowResiduals(const JointErrorModel& model, const GeometricParameters& parameters,
+                                      const std::vector<MeasurementCampaign>& campaigns,
+                                      const std::vector<int>& setup_of_campaign);
 
 // Mean, RMS and max of the 3-D error norms (m).
 struct ErrorStatistics {

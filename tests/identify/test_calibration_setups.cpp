@@ -6,6 +6,7 @@
 // better than from one campaign alone.
 #include <algorithm>
 #include <cmath>
+#include <memory>
 #include <set>
 #include <string>
 
@@ -14,6 +15,7 @@
 
 #include "calibration_test_support.hpp"
 #include "model/common/errors.hpp"
+#include "model/effects/backlash.hpp"
 #include "model/identify/calibration_report.hpp"
 
 namespace jointcomp {
@@ -331,6 +333,23 @@ TEST(CalibrationSetUps, TheReportsNameEachCampaignAndSetUp) {
   const std::string csv = calibrationResidualsCsv(run, sources);
   EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 351);
   EXPECT_NE(csv.find("\nB.csv,calibration,149,"), std::string::npos);
+}
+
+TEST(CalibrationSetUps, TheReportedResidualsAreTheRowsTheFitSaw) {
+  // With lost motion in the prior, a row's prediction depends on the moves before it: the second campaign's
+  // first rows remember the first campaign's last move. The reported residual of every row is the fit's.
+  JointErrorModel prior = ur10Model();
+  prior.addEffect(std::make_unique<BacklashEffect>(prior.robot(), std::vector<double>(6, 2e-3)));
+  const TwoSetUps two = simulateTwoSetUps(61);
+  const CalibrationRun run = runCalibration(prior, two.campaigns, {}, {});
+  ASSERT_EQ(run.residual.size(), run.result.error_after.size());
+  for (std::size_t k = 0; k < run.residual.size(); ++k) {
+    EXPECT_NEAR(run.residual[k].error.norm(), run.result.error_after[k], 1e-9) << k;
+    EXPECT_EQ(run.residual[k].row, run.result.row[k]) << k;
+  }
+  // The campaign on its own forgets that move: its first row is predicted otherwise.
+  const std::vector<RowResidual> alone = rowResiduals(prior, run.result.estimate.ofSetUp(1), two.campaigns[1]);
+  EXPECT_GT((alone.front().error - run.residual[200].error).norm(), 1e-6);
 }
 
 }  // namespace
