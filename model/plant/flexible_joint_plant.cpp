@@ -171,13 +171,16 @@ struct StructuredLinearSolver {
   int solve(double* x, const double* b) {
     for (int k = 0; k < n; ++k)
       integral_offset[k] = (b[4 * n + k] - integral_by_p[k] * b[2 * n + k]) / integral_self[k];
-    for (int i = 0; i < 2 * n; ++i) {
-      const int row = i < n ? n + i : 2 * n + i;
-      double value = b[row];
-      for (int k = 0; k < n; ++k) {
-        value -= by_position(i, k) * b[k] + by_motor(i, k) * b[2 * n + k] + by_integral(i, k) * integral_offset[k];
-      }
-      rhs[i] = value;
+    // Column by column (contiguous, so the compiler vectorises it over the rows), each row's sum in the
+    // order of k as before: the same bits as row by row.
+    for (int i = 0; i < 2 * n; ++i) rhs[i] = b[i < n ? n + i : 2 * n + i];
+    double* value = rhs.data();
+    for (int k = 0; k < n; ++k) {
+      const double b_q = b[k], b_p = b[2 * n + k], b_z = integral_offset[k];
+      const double* position = by_position.col(k).data();
+      const double* motor = by_motor.col(k).data();
+      const double* integral = by_integral.col(k).data();
+      for (int i = 0; i < 2 * n; ++i) value[i] -= position[i] * b_q + motor[i] * b_p + integral[i] * b_z;
     }
     solveReduced();
     for (int k = 0; k < n; ++k) {
