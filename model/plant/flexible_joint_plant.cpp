@@ -1,6 +1,7 @@
 #include "model/plant/flexible_joint_plant.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -10,7 +11,6 @@
 #include <nvector/nvector_serial.h>
 #include <sunlinsol/sunlinsol_dense.h>
 #include <sunmatrix/sunmatrix_dense.h>
-#include <Eigen/LU>
 
 #include "model/common/errors.hpp"
 #include "model/effects/compliance.hpp"
@@ -40,7 +40,10 @@ struct StructuredLinearSolver {
   // iteration's solve needs them.
   using Coupling = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::ColMajor, 2 * kMaxJoints, kMaxJoints>;
   Coupling by_position, by_motor, by_integral;
-  Eigen::PartialPivLU<Reduced> lu;
+  // `reduced` holds its own LU factors after a setup (unit-lower L below the diagonal, U on and above), with
+  // the row taken as pivot at each column: a 12x12 by plain loops, a fifth of what Eigen's blocked
+  // PartialPivLU of a dynamic matrix costs at this size (it showed in the profile of the FMU's step).
+  std::array<int, 2 * kMaxJoints> pivot_row{};
   ReducedVector rhs, solution;
   const double* jacobian = nullptr;  // of the last setup, column-major, 5n x 5n; CVODE keeps it unchanged
   double gamma = 0.0;                // until the next setup
@@ -58,7 +61,6 @@ struct StructuredLinearSolver {
         by_position(2 * dof, dof),
         by_motor(2 * dof, dof),
         by_integral(2 * dof, dof),
-        lu(2 * dof),
         rhs(2 * dof),
         solution(2 * dof),
         position_gain(dof),
@@ -107,27 +109,80 @@ struct StructuredLinearSolver {
             at(row, 3 * n + k) + by_motor(i, k) * motor_gain[k] + by_integral(i, k) * integral_by_pd_reduced[k];
       }
     }
-    lu.compute(reduced);
-    const auto pivots = lu.matrixLU().diagonal();
-    for (int i = 0; i < 2 * n; ++i) {
-      if (!(pivots[i] != 0.0) || !std::isfinite(pivots[i])) return last_flag = SUNLS_LUFACT_FAIL;  // recoverable
-    }
+    if (!factorReduced()) return last_flag = SUNLS_LUFACT_FAIL;  // recoverable
     return last_flag = SUNLS_SUCCESS;
+  }
+
+  // Gaussian elimination with partial pivoting (the largest magnitude in the column, the first of equals, as
+  // LAPACK and Eigen choose) in place; false at a pivot that is zero or not finite.
+  bool factorReduced() {
+    const int m = 2 * n;
+    double* a = reduced.data();  // column-major, m x m: entry (i, j) at a[j * m + i]
+    for (int k = 0; k < m; ++k) {
+      double* column = a + static_cast<std::ptrdiff_t>(k) * m;
+      int pivot = k;
+      double largest = std::abs(column[k]);
+      for (int i = k + 1; i < m; ++i) {
+        const double magnitude = std::abs(column[i]);
+        if (magnitude > largest) {
+          largest = magnitude;
+          pivot = i;
+        }
+      }
+      pivot_row[k] = pivot;
+      if (pivot != k) {
+        for (int j = 0; j < m; ++j) std::swap(a[j * m + k], a[j * m + pivot]);
+      }
+      const double diagonal = column[k];
+      if (!(diagonal != 0.0) || !std::isfinite(diagonal)) return false;
+      for (int i = k + 1; i < m; ++i) column[i] /= diagonal;
+      for (int j = k + 1; j < m; ++j) {
+        double* target = a + static_cast<std::ptrdiff_t>(j) * m;
+        const double above = target[k];
+        if (above == 0.0) continue;  // the motor block is mostly zeros; the entries are finite (checked Jacobian)
+        for (int i = k + 1; i < m; ++i) target[i] -= column[i] * above;
+      }
+    }
+    return true;
+  }
+
+  // solution = reduced^-1 rhs by the factors of the last setup; rhs is overwritten.
+  void solveReduced() {
+    const int m = 2 * n;
+    const double* a = reduced.data();
+    double* x = rhs.data();
+    for (int k = 0; k < m; ++k) std::swap(x[k], x[pivot_row[k]]);
+    for (int k = 0; k < m; ++k) {
+      const double value = x[k];
+      if (value == 0.0) continue;
+      const double* column = a + static_cast<std::ptrdiff_t>(k) * m;
+      for (int i = k + 1; i < m; ++i) x[i] -= column[i] * value;
+    }
+    for (int k = m - 1; k >= 0; --k) {
+      const double* column = a + static_cast<std::ptrdiff_t>(k) * m;
+      x[k] /= column[k];
+      const double value = x[k];
+      for (int i = 0; i < k; ++i) x[i] -= column[i] * value;
+    }
+    solution = rhs;
   }
 
   // x and b may be the same vector: every value of b is read before x is written where it was.
   int solve(double* x, const double* b) {
     for (int k = 0; k < n; ++k)
       integral_offset[k] = (b[4 * n + k] - integral_by_p[k] * b[2 * n + k]) / integral_self[k];
-    for (int i = 0; i < 2 * n; ++i) {
-      const int row = i < n ? n + i : 2 * n + i;
-      double value = b[row];
-      for (int k = 0; k < n; ++k) {
-        value -= by_position(i, k) * b[k] + by_motor(i, k) * b[2 * n + k] + by_integral(i, k) * integral_offset[k];
-      }
-      rhs[i] = value;
+    // Column by column (contiguous, so the compiler vectorises it over the rows), each row's sum in the
+    // order of k as before: the same bits as row by row.
+    for (int i = 0; i < 2 * n; ++i) rhs[i] = b[i < n ? n + i : 2 * n + i];
+    double* value = rhs.data();
+    for (int k = 0; k < n; ++k) {
+      const double b_q = b[k], b_p = b[2 * n + k], b_z = integral_offset[k];
+      const double* position = by_position.col(k).data();
+      const double* motor = by_motor.col(k).data();
+      const double* integral = by_integral.col(k).data();
+      for (int i = 0; i < 2 * n; ++i) value[i] -= position[i] * b_q + motor[i] * b_p + integral[i] * b_z;
     }
-    solution = lu.solve(rhs);
+    solveReduced();
     for (int k = 0; k < n; ++k) {
       const double link_rate = solution[k], motor_rate = solution[n + k];
       x[k] = b[k] + position_gain[k] * link_rate;
