@@ -682,7 +682,9 @@ private:
 
   // The fitted rows as `model` predicts them: the campaigns' concatenation, each row with its set-up.
   CalibrationData fittedRows(const JointErrorModel& model) const {
-    return prepareCalibrationData(model, fitted_, setup_of_campaign_);
+    CalibrationData data = prepareCalibrationData(model, campaign_);
+    assignCampaigns(data, fitted_, setup_of_campaign_);
+    return data;
   }
 
   // Errors on the fitted rows, on every held-out campaign (frame re-fitted) and the paths' Ra and Rz.

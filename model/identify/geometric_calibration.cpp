@@ -452,6 +452,7 @@ CalibrationData prepareCalibrationData(const JointErrorModel& prior, const Measu
     data.other_error.push_back(other);
     data.measured.push_back(position);
     data.setup.push_back(0);
+    data.campaign.push_back(0);
   }
   return data;
 }
@@ -619,6 +620,7 @@ CalibrationData setUpRows(const CalibrationData& data, int setup) {
     rows.other_error.push_back(data.other_error[k]);
     rows.measured.push_back(data.measured[k]);
     rows.setup.push_back(0);
+    rows.campaign.push_back(data.campaign[k]);
   }
   return rows;
 }
@@ -911,16 +913,23 @@ void tabulateEstimates(const Robot& robot, const Eigen::VectorXd& nominal_values
 
 }  // namespace
 
-MeasurementCampaign concatenateCampaigns(const std::vector<MeasurementCampaign>& campaigns) {
+void checkCampaignsAgree(const std::vector<MeasurementCampaign>& campaigns) {
   if (campaigns.empty()) throw InvalidArgument("no campaign given");
-  MeasurementCampaign all = campaigns.front();
-  for (std::size_t c = 1; c < campaigns.size(); ++c) {
-    const MeasurementCampaign& m = campaigns[c];
-    if (m.dof != all.dof || m.frame != all.frame || !m.has_position) {
-      throw InvalidArgument("campaign '" + m.source + "' differs from '" + campaigns.front().source +
+  const MeasurementCampaign& first = campaigns.front();
+  for (const MeasurementCampaign& m : campaigns) {
+    if (m.dof != first.dof || m.frame != first.frame || m.has_position != first.has_position) {
+      throw InvalidArgument("campaign '" + m.source + "' differs from '" + first.source +
                             "' in joints, frame (base or instrument) or positions; campaigns used together must "
                             "agree in all three");
     }
+  }
+}
+
+MeasurementCampaign concatenateCampaigns(const std::vector<MeasurementCampaign>& campaigns) {
+  checkCampaignsAgree(campaigns);
+  MeasurementCampaign all = campaigns.front();
+  for (std::size_t c = 1; c < campaigns.size(); ++c) {
+    const MeasurementCampaign& m = campaigns[c];
     const double shift = (all.time.empty() ? 0.0 : all.time.back() + 1.0) - (m.time.empty() ? 0.0 : m.time.front());
     for (std::size_t k = 0; k < m.size(); ++k) {
       all.time.push_back(m.time[k] + shift);
@@ -945,8 +954,7 @@ int InstrumentSetUps::count() const {
 
 InstrumentSetUps instrumentSetUps(const JointErrorModel& prior, const std::vector<MeasurementCampaign>& campaigns,
                                   const GeometricCalibrationOptions& options) {
-  if (campaigns.empty()) throw InvalidArgument("no campaign given");
-  concatenateCampaigns(campaigns);  // the same joints, frame and positions, or a named error
+  checkCampaignsAgree(campaigns);
   InstrumentSetUps setups;
   setups.setup_of_campaign.assign(campaigns.size(), 0);
   setups.frame_of_campaign.assign(campaigns.size(), Eigen::Isometry3d::Identity());
@@ -980,26 +988,39 @@ GeometricCalibrationResult calibrateGeometry(const JointErrorModel& prior, const
   return calibrateGeometry(prior, std::vector<MeasurementCampaign>{campaign}, options);
 }
 
-CalibrationData prepareCalibrationData(const JointErrorModel& prior, const std::vector<MeasurementCampaign>& campaigns,
-                                       const std::vector<int>& setup_of_campaign) {
-  const MeasurementCampaign whole = concatenateCampaigns(campaigns);
-  if (setup_of_campaign.size() != campaigns.size()) {
-    throw InvalidArgument(whole.source + ": " + std::to_string(setup_of_campaign.size()) + " set-ups given for " +
+void assignCampaigns(CalibrationData& data, const std::vector<MeasurementCampaign>& campaigns,
+                     const std::vector<int>& setup_of_campaign) {
+  if (campaigns.empty() || setup_of_campaign.size() != campaigns.size()) {
+    throw InvalidArgument(data.source + ": " + std::to_string(setup_of_campaign.size()) + " set-ups given for " +
                           std::to_string(campaigns.size()) + " campaigns");
   }
-  CalibrationData data = prepareCalibrationData(prior, whole);
-  data.setups = 1 + *std::max_element(setup_of_campaign.begin(), setup_of_campaign.end());
-  for (int s = 0; s < data.setups; ++s) {
-    if (std::find(setup_of_campaign.begin(), setup_of_campaign.end(), s) == setup_of_campaign.end() ||
-        *std::min_element(setup_of_campaign.begin(), setup_of_campaign.end()) < 0) {
-      throw InvalidArgument(whole.source + ": instrument set-ups must be numbered 0, 1, ... without gaps");
+  std::vector<bool> used(campaigns.size(), false);
+  for (int s : setup_of_campaign) {
+    if (s < 0 || s >= static_cast<int>(campaigns.size())) {
+      throw InvalidArgument(data.source + ": instrument set-up " + std::to_string(s) + " of " +
+                            std::to_string(campaigns.size()) + " campaigns");
     }
+    used[static_cast<std::size_t>(s)] = true;
+  }
+  data.setups = 1 + *std::max_element(setup_of_campaign.begin(), setup_of_campaign.end());
+  if (std::find(used.begin(), used.begin() + data.setups, false) != used.begin() + data.setups) {
+    throw InvalidArgument(data.source + ": instrument set-ups must be numbered 0, 1, ... without gaps");
   }
   std::size_t campaign = 0, end = campaigns.front().size();
   for (std::size_t k = 0; k < data.size(); ++k) {
-    while (static_cast<std::size_t>(data.row[k]) >= end) end += campaigns[++campaign].size();
+    while (static_cast<std::size_t>(data.row[k]) >= end) {
+      if (++campaign == campaigns.size()) throw InvalidArgument(data.source + ": a row beyond the campaigns given");
+      end += campaigns[campaign].size();
+    }
     data.setup[k] = setup_of_campaign[campaign];
+    data.campaign[k] = static_cast<int>(campaign);
   }
+}
+
+CalibrationData prepareCalibrationData(const JointErrorModel& prior, const std::vector<MeasurementCampaign>& campaigns,
+                                       const std::vector<int>& setup_of_campaign) {
+  CalibrationData data = prepareCalibrationData(prior, concatenateCampaigns(campaigns));
+  assignCampaigns(data, campaigns, setup_of_campaign);
   return data;
 }
 
@@ -1036,17 +1057,13 @@ GeometricCalibrationResult calibrateGeometry(const JointErrorModel& prior,
   }
   GeometricCalibrationResult result;
   // Each used row's campaign and its row there.
+  std::vector<int> first_row(1, 0);
+  for (const MeasurementCampaign& c : campaigns) first_row.push_back(first_row.back() + static_cast<int>(c.size()));
   std::vector<int> own_row;
-  {
-    std::size_t campaign = 0, first = 0;
-    for (std::size_t k = 0; k < data.size(); ++k) {
-      while (static_cast<std::size_t>(data.row[k]) >= first + campaigns[campaign].size()) {
-        first += campaigns[campaign++].size();
-      }
-      result.campaign_of_row.push_back(static_cast<int>(campaign));
-      own_row.push_back(data.row[k] - static_cast<int>(first));
-    }
+  for (std::size_t k = 0; k < data.size(); ++k) {
+    own_row.push_back(data.row[k] - first_row[static_cast<std::size_t>(data.campaign[k])]);
   }
+  result.campaign_of_row = data.campaign;
   for (const MeasurementCampaign& c : campaigns) result.sources.push_back(c.source);
   result.setup_of_campaign = setup_of_campaign;
   const int rows = static_cast<int>(data.size());

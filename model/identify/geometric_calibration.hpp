@@ -125,6 +125,7 @@ struct CalibrationData {
   std::vector<JointVector> other_error;   // rad, the prior's other joint-error effects
   std::vector<Eigen::Vector3d> measured;  // m, in the campaign's frame
   std::vector<int> setup;                 // instrument set-up of each used row (0 for one campaign)
+  std::vector<int> campaign;              // campaign of each used row (0 for one campaign)
   int setups = 1;
   int skipped_rows = 0;      // rows without a measured position (NaN / empty cells)
   bool torque_known = true;  // false when the robot has no inertials (no compliance then)
@@ -139,6 +140,11 @@ CalibrationData prepareCalibrationData(const JointErrorModel& prior, const Measu
 // its campaign (setup_of_campaign, one per campaign, 0-based and without gaps).
 CalibrationData prepareCalibrationData(const JointErrorModel& prior, const std::vector<MeasurementCampaign>& campaigns,
                                        const std::vector<int>& setup_of_campaign);
+// The same for rows already prepared from the campaigns' concatenation (without copying the campaigns again):
+// each row's campaign and set-up. Throws InvalidArgument for set-ups not numbered 0, 1, ... or rows beyond
+// the campaigns.
+void assignCampaigns(CalibrationData& data, const std::vector<MeasurementCampaign>& campaigns,
+                     const std::vector<int>& setup_of_campaign);
 
 // The predicted instrument reading of a row measured from set-up `setup` and, when `jacobian` is not
 // null, its derivative by every parameter (3 x GeometricParameterLayout(dof, setUpCount()).size()).
@@ -275,8 +281,10 @@ GeometricCalibrationResult calibrateGeometry(const JointErrorModel& prior,
                                              const GeometricCalibrationOptions& options);
 
 // The campaigns as one (rows appended in order, times shifted to stay non-decreasing, sources joined by
-// '+'). Throws InvalidArgument for campaigns of other joint counts, frames or without positions.
+// '+'). Throws InvalidArgument (checkCampaignsAgree) for campaigns of other joint counts, frames or without
+// positions.
 MeasurementCampaign concatenateCampaigns(const std::vector<MeasurementCampaign>& campaigns);
+void checkCampaignsAgree(const std::vector<MeasurementCampaign>& campaigns);
 
 // The nominal parameters a calibration starts from: offsets and compliance (1 / stiffness) of the prior's
 // "offset" and "compliance" effects (zero without them), the campaign's target (zero without one),

@@ -296,6 +296,16 @@ TEST(CalibrationSetUps, CampaignsThatCannotBeCalibratedTogetherAreNamed) {
   few.campaigns[1].payload.resize(2);
   EXPECT_THROW(calibrateGeometry(ur10Model(), few.campaigns), InvalidArgument);
   EXPECT_THROW(calibrateGeometry(ur10Model(), std::vector<MeasurementCampaign>{}), InvalidArgument);
+  // Set-ups given by hand: one per campaign, numbered without gaps.
+  const TwoSetUps fine = simulateTwoSetUps(43);
+  EXPECT_THROW(prepareCalibrationData(ur10Model(), fine.campaigns, {0}), InvalidArgument);
+  EXPECT_THROW(prepareCalibrationData(ur10Model(), fine.campaigns, {0, 2}), InvalidArgument);
+  EXPECT_THROW(prepareCalibrationData(ur10Model(), fine.campaigns, {1, 1}), InvalidArgument);
+  EXPECT_THROW(prepareCalibrationData(ur10Model(), fine.campaigns, {0, -1}), InvalidArgument);
+  const CalibrationData rows = prepareCalibrationData(ur10Model(), fine.campaigns, {0, 1});
+  EXPECT_EQ(rows.setups, 2);
+  EXPECT_EQ(std::count(rows.campaign.begin(), rows.campaign.end(), 1), 150);
+  EXPECT_EQ(rows.setup, rows.campaign);
 }
 
 TEST(CalibrationSetUps, TheReportsNameEachCampaignAndSetUp) {
