@@ -109,6 +109,12 @@ std::vector<std::string> fittedFiles(const CalibrationSources& sources) {
   return sources.campaigns.empty() ? std::vector<std::string>{sources.campaign} : sources.campaigns;
 }
 
+// Fitted campaign c's file as the user named it, or the campaign's own name when the files are not given.
+const std::string& fileOf(const std::vector<std::string>& files, const GeometricCalibrationResult& result,
+                          std::size_t c) {
+  return c < files.size() ? files[c] : result.sources[c];
+}
+
 // The before/after statistics of the rows of fitted campaign `c`.
 std::pair<ErrorStatistics, ErrorStatistics> campaignStatistics(const GeometricCalibrationResult& result, int c) {
   std::vector<double> before, after;
@@ -128,7 +134,7 @@ nlohmann::ordered_json instrumentSetUpsJson(const GeometricCalibrationResult& re
   for (int s = 0; s < result.estimate.setUpCount(); ++s) {
     nlohmann::ordered_json members = nlohmann::ordered_json::array();
     for (std::size_t c = 0; c < result.setup_of_campaign.size(); ++c) {
-      if (result.setup_of_campaign[c] == s) members.push_back(c < files.size() ? files[c] : result.sources[c]);
+      if (result.setup_of_campaign[c] == s) members.push_back(fileOf(files, result, c));
     }
     const GeometricParameters own = result.estimate.ofSetUp(s);
     setups.push_back(
@@ -144,14 +150,18 @@ nlohmann::ordered_json instrumentSetUpsJson(const GeometricCalibrationResult& re
 std::string describeInstrumentSetUps(const GeometricCalibrationResult& result, const std::vector<std::string>& files) {
   const int setups = result.estimate.setUpCount();
   std::ostringstream text;
+  char rule[128];
+  std::snprintf(rule, sizeof(rule), " agree within %.0f mm and %.0f deg share one):", kSameSetUpDistance * 1e3,
+                kSameSetUpAngle * 180.0 / 3.14159265358979323846);
   text << result.setup_of_campaign.size() << " campaigns from " << setups
-       << (setups == 1 ? " instrument set-up (one frame fitted for all)"
-                       : " instrument set-ups, each with its own frame (campaigns whose frames, fitted on the "
-                         "nominal robot, agree within 50 mm and 2 deg share one):");
+       << (setups == 1 ? std::string(" instrument set-up (one frame fitted for all)")
+                       : std::string(" instrument set-ups, each with its own frame (campaigns whose frames, fitted "
+                                     "on the nominal robot,") +
+                             rule);
   for (int s = 0; s < setups && setups > 1; ++s) {
     text << (s ? ";" : "") << " set-up " << s + 1 << ":";
     for (std::size_t c = 0; c < result.setup_of_campaign.size(); ++c) {
-      if (result.setup_of_campaign[c] == s) text << " " << baseName(c < files.size() ? files[c] : result.sources[c]);
+      if (result.setup_of_campaign[c] == s) text << " " << baseName(fileOf(files, result, c));
     }
   }
   return text.str();
@@ -228,7 +238,7 @@ nlohmann::ordered_json calibrationReportJson(const CalibrationRun& run, const Ge
   for (std::size_t c = 0; c < result.sources.size(); ++c) {
     const auto [before, after] =
         several ? campaignStatistics(result, static_cast<int>(c)) : std::make_pair(result.before, result.after);
-    nlohmann::ordered_json entry = {{"file", c < files.size() ? files[c] : result.sources[c]},
+    nlohmann::ordered_json entry = {{"file", fileOf(files, result, c)},
                                     {"role", "calibration"},
                                     {"rows", after.rows},
                                     {"before", errorStatisticsJson(before)},
@@ -263,7 +273,6 @@ std::string calibrationSummary(const CalibrationRun& run, const CalibrationSourc
   std::ostringstream summary;
   summary << "Kinematic calibration of " << run.calibrated_robot->name << " on " << sources.campaign << "\n";
   const std::vector<std::string> files = fittedFiles(sources);
-  auto fileOf = [&](std::size_t c) { return baseName(c < files.size() ? files[c] : result.sources[c]); };
   if (result.sources.size() > 1) summary << describeInstrumentSetUps(result, files) << "\n";
   char line[512];
   std::snprintf(line, sizeof(line),
@@ -283,7 +292,7 @@ std::string calibrationSummary(const CalibrationRun& run, const CalibrationSourc
   if (result.sources.size() > 1) {
     for (std::size_t c = 0; c < result.sources.size(); ++c) {
       const auto [before, after] = campaignStatistics(result, static_cast<int>(c));
-      summary << tableRow(fileOf(c) + " (calibration)", after.rows, before, after);
+      summary << tableRow(baseName(fileOf(files, result, c)) + " (calibration)", after.rows, before, after);
     }
     summary << tableRow("all calibration rows", result.used_rows, result.before, result.after);
   } else {
