@@ -11,6 +11,9 @@
    what a smooth function of the direction from the tracker (harmonics of azimuth and elevation, the form
    of a tracker's encoder and axis errors) takes of it. The campaigns' frame is the tracker's own, origin at
    the tracker head, as in the IPA files.
+5. Two more physical effects of the whole arm: the bearings' runout (each joint's rotating part tilted about
+   the two axes across its own, by harmonics of the joint's angle) and the links' thermal expansion with the
+   measured air temperature; each fitted on A with A's frame and scored on B with B's frame re-fitted.
 
 Usage, after `jointcomp import-ipa` of both series and
 `jointcomp calibrate --urdf model/robots/ur10.urdf --campaign A.csv --holdout B.csv --out DIR`:
@@ -275,6 +278,68 @@ def tracker(a, b, order):
                                                                                                    coefficients)))
 
 
+def runout_columns(q, measured, orders, joints):
+    """Per row 3 x k columns (mm per rad): joint k's rotating part turned about the two axes across its own
+    that turn with it (a bearing's tilt), times cos and sin of each order of the joint's angle."""
+    _, base_to_instrument = instrument_jacobians(q, measured)
+    rotations, origins, tool = frames(q)
+    columns = []
+    for k in joints:
+        c, s = np.cos(q[:, k]), np.sin(q[:, k])
+        across = (rotations[k][:, :, 0] * c[:, None] + rotations[k][:, :, 1] * s[:, None],
+                  rotations[k][:, :, 1] * c[:, None] - rotations[k][:, :, 0] * s[:, None])
+        for axis in across:
+            moved = np.cross(axis, tool - origins[k]) * 1e3 @ base_to_instrument.T
+            for order in orders:
+                for shape in (np.cos(order * q[:, k]), np.sin(order * q[:, k])):
+                    columns.append(moved * shape[:, None])
+    return np.stack(columns, axis=2).reshape(-1, len(columns))
+
+
+def expansion_columns(q, measured, temperature, reference):
+    """One column: every point of the arm moves away from the base by alpha (T - T0) times its distance."""
+    _, base_to_instrument = instrument_jacobians(q, measured)
+    _, _, tool = frames(q)
+    return ((tool * 1e3 @ base_to_instrument.T) * (temperature - reference)[:, None]).reshape(-1, 1)
+
+
+def fitted_on_a_scored_on_b(name, a, b, columns_a, columns_b):
+    """Fits the columns and A's frame on A's residual, then scores B after re-fitting B's frame."""
+    _, ma, _, ra = a
+    _, mb, _, rb = b
+    design = np.hstack([columns_a, frame_columns(ma).reshape(-1, 6)])
+    coefficients = np.linalg.lstsq(design, ra.reshape(-1), rcond=None)[0]
+    left_a = (ra.reshape(-1) - design @ coefficients).reshape(-1, 3)
+    left_b = without_frame((rb.reshape(-1) - columns_b @ coefficients[:columns_b.shape[1]]).reshape(-1, 3), mb)
+    print("   %s: A %.4f -> %.4f mm, B %.4f -> %.4f mm" % (name, rms(ra), rms(left_a), rms(without_frame(rb, mb)),
+                                                        rms(left_b)))
+    return coefficients
+
+
+def whole_arm(a, b, temperatures):
+    qa, ma, _, _ = a
+    qb, mb, _, _ = b
+    print("5. effects of the whole arm, fitted on A, B with its frame re-fitted:")
+    orders, joints = (1, 2), range(6)
+    fitted_on_a_scored_on_b("bearing runout of every joint, orders 1-2 (%d parameters)" % (4 * len(orders) * 6), a, b,
+                            runout_columns(qa, ma, orders, joints), runout_columns(qb, mb, orders, joints))
+    for joint in joints:
+        fitted_on_a_scored_on_b("bearing runout of joint %d alone" % (joint + 1), a, b,
+                                runout_columns(qa, ma, orders, [joint]), runout_columns(qb, mb, orders, [joint]))
+    ta, tb = temperatures
+    reference = np.mean(ta)
+    alpha = fitted_on_a_scored_on_b("thermal expansion (A %.2f-%.2f degC, B %.2f-%.2f degC)" % (
+        ta.min(), ta.max(), tb.min(), tb.max()), a, b, expansion_columns(qa, ma, ta, reference),
+        expansion_columns(qb, mb, tb, reference))[0]
+    print("   expansion coefficient fitted: %.1f ppm/K (aluminium 23)" % (alpha * 1e6))
+
+
+def read_temperatures(path):
+    rows = [line.strip().split(",") for line in open(path) if not line.startswith("#")]
+    column = rows[0].index("temp") if "temp" in rows[0] else None
+    return None if column is None else np.array([float(r[column]) for r in rows[1:]])
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("calibration", help="output folder of jointcomp calibrate (A fitted, B held out)")
@@ -299,6 +364,10 @@ def main():
             sys.exit("--raw-b needs --trafo-b")
         orientations(arguments.raw_b, arguments.trafo_b)
     tracker(a, b, 3)
+    temperatures = (read_temperatures(arguments.series_a), read_temperatures(arguments.series_b))
+    if any(t is None for t in temperatures):
+        sys.exit("both campaigns need their temperature column (jointcomp import-ipa writes it)")
+    whole_arm(a, b, temperatures)
 
 
 if __name__ == "__main__":

@@ -44,5 +44,10 @@ assert best_b < 15.0, best_b               # ...but none helps B much
 assert after_frames > 5.0 * repeat, (after_frames, repeat)  # repeatable, and not kinematic
 assert across_a > 1.5 * along_a, (across_a, along_a)  # A's residual lies across the beam: angles...
 assert tracker_share < 10.0, tracker_share             # ...but not the tracker's: no function of its direction
+runout = [tuple(map(float, m)) for m in re.findall(r"bearing runout of .*: A ([0-9.]+) -> ([0-9.]+) mm, B ([0-9.]+) -> ([0-9.]+) mm", text)]
+assert len(runout) == 7, runout
+assert all(b_after > 0.95 * b_before for _, _, b_before, b_after in runout), runout  # no bearing's tilt carries to B
+thermal = re.search(r"thermal expansion .*: A ([0-9.]+) -> ([0-9.]+) mm", text).groups()
+assert float(thermal[1]) > 0.99 * float(thermal[0]), thermal  # nor the links' expansion with the air temperature
 print("the UR10 study holds")
 PY
