@@ -17,6 +17,12 @@ struct SinCosAnchor {
 // Within this of an anchor, sinCosNear's Taylor terms leave less than 1e-20.
 constexpr double kSinCosNearAnchor = 0.0625;  // rad
 
+// Out of line: inlined, sinCos's code in the rare branch slowed the common one (the compensator along a path).
+[[gnu::noinline]] inline void reanchor(double angle, SinCosAnchor& anchor, double& sine, double& cosine) {
+  sinCos(angle, sine, cosine);
+  anchor = {angle, sine, cosine};
+}
+
 // sin and cos of `angle`. With `reuse` and the angle within kSinCosNearAnchor of the anchor: from the anchor
 // by Taylor terms to d^9 (sine) and d^10 (cosine), which leave less than 1e-20, or within 1/128 rad to d^5
 // and d^6, which leave less than 4e-19; the anchor is kept. Otherwise sinCos's, and the anchor moves there.
@@ -40,8 +46,7 @@ inline void sinCosNear(double angle, bool reuse, SinCosAnchor& anchor, double& s
     sine = anchor.sin + (anchor.sin * cos_d_minus_1 + anchor.cos * sin_d);
     cosine = anchor.cos + (anchor.cos * cos_d_minus_1 - anchor.sin * sin_d);
   } else {
-    sinCos(angle, sine, cosine);
-    anchor = {angle, sine, cosine};
+    reanchor(angle, anchor, sine, cosine);
   }
 }
 
