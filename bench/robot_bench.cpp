@@ -48,6 +48,7 @@
 #include <kdl_parser/kdl_parser.hpp>
 
 #include "bench/support/allocation_counting.hpp"
+#include "model/common/sin_cos.hpp"
 #include "model/robot/dynamics.hpp"
 #include "model/robot/kinematics.hpp"
 #include "model/robot/load_urdf.hpp"
@@ -433,6 +434,52 @@ void BM_Kdl_ForwardKinematics(benchmark::State& state) {
   allocations.report(state);
 }
 
+// The sines and cosines a forward kinematics needs (no KDL pair: KDL calls libm): the joints' six at once by
+// sinCosBatch against six libm sin-and-cos pairs (GCC merges each pair into one sincos call), and one angle
+// by sinCos against libm.
+void BM_Ours_JointSinCos(benchmark::State& state) {
+  BENCH_PROLOGUE;
+  double sines[jointcomp::kMaxJoints], cosines[jointcomp::kMaxJoints];
+  const AllocationCounter allocations;
+  for (auto _ : state) {
+    jointcomp::sinCosBatch(NEXT_SAMPLE.q.data(), n, sines, cosines);
+    benchmark::DoNotOptimize(sines);
+    benchmark::DoNotOptimize(cosines);
+  }
+  allocations.report(state);
+}
+void BM_Libm_JointSinCos(benchmark::State& state) {
+  BENCH_PROLOGUE;
+  double sines[jointcomp::kMaxJoints], cosines[jointcomp::kMaxJoints];
+  for (auto _ : state) {
+    const JointVector& q = NEXT_SAMPLE.q;
+    for (int i = 0; i < n; ++i) {
+      sines[i] = std::sin(q[i]);
+      cosines[i] = std::cos(q[i]);
+    }
+    benchmark::DoNotOptimize(sines);
+    benchmark::DoNotOptimize(cosines);
+  }
+}
+void BM_Ours_SinCos(benchmark::State& state) {
+  BENCH_PROLOGUE;
+  for (auto _ : state) {
+    double sine, cosine;
+    jointcomp::sinCos(NEXT_SAMPLE.q[0], sine, cosine);
+    benchmark::DoNotOptimize(sine);
+    benchmark::DoNotOptimize(cosine);
+  }
+}
+void BM_Libm_SinCos(benchmark::State& state) {
+  BENCH_PROLOGUE;
+  for (auto _ : state) {
+    const double angle = NEXT_SAMPLE.q[0];
+    double sine = std::sin(angle), cosine = std::cos(angle);
+    benchmark::DoNotOptimize(sine);
+    benchmark::DoNotOptimize(cosine);
+  }
+}
+
 // Jacobian from q (KDL's JntToJac runs its own forward kinematics, so ours includes it too).
 void BM_Ours_Jacobian(benchmark::State& state) {
   BENCH_PROLOGUE;
@@ -617,6 +664,10 @@ void BM_Kdl_ForwardDynamics(benchmark::State& state) {
 
 BENCHMARK(BM_Ours_ForwardKinematics);
 BENCHMARK(BM_Kdl_ForwardKinematics);
+BENCHMARK(BM_Ours_JointSinCos);
+BENCHMARK(BM_Libm_JointSinCos);
+BENCHMARK(BM_Ours_SinCos);
+BENCHMARK(BM_Libm_SinCos);
 BENCHMARK(BM_Ours_Jacobian);
 BENCHMARK(BM_Kdl_Jacobian);
 BENCHMARK(BM_Ours_Gravity);

@@ -75,7 +75,7 @@ constexpr double kLargestNewtonSlope = 0.5;
 void Compensator::prepare(JointContext& ctx, bool along_path) {
   const Robot& robot = model_.robot();
   checkJointVector(robot, ctx.q, "planned q");
-  // compensate() keeps the plain FK (libm's bits, and no anchors to store); compensateFrom() starts the
+  // compensate() keeps the plain FK (sinCos's bits, and no anchors to store); compensateFrom() starts the
   // anchors with its first call.
   if (along_path) {
     forwardKinematicsNear(robot, ws_.robot, ctx.q, joint_anchors_, joint_anchors_set_);
@@ -124,7 +124,7 @@ FixedPointReport Compensator::iterate(JointContext& ctx, JointVector& reference,
       dq_[j] = fixed_dq_[j];
       slope_[j] = 0.0;
     }
-    // The harmonics' sines near their anchors without libm: later iterates are within a small angle of
+    // The harmonics' sines near their anchors by the angle-addition formula: later iterates are within a small angle of
     // the first, and along a path (continue_anchors) the first is within one of the previous point's.
     for (const Transmission& transmission : transmission_errors_) {
       transmission.effect->addJointErrorAndMotorSlope(ctx, anchors_.data() + transmission.first_anchor,

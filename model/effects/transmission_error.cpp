@@ -8,6 +8,7 @@
 #include "model/common/errors.hpp"
 #include "model/common/json_fields.hpp"
 #include "model/common/periodogram.hpp"
+#include "model/common/sin_cos.hpp"
 #include "model/effects/joint_error_model.hpp"
 
 namespace jointcomp {
@@ -64,15 +65,18 @@ std::unique_ptr<Effect> TransmissionErrorEffect::fromJson(const nlohmann::json& 
 void TransmissionErrorEffect::addJointError(const Robot&, const JointContext& ctx, JointVector& dq) const {
   for (const Harmonic& h : harmonics_) {
     const double angle = gears_.stageInputAngle(h.joint, h.stage, ctx.motor);
-    dq[h.joint] += h.amplitude_rad * std::sin(h.cycles_per_revolution * angle + h.phase_rad);
+    double sine, cosine;
+    sinCos(h.cycles_per_revolution * angle + h.phase_rad, sine, cosine);
+    dq[h.joint] += h.amplitude_rad * sine;
   }
 }
 
 bool TransmissionErrorEffect::addMotorSlope(const Robot&, const JointContext& ctx, JointVector& slope) const {
   for (const Harmonic& h : harmonics_) {
     const double angle = gears_.stageInputAngle(h.joint, h.stage, ctx.motor);
-    slope[h.joint] += h.amplitude_rad * h.cycles_per_revolution * gears_.stageInputPerMotor(h.joint, h.stage) *
-                      std::cos(h.cycles_per_revolution * angle + h.phase_rad);
+    double sine, cosine;
+    sinCos(h.cycles_per_revolution * angle + h.phase_rad, sine, cosine);
+    slope[h.joint] += h.amplitude_rad * h.cycles_per_revolution * gears_.stageInputPerMotor(h.joint, h.stage) * cosine;
   }
   return true;
 }
@@ -81,10 +85,10 @@ void TransmissionErrorEffect::addJointErrorAndMotorSlope(const JointContext& ctx
                                                          JointVector& slope) const {
   for (const Harmonic& h : harmonics_) {
     const double angle = gears_.stageInputAngle(h.joint, h.stage, ctx.motor);
-    const double phase = h.cycles_per_revolution * angle + h.phase_rad;
-    dq[h.joint] += h.amplitude_rad * std::sin(phase);
-    slope[h.joint] +=
-        h.amplitude_rad * h.cycles_per_revolution * gears_.stageInputPerMotor(h.joint, h.stage) * std::cos(phase);
+    double sine, cosine;
+    sinCos(h.cycles_per_revolution * angle + h.phase_rad, sine, cosine);
+    dq[h.joint] += h.amplitude_rad * sine;
+    slope[h.joint] += h.amplitude_rad * h.cycles_per_revolution * gears_.stageInputPerMotor(h.joint, h.stage) * cosine;
   }
 }
 

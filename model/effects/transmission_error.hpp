@@ -34,10 +34,10 @@ public:
   bool addMotorSlope(const Robot& robot, const JointContext& ctx, JointVector& slope) const override;
   // For the compensator's iterations, whose commands move by small angles: addJointError and
   // addMotorSlope in one pass, keeping each harmonic's phase (argument of the sine) with its sine and cosine
-  // in `anchors` (harmonics().size() of them, caller-owned). With reuse_anchors false, libm's sin and cos
+  // in `anchors` (harmonics().size() of them, caller-owned). With reuse_anchors false, sinCos
   // at every harmonic (the anchors are set); with true, a harmonic whose phase stayed within kNearAnchor of
   // its anchor gets its sine and cosine by the angle-addition formula with Taylor series of the difference
-  // (no libm call), the others are re-anchored. The same values as addJointError and addMotorSlope to
+  // (no sinCos call), the others are re-anchored. The same values as addJointError and addMotorSlope to
   // rounding (a few 1e-20 rad).
   using Anchor = SinCosAnchor;                              // its angle is the harmonic's phase
   static constexpr double kNearAnchor = kSinCosNearAnchor;  // rad of phase

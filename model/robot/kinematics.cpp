@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "model/common/errors.hpp"
+#include "model/common/sin_cos.hpp"
 
 namespace jointcomp {
 namespace {
@@ -62,9 +63,12 @@ void forwardKinematicsWith(const Robot& robot, RobotWorkspace& ws, SinCos sin_co
 
 void forwardKinematics(const Robot& robot, RobotWorkspace& ws, const JointVector& q) {
   checkJointVector(robot, q, "q");
-  forwardKinematicsWith(robot, ws, [&q](int i, double& c, double& s) {
-    c = std::cos(q[i]);
-    s = std::sin(q[i]);
+  // All the joints' sines and cosines at once (vectorised, a pure function of q: no libm call).
+  double sines[kMaxJoints], cosines[kMaxJoints];
+  sinCosBatch(q.data(), robot.dof(), sines, cosines);
+  forwardKinematicsWith(robot, ws, [&sines, &cosines](int i, double& c, double& s) {
+    c = cosines[i];
+    s = sines[i];
   });
 }
 

@@ -6,16 +6,17 @@
 
 namespace jointcomp {
 
-// Fills ws.joint_pose, ws.axis, ws.origin, ws.com and ws.tool_pose for the configuration q.
+// Fills ws.joint_pose, ws.axis, ws.origin, ws.com and ws.tool_pose for the configuration q, with the joints'
+// sines and cosines from sinCosBatch (model/common/sin_cos.hpp: a pure function of q, no libm).
 // Throws InvalidArgument for a q of the wrong size or with non-finite values. Allocates nothing.
 void forwardKinematics(const Robot& robot, RobotWorkspace& ws, const JointVector& q);
 
 // Each joint angle with its sine and cosine, for forwardKinematicsNear (caller-owned, one per path).
 using JointAngleAnchors = std::array<SinCosAnchor, kMaxJoints>;
 // forwardKinematics with each joint's sine and cosine by sinCosNear: with reuse_anchors, a joint within
-// kSinCosNearAnchor of its anchor gets them without libm (along a dense path, where libm's six sincos are a
-// third of the FK), equal to libm's to about 1e-19; without, libm's (the same bits as forwardKinematics) and
-// the anchors move to q. Same checks as forwardKinematics; allocates nothing.
+// kSinCosNearAnchor of its anchor gets them by the angle-addition formula (along a dense path), equal to
+// sinCos's to about 1e-19; without, sinCos's (the same bits as forwardKinematics) and the anchors move to q. Same
+// checks as forwardKinematics; allocates nothing.
 void forwardKinematicsNear(const Robot& robot, RobotWorkspace& ws, const JointVector& q, JointAngleAnchors& anchors,
                            bool reuse_anchors);
 
