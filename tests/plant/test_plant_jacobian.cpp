@@ -367,6 +367,35 @@ TEST(PlantJacobian, StructuredSolverFollowsTheDenseLu) {
   }
 }
 
+// The reuse knobs reach CVODE: on the same move, a fresh Jacobian and Newton matrix every step cost far more
+// Jacobians and setups than the defaults; the end states agree within the tolerances.
+TEST(PlantJacobian, ReuseKnobsReachCvode) {
+  Rx170 rx;
+  std::vector<PlantStatistics> statistics;
+  std::vector<JointVector> ends;
+  for (bool every_step : {true, false}) {
+    PlantOptions options;
+    if (every_step) {
+      options.jacobian_reuse_steps = 1;
+      options.newton_setup_steps = 1;
+    }
+    FlexibleJointPlant plant(rx.model, rx.drives, options);
+    const JointVector start = joints({20.0, 45.0, 70.0, 30.0, 50.0, 10.0});
+    plant.reset(start);
+    const JointVector velocity = joints({30.0, -20.0, 25.0, 60.0, -45.0, 90.0});
+    for (int k = 1; k <= 50; ++k) {
+      plant.setReference(start + velocity * (0.004 * k), velocity);
+      plant.advance(0.004 * k);
+    }
+    statistics.push_back(plant.statistics());
+    ends.push_back(plant.linkPositions());
+  }
+  EXPECT_GE(statistics[0].jacobian_evaluations, statistics[0].steps / 2);
+  EXPECT_LT(statistics[1].jacobian_evaluations, statistics[0].jacobian_evaluations / 4);
+  EXPECT_GT(statistics[0].linear_solver_setups, 2 * statistics[1].linear_solver_setups);
+  EXPECT_LE((ends[0] - ends[1]).cwiseAbs().maxCoeff(), 1e-6);
+}
+
 // A transmission error with an enormous slope and no error of its own: at rest the right-hand side stays
 // finite (the slope multiplies motor rates that are zero), the Jacobian (slope squared) does not.
 class OverflowingSlope : public Effect {
