@@ -17,7 +17,8 @@
 //                                --benchmark_repetitions=5 --benchmark_enable_random_interleaving=true
 //   BM_Ours_PlantRightHandSide   one FlexibleJointPlant::derivative() (link forward dynamics, transmission
 //                                error and its sensitivity, loads, controller)
-//   BM_Ours_PlantJacobian        one FlexibleJointPlant::jacobian() (what CVODE's Newton iterations use)
+//   BM_Ours_PlantJacobian/1      one FlexibleJointPlant::jacobian() (what CVODE's Newton iterations use);
+//                                /0: with the link dynamics' q and qd columns by forward differences (before)
 //   BM_Ours_ForwardDynamics      jointcomp::forwardDynamics
 //   BM_Kdl_ForwardDynamics       KDL::ChainFdSolver_RNE::CartToJnt on the same URDF chain, base_link -> flange
 //
@@ -165,12 +166,19 @@ Fixture& fixture() {
 // ---------------------------------------------------------------------------------------------------
 // The spiral on the plant.
 
+void runSpiralBenchmark(benchmark::State& state, const SpiralExperimentSpec& spec);
+
 void BM_Ours_PlantSpiral(benchmark::State& state) {
-  Fixture& f = fixture();
   SpiralExperimentSpec spec;
-  spec.drives = f.drives;
+  spec.drives = fixture().drives;
   spec.plant.analytic_jacobian = state.range(0) >= 1;
   spec.plant.structured_linear_solver = state.range(0) >= 2;
+  runSpiralBenchmark(state, spec);
+}
+BENCHMARK(BM_Ours_PlantSpiral)->Arg(0)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(3);
+
+void runSpiralBenchmark(benchmark::State& state, const SpiralExperimentSpec& spec) {
+  Fixture& f = fixture();
   double motion = 0.0, simulating = 0.0;
   PlantStatistics total;
   for (auto _ : state) {
@@ -197,7 +205,6 @@ void BM_Ours_PlantSpiral(benchmark::State& state) {
   state.counters["lu_setups"] = static_cast<double>(total.linear_solver_setups) / experiments;
   state.counters["rhs_per_motion_s"] = static_cast<double>(total.rhs_evaluations) / motion;
 }
-BENCHMARK(BM_Ours_PlantSpiral)->Arg(0)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(3);
 
 // The simulation alone, on CPU time: the three runs' references of one experiment (computed before timing)
 // replayed on a plant of the experiment's truth, as runSpiralExperiment drives it. Before timing, the
@@ -206,7 +213,10 @@ void BM_Ours_PlantSpiralSimulation(benchmark::State& state) {
   Fixture& f = fixture();
   SpiralExperimentSpec spec;
   spec.drives = f.drives;
-  static const SpiralExperimentResult experiment = runSpiralExperiment(*f.model, spec);
+  spec.plant.jacobian_reuse_steps = state.range(0);
+  spec.plant.newton_setup_steps = state.range(1);
+  spec.plant.newton_setup_gamma_change = static_cast<double>(state.range(2)) / 100.0;
+  const SpiralExperimentResult experiment = runSpiralExperiment(*f.model, spec);
   const JointErrorModel truth = perturbedModel(*f.model, spec.truth);
   FlexibleJointPlant plant(truth, f.drives, spec.plant);
   const JointTrajectory& planned = experiment.planned;
@@ -231,8 +241,25 @@ void BM_Ours_PlantSpiralSimulation(benchmark::State& state) {
   }
   // Motion seconds per CPU second (a rate over the benchmark's CPU time).
   state.counters["real_time_factor_cpu"] = benchmark::Counter(motion, benchmark::Counter::kIsRate);
+  const PlantStatistics& statistics = experiment.plant_statistics;  // of the whole experiment's three runs
+  state.counters["steps"] = static_cast<double>(statistics.steps);
+  state.counters["rhs_evaluations"] = static_cast<double>(statistics.rhs_evaluations);
+  state.counters["jacobian_evaluations"] = static_cast<double>(statistics.jacobian_evaluations);
+  state.counters["newton_iterations"] = static_cast<double>(statistics.nonlinear_iterations);
+  state.counters["lu_setups"] = static_cast<double>(statistics.linear_solver_setups);
 }
-BENCHMARK(BM_Ours_PlantSpiralSimulation)->Unit(benchmark::kMillisecond)->MinTime(2.0);
+// Arguments: PlantOptions' jacobian_reuse_steps, newton_setup_steps, newton_setup_gamma_change in percent;
+// the defaults first, then CVODE's own (51, 20, 30) and the settings they were chosen against.
+BENCHMARK(BM_Ours_PlantSpiralSimulation)
+    ->Args({200, 40, 60})
+    ->Args({51, 20, 30})
+    ->Args({20, 20, 30})
+    ->Args({1000, 20, 30})
+    ->Args({200, 20, 30})
+    ->Args({100, 20, 60})
+    ->Args({51, 20, 100})
+    ->Unit(benchmark::kMillisecond)
+    ->MinTime(2.0);
 
 // ---------------------------------------------------------------------------------------------------
 // One right-hand side against forward dynamics.
@@ -256,7 +283,9 @@ BENCHMARK(BM_Ours_PlantRightHandSide);
 
 void BM_Ours_PlantJacobian(benchmark::State& state) {
   Fixture& f = fixture();
-  FlexibleJointPlant plant(*f.model, f.drives);
+  PlantOptions options;
+  options.analytic_link_derivatives = state.range(0) != 0;
+  FlexibleJointPlant plant(*f.model, f.drives, options);
   plant.reset(f.samples[0].q);
   std::vector<double> jacobian(static_cast<std::size_t>(plant.stateSize() * plant.stateSize()));
   std::size_t k = 0;
@@ -269,7 +298,7 @@ void BM_Ours_PlantJacobian(benchmark::State& state) {
   }
   allocations.report(state);
 }
-BENCHMARK(BM_Ours_PlantJacobian);
+BENCHMARK(BM_Ours_PlantJacobian)->Arg(0)->Arg(1);
 
 void BM_Ours_ForwardDynamics(benchmark::State& state) {
   Fixture& f = fixture();

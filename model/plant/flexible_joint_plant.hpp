@@ -57,6 +57,19 @@ struct PlantOptions {
   // With that Jacobian, solve CVODE's Newton systems by eliminating the link and motor positions and the
   // integrals (a 2n x 2n LU instead of 5n x 5n); false: SUNDIALS' dense LU (kept to compare against).
   bool structured_linear_solver = true;
+  // In that Jacobian, the link dynamics' q and qd columns by tangent passes of inverse dynamics and the
+  // loads' rates; false: forward differences of the link dynamics (2 n forward dynamics), as before.
+  bool analytic_link_derivatives = true;
+  // How long CVODE keeps a Jacobian and a Newton matrix: a fresh Jacobian at least every jacobian_reuse_steps
+  // steps (CVodeSetJacEvalFrequency, msbj), a new I - gamma J at least every newton_setup_steps steps
+  // (CVodeSetLSetupFrequency, msbp) or once gamma moved by more than newton_setup_gamma_change relative
+  // (CVodeSetDeltaGammaMaxLSetup). CVODE's own 51, 20, 0.3 refresh more often than the plant needs: 200, 40,
+  // 0.6 was the fastest of the 15 settings measured (plant_bench PlantSpiralSimulation: 71.2 -> 67.4 ms CPU,
+  // 418 -> 131 Jacobians, 2494 -> 1183 setups; fmu_bench spiral at 1 ms 270x -> 276x, at 10 ms 617x -> 660x);
+  // 20 or 1000 Jacobian steps were slower (75.2, 80.9 ms: more Newton iterations and steps).
+  long jacobian_reuse_steps = 200;
+  long newton_setup_steps = 40;
+  double newton_setup_gamma_change = 0.6;
   // The reference across an update: true blends the old extrapolation into the new one over the interval
   // since the previous update (a quintic smoothstep), so that the controller's reference is C2 and its
   // feed-forward C1 at every update; false: the reference jumps to the new extrapolation at each update.
@@ -197,6 +210,12 @@ private:
   // Link accelerations for the transmitted torque `spring_torque`: loads, then forward dynamics at q.
   void linkAcceleration(const JointVector& q, const JointVector& qd, const JointVector& spring_torque,
                         JointVector& qdd);
+  // d qdd/dq and d qdd/dqd at fixed transmitted torque into jacobian_scratch_.link_by_q, link_by_qd, after
+  // linkAcceleration(q, qd, ...) gave qdd (its pose and loads still in ws_ and ctx_) and jacobian_scratch_.inverse_mass
+  // holds M^-1: analytically (false when a load does not know its rate), or by forward differences.
+  bool analyticLinkDerivatives(const JointVector& qd, const JointVector& qdd);
+  void linkDerivativesByDifferences(const JointVector& q, const JointVector& qd, const JointVector& spring_torque,
+                                    const JointVector& qdd);
   void staticFeedforward(const JointVector& position, JointVector& torque);
 
   JointErrorModel truth_;
@@ -224,8 +243,9 @@ private:
   PlantStatistics statistics_;
   // The Jacobian's scratch, here so that jacobian() allocates nothing.
   struct JacobianScratch {
-    JointMatrix inverse_mass, spring_by_motor, reaction_by_motor, reaction_by_motor_rate, link_by_q, link_by_qd;
-    JointVector curvature, ahead, behind;
+    JointMatrix inverse_mass, spring_by_motor, reaction_by_motor, reaction_by_motor_rate, link_by_q, link_by_qd,
+        torque_by_q;
+    JointVector curvature, ahead, behind, load_rate, shifted_qdd;
     Eigen::LLT<JointMatrix> mass_llt;
   } jacobian_scratch_;
   std::unique_ptr<Solver> solver_;

@@ -219,6 +219,122 @@ void forwardDynamicsAtCurrentPose(const Robot& robot, RobotWorkspace& ws, const 
   choleskySolveInPlace(ws.mass_factor, qdd);
 }
 
+namespace {
+
+// One tangent (forward-mode) pass of newtonEulerAtCurrentPose, whose results ws holds, along e_joint in q
+// (`pose`) or in qd, at fixed qdd: d tau into `column`. Turning joint j rotates the bodies j..n-1 by axis_j
+// about o_j (their axes beyond j, origins, centres, inertias); the bodies before it keep their pose and
+// rates, so the forward pass starts at it. `pose` a template argument: the rate passes drop the rotation's
+// terms at compile time (a third of the Jacobian's time otherwise).
+template <bool pose, class Column>
+void newtonEulerTangent(const Robot& robot, const RobotWorkspace& ws, const JointVector& qd, const JointVector& qdd,
+                        int joint, Column column) {
+  const int n = robot.dof();
+  const Eigen::Vector3d zero = Eigen::Vector3d::Zero();
+  const Eigen::Vector3d rotation = pose ? ws.axis[joint] : zero;  // of every body from `joint` on
+  std::array<Eigen::Vector3d, kMaxJoints> d_omega, d_omega_dot, d_acc;
+  Eigen::Vector3d d_w = zero, d_w_dot = zero, d_origin_acc = zero;
+  for (int i = joint; i < n; ++i) {
+    const Eigen::Vector3d& omega_before = i > 0 ? ws.omega[i - 1] : zero;
+    const Eigen::Vector3d& omega_dot_before = i > 0 ? ws.omega_dot[i - 1] : zero;
+    Eigen::Vector3d d_axis = zero;
+    if (i > joint) {  // at the joint itself its origin and axis stay, and the tangents before it are zero
+      const Eigen::Vector3d step = ws.origin[i] - ws.origin[i - 1];
+      d_origin_acc += d_w_dot.cross(step) + d_w.cross(omega_before.cross(step)) + omega_before.cross(d_w.cross(step));
+      if (pose) {
+        const Eigen::Vector3d d_step = rotation.cross(step);
+        d_origin_acc += omega_dot_before.cross(d_step) + omega_before.cross(omega_before.cross(d_step));
+        d_axis = rotation.cross(ws.axis[i]);
+      }
+    }
+    const Eigen::Vector3d joint_rate = ws.axis[i] * qd[i];
+    Eigen::Vector3d d_joint_rate = d_axis * qd[i];
+    if (!pose && i == joint) d_joint_rate += ws.axis[i];
+    d_w_dot += d_axis * qdd[i] + d_w.cross(joint_rate) + omega_before.cross(d_joint_rate);
+    d_w += d_joint_rate;
+    const Eigen::Vector3d r = ws.com[i] - ws.origin[i];
+    d_acc[i] = d_origin_acc + d_w_dot.cross(r) + d_w.cross(ws.omega[i].cross(r)) + ws.omega[i].cross(d_w.cross(r));
+    if (pose) {
+      const Eigen::Vector3d d_r = rotation.cross(r);
+      d_acc[i] += ws.omega_dot[i].cross(d_r) + ws.omega[i].cross(ws.omega[i].cross(d_r));
+    }
+    d_omega[i] = d_w;
+    d_omega_dot[i] = d_w_dot;
+  }
+  Eigen::Vector3d d_force = zero, d_moment = zero;
+  for (int i = n - 1; i >= 0; --i) {
+    const bool moved = i >= joint;
+    if (i + 1 < n) {
+      const Eigen::Vector3d lever = ws.origin[i + 1] - ws.origin[i];
+      d_moment += lever.cross(d_force);
+      if (pose && moved) d_moment += rotation.cross(lever).cross(ws.force[i + 1]);
+    }
+    if (moved) {
+      const double mass = robot.joints[i].body.mass;
+      const Eigen::Matrix3d& inertia = ws.inertia[i];
+      const Eigen::Vector3d& omega = ws.omega[i];
+      const Eigen::Vector3d inertia_omega = inertia * omega;
+      const Eigen::Vector3d r = ws.com[i] - ws.origin[i];
+      const Eigen::Vector3d d_body_force = mass * d_acc[i];
+      // d(I v) = I dv + dI v with dI v = rotation x (I v) - I (rotation x v).
+      Eigen::Vector3d d_inertia_omega = inertia * d_omega[i];
+      Eigen::Vector3d d_body_moment = inertia * d_omega_dot[i] + d_omega[i].cross(inertia_omega);
+      if (pose) {
+        d_inertia_omega += rotation.cross(inertia_omega) - inertia * rotation.cross(omega);
+        d_body_moment += rotation.cross(inertia * ws.omega_dot[i]) - inertia * rotation.cross(ws.omega_dot[i]) +
+                         rotation.cross(r).cross(mass * ws.acc[i]);
+      }
+      d_moment += d_body_moment + omega.cross(d_inertia_omega) + r.cross(d_body_force);
+      d_force += d_body_force;
+    }
+    double d_tau = ws.axis[i].dot(d_moment);
+    if (pose && i > joint) d_tau += rotation.cross(ws.axis[i]).dot(ws.moment[i]);
+    column[i] = d_tau;
+  }
+}
+
+}  // namespace
+
+void inverseDynamicsDerivativesAtCurrentPose(const Robot& robot, RobotWorkspace& ws, const JointVector& qd,
+                                             const JointVector& qdd, bool with_gravity, JointMatrix& by_q,
+                                             JointMatrix& by_qd) {
+  const int n = robot.dof();
+  by_q.resize(n, n);
+  by_qd.resize(n, n);
+  updateBodyInertias(robot, ws);
+  JointVector tau(n);
+  newtonEulerAtCurrentPose(robot, ws, qd, qdd, with_gravity, tau);  // the values the tangents run along
+  for (int j = 0; j < n; ++j) {
+    newtonEulerTangent<true>(robot, ws, qd, qdd, j, by_q.col(j));
+    newtonEulerTangent<false>(robot, ws, qd, qdd, j, by_qd.col(j));
+  }
+}
+
+void inverseDynamicsDerivatives(const Robot& robot, RobotWorkspace& ws, const JointVector& q, const JointVector& qd,
+                                const JointVector& qdd, JointMatrix& by_q, JointMatrix& by_qd) {
+  requireInertials(robot);
+  checkJointVector(robot, qd, "qd");
+  checkJointVector(robot, qdd, "qdd");
+  forwardKinematics(robot, ws, q);
+  inverseDynamicsDerivativesAtCurrentPose(robot, ws, qd, qdd, true, by_q, by_qd);
+}
+
+void forwardDynamicsDerivatives(const Robot& robot, RobotWorkspace& ws, const JointVector& q, const JointVector& qd,
+                                const JointVector& tau, JointVector& qdd, JointMatrix& by_q, JointMatrix& by_qd) {
+  forwardDynamics(robot, ws, q, qd, tau, qdd);  // checks, and leaves M's factor in ws
+  inverseDynamicsDerivativesAtCurrentPose(robot, ws, qd, qdd, true, by_q, by_qd);
+  // M d qdd = -d RNEA at fixed tau.
+  JointVector column;
+  for (int j = 0; j < robot.dof(); ++j) {
+    column = -by_q.col(j);
+    choleskySolveInPlace(ws.mass_factor, column);
+    by_q.col(j) = column;
+    column = -by_qd.col(j);
+    choleskySolveInPlace(ws.mass_factor, column);
+    by_qd.col(j) = column;
+  }
+}
+
 // Eigen's unblocked LLT's arithmetic, in its order, so that the plant's results stay the same bits: the
 // diagonal less the sum of the row's squares, each entry less the sum of its products (both summed from
 // the first term on), divided by the root.

@@ -41,6 +41,21 @@ void forwardDynamics(const Robot& robot, RobotWorkspace& ws, const JointVector& 
 void forwardDynamicsAtCurrentPose(const Robot& robot, RobotWorkspace& ws, const JointVector& qd, const JointVector& tau,
                                   JointVector& qdd);
 
+// The partial derivatives of inverse dynamics tau = RNEA(q, qd, qdd) at fixed qdd: d tau/dq (which holds
+// (dM/dq) qdd, the Coriolis and the gravity terms' derivatives) and d tau/dqd, column j by one tangent
+// (forward-mode) pass of the recursions along e_j, into n x n `by_q` and `by_qd`.
+void inverseDynamicsDerivatives(const Robot& robot, RobotWorkspace& ws, const JointVector& q, const JointVector& qd,
+                                const JointVector& qdd, JointMatrix& by_q, JointMatrix& by_qd);
+// The same at the pose of the last forwardKinematics (qd and qdd not checked); gravity left out unless asked
+// (the plant takes gravity's derivative with its other loads'). Overwrites ws's Newton-Euler scratch.
+void inverseDynamicsDerivativesAtCurrentPose(const Robot& robot, RobotWorkspace& ws, const JointVector& qd,
+                                             const JointVector& qdd, bool with_gravity, JointMatrix& by_q,
+                                             JointMatrix& by_qd);
+// The partial derivatives of forward dynamics qdd = FD(q, qd, tau) at fixed tau, from M d qdd = -d RNEA:
+// d qdd/dq and d qdd/dqd (n x n), and qdd itself. Throws SolverError as forwardDynamics does.
+void forwardDynamicsDerivatives(const Robot& robot, RobotWorkspace& ws, const JointVector& q, const JointVector& qd,
+                                const JointVector& tau, JointVector& qdd, JointMatrix& by_q, JointMatrix& by_qd);
+
 // The Cholesky factor L (M = L L^T, lower triangle of `factor`; the upper is left as it was) of a symmetric
 // positive definite matrix, reading its lower triangle; false when it is not positive definite (or holds a
 // value that is not a number). Eigen's LLT's arithmetic in plain loops: the same bits (its solve's up to 8

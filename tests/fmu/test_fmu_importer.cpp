@@ -755,7 +755,7 @@ TEST_P(FmuTest, DescribesItselfAndExportsTheStandardVersion) {
   }
   const ModelDescription md = readModelDescription(GetParam());
   EXPECT_EQ(md.outputs.size(), 51u);
-  EXPECT_EQ(md.vr.size(), 146u);
+  EXPECT_EQ(md.vr.size(), 149u);
   EXPECT_FALSE(md.token.empty());
 }
 

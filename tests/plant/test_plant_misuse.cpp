@@ -120,6 +120,20 @@ TEST(PlantMisuse, ConstructionChecksTheModelAndTheDrives) {
   options = PlantOptions();
   options.max_steps_per_advance = 0;
   EXPECT_THROW(FlexibleJointPlant(full, rx170Drives(), options), InvalidArgument);
+  options = PlantOptions();
+  options.jacobian_reuse_steps = 0;
+  expectThrowMentioning<InvalidArgument>([&] { FlexibleJointPlant plant(full, rx170Drives(), options); },
+                                         {"jacobian_reuse_steps", "0"}, "no Jacobian steps");
+  options = PlantOptions();
+  options.newton_setup_steps = -3;
+  expectThrowMentioning<InvalidArgument>([&] { FlexibleJointPlant plant(full, rx170Drives(), options); },
+                                         {"newton_setup_steps", "-3"}, "negative setup steps");
+  for (double change : {0.0, -1.0, 11.0, std::numeric_limits<double>::quiet_NaN()}) {
+    options = PlantOptions();
+    options.newton_setup_gamma_change = change;
+    expectThrowMentioning<InvalidArgument>([&] { FlexibleJointPlant plant(full, rx170Drives(), options); },
+                                           {"newton_setup_gamma_change"}, "gamma change " + std::to_string(change));
+  }
 }
 
 // Asserts that advancing `plant` by `span` throws SolverError naming one of CVODE's return flags, and
