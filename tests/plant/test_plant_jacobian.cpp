@@ -282,27 +282,38 @@ TEST(PlantJacobian, LinkColumnsMatchTheirDifferenceQuotients) {
   }
 }
 
+// What a test effect without parameters leaves as it is.
+template <class Derived>
+class ParameterlessEffect : public Effect {
+public:
+  std::vector<std::string> parameterNames() const override { return {}; }
+  std::vector<double> parameters() const override { return {}; }
+  void setParameters(const std::vector<double>&) override {}
+  nlohmann::json toJson() const override { return {}; }
+  std::unique_ptr<Effect> clone() const override { return std::make_unique<Derived>(); }
+};
+
+// The RX170's model with one more effect.
+JointErrorModel withEffect(const JointErrorModel& model, std::unique_ptr<Effect> extra) {
+  std::vector<std::unique_ptr<Effect>> effects;
+  for (int i = 0; i < model.effectCount(); ++i) effects.push_back(model.effect(i).clone());
+  effects.push_back(std::move(extra));
+  return JointErrorModel(model.sharedRobot(), model.gears(), std::move(effects));
+}
+
 // A load that does not know its rate: the link columns fall back to differences, and still match.
-class LoadWithoutRate : public Effect {
+class LoadWithoutRate : public ParameterlessEffect<LoadWithoutRate> {
 public:
   std::string type() const override { return "load_without_rate"; }
   EffectRole role() const override { return EffectRole::Load; }
   void addLoadTorque(const Robot&, const RobotWorkspace&, JointContext& ctx) const override {
     ctx.load_torque[1] += 40.0 * std::sin(ctx.q[1] + 0.5 * ctx.q[2]);
   }
-  std::vector<std::string> parameterNames() const override { return {}; }
-  std::vector<double> parameters() const override { return {}; }
-  void setParameters(const std::vector<double>&) override {}
-  nlohmann::json toJson() const override { return {}; }
-  std::unique_ptr<Effect> clone() const override { return std::make_unique<LoadWithoutRate>(); }
 };
 
 TEST(PlantJacobian, ALoadWithoutItsRateFallsBackToDifferences) {
   Rx170 rx;
-  std::vector<std::unique_ptr<Effect>> effects;
-  for (int i = 0; i < rx.model.effectCount(); ++i) effects.push_back(rx.model.effect(i).clone());
-  effects.push_back(std::make_unique<LoadWithoutRate>());
-  const JointErrorModel model(rx.model.sharedRobot(), rx.model.gears(), std::move(effects));
+  const JointErrorModel model = withEffect(rx.model, std::make_unique<LoadWithoutRate>());
   FlexibleJointPlant plant(model, rx.drives);
   std::mt19937 rng(41);
   const std::vector<double> y = movingState(plant, joints({20.0, 45.0, 70.0, 30.0, 50.0, 10.0}), 0.02, 0.5, rng);
@@ -398,7 +409,7 @@ TEST(PlantJacobian, ReuseKnobsReachCvode) {
 
 // A transmission error with an enormous slope and no error of its own: at rest the right-hand side stays
 // finite (the slope multiplies motor rates that are zero), the Jacobian (slope squared) does not.
-class OverflowingSlope : public Effect {
+class OverflowingSlope : public ParameterlessEffect<OverflowingSlope> {
 public:
   std::string type() const override { return "overflowing_slope"; }
   EffectRole role() const override { return EffectRole::JointError; }
@@ -408,19 +419,11 @@ public:
     slope[0] += 1e200;
     return true;
   }
-  std::vector<std::string> parameterNames() const override { return {}; }
-  std::vector<double> parameters() const override { return {}; }
-  void setParameters(const std::vector<double>&) override {}
-  nlohmann::json toJson() const override { return {}; }
-  std::unique_ptr<Effect> clone() const override { return std::make_unique<OverflowingSlope>(); }
 };
 
 TEST(PlantJacobian, ANonFiniteJacobianStopsTheIntegration) {
   Rx170 rx;
-  std::vector<std::unique_ptr<Effect>> effects;
-  for (int i = 0; i < rx.model.effectCount(); ++i) effects.push_back(rx.model.effect(i).clone());
-  effects.push_back(std::make_unique<OverflowingSlope>());
-  const JointErrorModel model(rx.model.sharedRobot(), rx.model.gears(), std::move(effects));
+  const JointErrorModel model = withEffect(rx.model, std::make_unique<OverflowingSlope>());
   PlantOptions options;
   options.control = false;
   FlexibleJointPlant plant(model, rx.drives, options);
