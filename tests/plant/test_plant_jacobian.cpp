@@ -348,6 +348,17 @@ TEST(PlantJacobian, StructuredNewtonSolveMatchesADenseLu) {
   }
 }
 
+// From rest, every drive moves at its own constant speed for 0.2 s, the reference updated every 4 ms.
+void moveEveryDrive(FlexibleJointPlant& plant) {
+  const JointVector start = joints({20.0, 45.0, 70.0, 30.0, 50.0, 10.0});
+  plant.reset(start);
+  const JointVector velocity = joints({30.0, -20.0, 25.0, 60.0, -45.0, 90.0});
+  for (int k = 1; k <= 50; ++k) {
+    plant.setReference(start + velocity * (0.004 * k), velocity);
+    plant.advance(0.004 * k);
+  }
+}
+
 // The structured Newton solver (elimination down to qd and pd) against SUNDIALS' dense LU of the same
 // Jacobian: a move of every drive, integrated tightly both ways, ends in the same state, and Newton needs
 // as many iterations per step (a wrong solve would still converge, but slower).
@@ -361,13 +372,7 @@ TEST(PlantJacobian, StructuredSolverFollowsTheDenseLu) {
   for (bool structured : {false, true}) {
     options.structured_linear_solver = structured;
     FlexibleJointPlant plant(rx.model, rx.drives, options);
-    const JointVector start = joints({20.0, 45.0, 70.0, 30.0, 50.0, 10.0});
-    plant.reset(start);
-    const JointVector velocity = joints({30.0, -20.0, 25.0, 60.0, -45.0, 90.0});
-    for (int k = 1; k <= 50; ++k) {
-      plant.setReference(start + velocity * (0.004 * k), velocity);
-      plant.advance(0.004 * k);
-    }
+    moveEveryDrive(plant);
     ends.emplace_back(plant.state(), plant.state() + plant.stateSize());
     const PlantStatistics statistics = plant.statistics();
     iterations_per_step.push_back(static_cast<double>(statistics.nonlinear_iterations) / statistics.steps);
@@ -391,13 +396,7 @@ TEST(PlantJacobian, ReuseKnobsReachCvode) {
       options.newton_setup_steps = 1;
     }
     FlexibleJointPlant plant(rx.model, rx.drives, options);
-    const JointVector start = joints({20.0, 45.0, 70.0, 30.0, 50.0, 10.0});
-    plant.reset(start);
-    const JointVector velocity = joints({30.0, -20.0, 25.0, 60.0, -45.0, 90.0});
-    for (int k = 1; k <= 50; ++k) {
-      plant.setReference(start + velocity * (0.004 * k), velocity);
-      plant.advance(0.004 * k);
-    }
+    moveEveryDrive(plant);
     statistics.push_back(plant.statistics());
     ends.push_back(plant.linkPositions());
   }
