@@ -64,7 +64,7 @@ private:
   };
   std::vector<Transmission> transmission_errors_;
   std::vector<TransmissionErrorEffect::Anchor> anchors_;
-  bool anchors_set_ = false;         // by an earlier call (each harmonic's sine and cosine at some phase, from libm)
+  bool anchors_set_ = false;         // by an earlier call (each harmonic's sine and cosine at some phase, from sinCos)
   JointAngleAnchors joint_anchors_;  // the joint angles' sines and cosines, by compensateFrom
   bool joint_anchors_set_ = false;
   std::vector<int> other_command_effects_;
