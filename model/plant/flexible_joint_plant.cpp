@@ -1062,7 +1062,8 @@ void FlexibleJointPlant::advance(double end_time) {
   check(CVodeSetMaxNumSteps(s.cvode, static_cast<long>(budget)), "CVodeSetMaxNumSteps");
   s.last_error.clear();
   realtype reached = time_;
-  const int flag = CVode(s.cvode, end_time, s.y, &reached, CV_NORMAL);
+  const int flag = options_.even_steps ? integrateEvenly(end_time, static_cast<long>(budget), reached)
+                                       : CVode(s.cvode, end_time, s.y, &reached, CV_NORMAL);
   long steps = 0, rhs = 0, jacobians = 0, error_failures = 0, convergence_failures = 0, rhs_for_jacobians = 0;
   long newton_iterations = 0, setups = 0;
   CVodeGetNumNonlinSolvIters(s.cvode, &newton_iterations);
@@ -1088,7 +1089,7 @@ void FlexibleJointPlant::advance(double end_time) {
     restart_ = true;
     if (flag == CV_TOO_MUCH_WORK) {
       throw SolverError("plant: the integration spent its work budget (" + std::to_string(static_cast<long>(budget)) +
-                        " steps, CV_TOO_MUCH_WORK) between t = " + std::to_string(reached) + " s and " +
+                        " CVODE steps, CV_TOO_MUCH_WORK) between t = " + std::to_string(reached) + " s and " +
                         std::to_string(end_time) +
                         " s: the plant is too stiff for its parameters (look at the drive gains and the joint "
                         "stiffnesses) or the motion leaves what it can follow" +
@@ -1099,6 +1100,33 @@ void FlexibleJointPlant::advance(double end_time) {
   }
   time_ = end_time;
   checkWatchdog();
+}
+
+// PlantOptions::even_steps: one CVODE step per call. When what is left of the advance is more than CVODE's
+// planned step but less than two, the stop time is set at its middle, so that the advance ends in two equal
+// steps instead of the planned one and a sliver (a cut step in front of the end would make CVODE keep its
+// size and hold back its growth, so the stop time is moved only there). The count of calls keeps the
+// advance's work budget.
+int FlexibleJointPlant::integrateEvenly(double end_time, long budget, double& reached) {
+  Solver& s = *solver_;
+  realtype at = time_;
+  for (long step = 0; step < budget; ++step) {
+    realtype planned = 0.0;  // 0 before CVODE's first step after a (re)start: it chooses that one itself
+    if (CVodeGetCurrentStep(s.cvode, &planned) != CV_SUCCESS) planned = 0.0;
+    const double left = end_time - at;
+    // CVODE takes a stop time as reached within 100 roundoffs (its FUZZ_FACTOR): a rest within that of the
+    // planned step is one step, and a rest of two planned steps is left to CVODE (a cut by a roundoff would
+    // still count as a change of step).
+    const double fuzz = 100.0 * std::numeric_limits<double>::epsilon() * (std::fabs(at) + planned);
+    double stop = end_time;
+    if (planned > 0.0 && left - fuzz > planned && 0.5 * left < planned - fuzz) stop = at + 0.5 * left;
+    check(CVodeSetStopTime(s.cvode, stop), "CVodeSetStopTime");
+    const int flag = CVode(s.cvode, end_time, s.y, &at, CV_ONE_STEP);
+    reached = at;
+    if (flag < 0) return flag;
+    if (stop == end_time && flag == CV_TSTOP_RETURN) return flag;
+  }
+  return CV_TOO_MUCH_WORK;
 }
 
 void FlexibleJointPlant::setWatchdog(double tracking_envelope_rad, double joint_limit_margin_rad) {

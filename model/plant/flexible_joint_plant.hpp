@@ -77,6 +77,12 @@ struct PlantOptions {
   // tripled CVODE's steps (24,072 -> 68,688), while the jumps, at the step boundaries CVodeSetStopTime
   // makes, cost none; and it moved Table II's Rz of run 2 by 0.15 um (model/plant/README.md).
   bool smooth_reference = false;
+  // Land on each advance's end in equal steps: before every CVODE step the plant sets an intermediate stop
+  // time that splits what is left of the advance into as many equal steps as CVODE's planned step needs, so
+  // that no step is left a sliver short of the end (CVODE cuts only a step that would pass its stop time; one
+  // that falls just short leaves a sliver, and the steps after it restart from the sliver's size and order 1).
+  // false: one CVODE call per advance with the advance's end as its only stop time, as before.
+  bool even_steps = true;
   bool control = true;         // false: no motor torque at all (free response)
   bool motors_locked = false;  // true: motor positions held where they are (static tests)
 };
@@ -198,6 +204,7 @@ private:
   };
   ReferencePoint referencePoint(int joint, double t) const;
   void checkWatchdog();
+  int integrateEvenly(double end_time, long budget, double& reached);
   void transmissionError(const JointVector& p, const JointVector& q, JointVector& error);
   void transmissionTorques(const JointVector& p, const JointVector& pd, const JointVector& q, const JointVector& qd,
                            JointVector& link_torque, JointVector& motor_reaction);

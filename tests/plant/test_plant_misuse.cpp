@@ -157,7 +157,7 @@ void expectSolverFailure(FlexibleJointPlant& plant, double span, const std::vect
   EXPECT_TRUE(plant.motorPositions().allFinite()) << what;
 }
 
-TEST(PlantMisuse, TooFewStepsIsASolverErrorWithCvodesReason) {
+TEST(PlantMisuse, TooFewStepsIsASolverErrorNamingTheBudget) {
   PlantOptions options;
   options.max_steps_per_advance = 5;
   FlexibleJointPlant plant(rx170Model(), rx170Drives(), options);
