@@ -77,11 +77,11 @@ struct PlantOptions {
   // tripled CVODE's steps (24,072 -> 68,688), while the jumps, at the step boundaries CVodeSetStopTime
   // makes, cost none; and it moved Table II's Rz of run 2 by 0.15 um (model/plant/README.md).
   bool smooth_reference = false;
-  // Land on each advance's end in equal steps: before every CVODE step the plant sets an intermediate stop
-  // time that splits what is left of the advance into as many equal steps as CVODE's planned step needs, so
-  // that no step is left a sliver short of the end (CVODE cuts only a step that would pass its stop time; one
-  // that falls just short leaves a sliver, and the steps after it restart from the sliver's size and order 1).
-  // false: one CVODE call per advance with the advance's end as its only stop time, as before.
+  // End each advance in two equal steps when the rest of it is between one and two of CVODE's planned steps
+  // (the plant steps CVODE one step per call and moves the stop time to the rest's middle), not in the planned
+  // step and a sliver: CVODE cuts only a step that would pass its stop time, and after a sliver it restarts
+  // from the sliver's size at order 1. fmu_bench at 10 ms updates: 4.94 -> 3.22 steps and 1.20 -> 0.25 Newton
+  // matrices per update. false: one CVODE call per advance with its end as the only stop time, as before.
   bool even_steps = true;
   bool control = true;         // false: no motor torque at all (free response)
   bool motors_locked = false;  // true: motor positions held where they are (static tests)
