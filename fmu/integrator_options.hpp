@@ -33,6 +33,8 @@ inline constexpr IntegratorOption kIntegratorOptions[] = {
      [](PlantOptions& o, double v) { o.newton_setup_steps = static_cast<long>(v); }},
     {"newton_setup_gamma_change", [](const PlantOptions& o) { return o.newton_setup_gamma_change; },
      [](PlantOptions& o, double v) { o.newton_setup_gamma_change = v; }},
+    {"even_steps", [](const PlantOptions& o) { return o.even_steps ? 1.0 : 0.0; },
+     [](PlantOptions& o, double v) { o.even_steps = v != 0.0; }},
     {"tracking_envelope_rad", [](const PlantOptions& o) { return o.tracking_envelope_rad; },
      [](PlantOptions& o, double v) { o.tracking_envelope_rad = v; }},
     {"joint_limit_margin_rad", [](const PlantOptions& o) { return o.joint_limit_margin_rad; },

@@ -196,6 +196,8 @@ def load(tables, values_path):
             if kind == "Real":
                 v["start"] = number(where, "start", str(start)) if isinstance(start, str) else float(start)
             elif kind == "Boolean":
+                if v["bind_kind"] is not None and start in (0, 1, 0.0, 1.0, True, False):
+                    start = "true" if start else "false"  # a bound option's value from the parameter file
                 if start not in ("true", "false"):
                     fail(where, "a Boolean start is true or false")
                 v["start"] = start == "true"

@@ -1059,11 +1059,15 @@ void FlexibleJointPlant::advance(double end_time) {
   // that cannot be integrated fails within seconds instead of running for minutes.
   const double budget = std::min(static_cast<double>(options_.max_steps_per_advance),
                                  kStepBudgetFloor + kStepBudgetPerSecond * (end_time - time_));
-  check(CVodeSetMaxNumSteps(s.cvode, static_cast<long>(budget)), "CVodeSetMaxNumSteps");
   s.last_error.clear();
   realtype reached = time_;
-  const int flag = options_.even_steps ? integrateEvenly(end_time, static_cast<long>(budget), reached)
-                                       : CVode(s.cvode, end_time, s.y, &reached, CV_NORMAL);
+  int flag = 0;
+  if (options_.even_steps) {
+    flag = integrateEvenly(end_time, static_cast<long>(budget), reached);  // counts the budget itself
+  } else {
+    check(CVodeSetMaxNumSteps(s.cvode, static_cast<long>(budget)), "CVodeSetMaxNumSteps");
+    flag = CVode(s.cvode, end_time, s.y, &reached, CV_NORMAL);
+  }
   long steps = 0, rhs = 0, jacobians = 0, error_failures = 0, convergence_failures = 0, rhs_for_jacobians = 0;
   long newton_iterations = 0, setups = 0;
   CVodeGetNumNonlinSolvIters(s.cvode, &newton_iterations);

@@ -615,11 +615,14 @@ void setTruth(Master& m, const JointErrorModel& truth) {
 }
 
 // Instantiates and initialises at the spiral's first sample.
-void start(Master& m, long mode, const JointErrorModel* truth = nullptr) {
+void start(Master& m, long mode, const JointErrorModel* truth = nullptr, bool even_steps = true) {
   ASSERT_TRUE(m.instantiate()) << m.log();
   ASSERT_EQ(m.enterInitialization(spiral().time[0]), kOK) << m.log();
   ASSERT_EQ(m.setEnumeration(m.vr("compensation"), mode), kOK) << m.log();
   if (truth) setTruth(m, *truth);
+  if (!even_steps) {
+    ASSERT_EQ(m.setBoolean(m.vr("integrator.even_steps"), false), kOK) << m.log();
+  }
   ASSERT_EQ(m.setReals(m.vrs("q_desired_", kDof), values(spiral().q[0])), kOK) << m.log();
   ASSERT_EQ(m.exitInitialization(), kOK) << m.log();
 }
@@ -677,11 +680,12 @@ JointVector parabolaSlope(const JointVector& q, double t, const JointVector& las
 }
 
 // The same sequence on the plant and the compensator directly (fmu/instance.hpp, steps 1-4).
-Record runDirectly(long mode, const JointErrorModel& truth, std::size_t to, bool varying) {
+Record runDirectly(long mode, const JointErrorModel& truth, std::size_t to, bool varying,
+                   const PlantOptions& options = PlantOptions{}) {
   const Spiral& s = spiral();
   const JointErrorModel nominal = nominalModel();
   const std::vector<DriveParameters> drives = loadDriveParameters(unzipped(2) + "/resources/parameters.json", *s.robot);
-  FlexibleJointPlant plant(truth, drives, PlantOptions{});
+  FlexibleJointPlant plant(truth, drives, options);
   EffectMask mask = 0;
   if (mode == 1) mask = nominal.loadsAnd({"compliance"});
   if (mode == 2) mask = nominal.allEffects();
@@ -755,7 +759,7 @@ TEST_P(FmuTest, DescribesItselfAndExportsTheStandardVersion) {
   }
   const ModelDescription md = readModelDescription(GetParam());
   EXPECT_EQ(md.outputs.size(), 51u);
-  EXPECT_EQ(md.vr.size(), 149u);
+  EXPECT_EQ(md.vr.size(), 150u);
   EXPECT_FALSE(md.token.empty());
 }
 
@@ -847,6 +851,35 @@ TEST_P(FmuTest, VaryingCommunicationStepsMatchTheDirectRunBitForBit) {
     ASSERT_EQ(fmu.q_link[i], direct.q_link[i]) << "step " << i;
     ASSERT_EQ(fmu.q_ref[i], direct.q_ref[i]) << "step " << i;
   }
+}
+
+// integrator.even_steps reaches the plant: switched off, the FMU takes CVODE's own steps, the plant's with
+// PlantOptions::even_steps off bit for bit, and on steps of up to 5 ms those are other steps than the
+// default's (the ending in two equal steps), which end within the tolerance's reach of them.
+TEST_P(FmuTest, EvenStepsOffIsThePlantsOwnStepsBitForBit) {
+  const JointErrorModel truth = truthModel();
+  auto m = makeMaster(GetParam());
+  start(*m, 2, &truth, false);
+  const std::size_t end = 3000;
+  const Record fmu = run(*m, 0, end, true);
+  PlantOptions uneven;
+  uneven.even_steps = false;
+  const Record direct = runDirectly(2, truth, end, true, uneven);
+  const Record even = runDirectly(2, truth, end, true);
+  ASSERT_EQ(fmu.q_link.size(), direct.q_link.size());
+  ASSERT_EQ(fmu.q_link.size(), even.q_link.size());
+  std::size_t differing_from_even = 0;
+  double largest_difference = 0.0;
+  for (std::size_t i = 0; i < fmu.q_link.size(); ++i) {
+    ASSERT_EQ(fmu.q_link[i], direct.q_link[i]) << "step " << i;
+    if (fmu.q_link[i] != even.q_link[i]) ++differing_from_even;
+    for (int j = 0; j < kDof; ++j) {
+      largest_difference = std::max(largest_difference, std::abs(fmu.q_link[i][j] - even.q_link[i][j]));
+    }
+  }
+  EXPECT_GT(differing_from_even, fmu.q_link.size() / 2);
+  EXPECT_LT(largest_difference, 1e-6);
+  EXPECT_EQ(m->terminate(), kOK);
 }
 
 TEST(FmuRegression, CompensationThroughTheFmuReducesThePaperErrorAndBothVersionsAgree) {
