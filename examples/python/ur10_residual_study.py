@@ -14,6 +14,9 @@
 5. Two more physical effects of the whole arm: the bearings' runout (each joint's rotating part tilted about
    the two axes across its own, by harmonics of the joint's angle) and the links' thermal expansion with the
    measured air temperature; each fitted on A with A's frame and scored on B with B's frame re-fitted.
+6. Series B's goals, each reached in two configurations (elbow up and down) back to back: how much of the
+   residual the two share, what constant joint errors would share, and what smooth functions of the tool
+   position or of joint 1's angle, fitted on B itself, leave of it (optional, needs --raw-b).
 
 Usage, after `jointcomp import-ipa` of both series and
 `jointcomp calibrate --urdf model/robots/ur10.urdf --campaign A.csv --holdout B.csv --out DIR`:
@@ -243,6 +246,71 @@ def orientations(raw_path, trafo_path):
           "(median, %d pairs)" % (1e3 * rms(best), 1e3 * rms(left), 1e3 * repeat, len(same_q)))
 
 
+def goal_groups(raw_path, rows):
+    """Series B's rows grouped by their goal (the commanded T-Mac pose), from the raw IPA file."""
+    lines = [line.strip().split(";") for line in open(raw_path, encoding="latin-1")]
+    header = lines[0]
+    columns = [header.index(c) for c in ("Goal x", "Goal y", "Goal z", "Goal roll", "Goal pitch", "Goal yaw")]
+    goals = np.array([[float(r[c].replace(",", ".")) for c in columns] for r in lines[1:]])
+    if len(goals) != rows:
+        sys.exit("%s: %d rows, but the campaign has %d (the importer keeps every row)" % (raw_path, len(goals), rows))
+    groups = {}
+    for i, goal in enumerate(np.round(goals, 5)):
+        groups.setdefault(tuple(goal), []).append(i)
+    return [np.array(v) for v in groups.values() if len(v) >= 2]
+
+
+def within_goal_share(residual, groups):
+    rows = np.concatenate(groups)
+    return sum(np.sum((residual[v] - residual[v].mean(0)) ** 2) for v in groups) / np.sum(residual[rows] ** 2)
+
+
+def configurations(raw_path, b):
+    """Check 6: how much of B's residual the configurations reaching one goal share."""
+    qb, mb, _, rb = b
+    groups = goal_groups(raw_path, len(qb))
+    rows = np.concatenate(groups)
+    differences = np.degrees(np.median([np.abs(qb[v[1]] - qb[v[0]]) for v in groups], axis=0))
+    jb, b_rotation = instrument_jacobians(qb, mb)
+    # What an angle error of joint 2, 3 or 4 alone would leave shared (frame re-fitted, as for the residual).
+    joint_shares = [1.0 - within_goal_share(without_frame(jb[:, :, j] * 1e-3, mb), groups) for j in (1, 2, 3)]
+    shared = np.zeros_like(rb)
+    for v in groups:
+        shared[v] = rb[v].mean(0)
+    _, _, tool = frames(qb)
+    residual_base = rb @ b_rotation
+
+    def left_in_b(columns):  # B's RMS after a least-squares fit of these base-frame columns on B itself
+        k = columns.shape[2]
+        c = np.linalg.lstsq(columns.reshape(-1, k), residual_base.reshape(-1), rcond=None)[0]
+        return rms(without_frame((residual_base - columns @ c) @ b_rotation.T, mb))
+
+    centred = tool - tool.mean(0)
+    monomials = [np.ones(len(tool))]
+    for degree in range(1, 5):
+        for powers in sorted({tuple(sorted(p)) for p in np.ndindex(*(3,) * degree)}):
+            monomials.append(np.prod(centred[:, list(powers)], axis=1))
+    position_field = np.stack([np.einsum("n,ij->nij", m, np.eye(3)) for m in monomials], 3).reshape(len(tool), 3, -1)
+    joint_1 = []  # small rotations about the base axes (joint 1's angle and the tilts across it), harmonics of q1
+    for axis in np.eye(3):
+        lever = np.cross(axis, tool) * 1e3
+        for order in range(9):
+            for f in ((np.cos,) if order == 0 else (np.cos, np.sin)):
+                joint_1.append(lever * f(order * qb[:, 0])[:, None])
+    joint_1 = np.stack(joint_1, 2)
+    # A constant angle error of joint 2 or 4 moves the goal's point alike in both elbow configurations (their
+    # axes and the wrist are where the goal and joint 1 put them); only joint 3's elbow differs.
+    print("6. Series B's configurations of one goal (%d goals, each in 2 or more configurations measured back to back, "
+          "differing in joints 2, 3 and 4 by %.0f, %.0f and %.0f deg median): they share %.1f %% of the residual's "
+          "squares, where a constant angle error of joint 2, 3 or 4 would share %.0f, %.0f and %.0f %%; the shared part "
+          "is %.4f mm RMS, the part that differs %.4f mm; fitted on B itself, a smooth field of the tool position "
+          "(degree 4, %d parameters) leaves %.4f mm and harmonics of joint 1 with the base's tilts (orders 0-8, %d "
+          "parameters) %.4f mm of B's %.4f mm"
+          % (len(groups), differences[1], differences[2], differences[3], 100 * (1 - within_goal_share(rb, groups)),
+             *(100 * s for s in joint_shares), rms(shared[rows]), rms((rb - shared)[rows]),
+             position_field.shape[2], left_in_b(position_field), joint_1.shape[2], left_in_b(joint_1), rms(rb)))
+
+
 def tracker_direction_columns(measured, order):
     """Per row 3 x k columns: errors across the beam that grow with range (angle errors) and along it,
     each a harmonic of the azimuth or elevation up to `order`."""
@@ -363,6 +431,7 @@ def main():
         if not arguments.trafo_b:
             sys.exit("--raw-b needs --trafo-b")
         orientations(arguments.raw_b, arguments.trafo_b)
+        configurations(arguments.raw_b, b)
     tracker(a, b, 3)
     temperatures = (read_temperatures(arguments.series_a), read_temperatures(arguments.series_b))
     if any(t is None for t in temperatures):

@@ -49,5 +49,15 @@ assert len(runout) == 7, runout
 assert all(b_after > 0.95 * b_before for _, _, b_before, b_after in runout), runout  # no bearing's tilt carries to B
 thermal = re.search(r"thermal expansion .*: A ([0-9.]+) -> ([0-9.]+) mm", text).groups()
 assert float(thermal[1]) > 0.99 * float(thermal[0]), thermal  # nor the links' expansion with the air temperature
+pair = re.search(r"they share ([0-9.]+) % of the residual's squares, where a constant angle error of joint 2, 3 or 4 "
+                 r"would share ([0-9.]+), ([0-9.]+) and ([0-9.]+) %", text)
+shared, joint_2, joint_3, joint_4 = map(float, pair.groups())
+assert shared > 50.0, shared                        # most of B's residual is common to a goal's elbow configurations
+assert joint_2 > 99.0 and joint_4 > 99.0, pair.groups()  # as constant errors of joints 2 and 4 would be...
+assert joint_3 < shared - 20.0, pair.groups()       # ...and unlike joint 3's, which the elbow changes
+fields = re.search(r"\(degree 4, [0-9]+ parameters\) leaves ([0-9.]+) mm and harmonics of joint 1 .* parameters\) "
+                   r"([0-9.]+) mm of B's ([0-9.]+) mm", text)
+position_field, joint_1, b_total = map(float, fields.groups())
+assert position_field > 0.8 * b_total and joint_1 > 0.8 * b_total, fields.groups()  # neither explains B, even on B
 print("the UR10 study holds")
 PY
