@@ -15,6 +15,7 @@
 #include <memory>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <benchmark/benchmark.h>
@@ -80,6 +81,7 @@ const Spiral& spiral(int step_ms = 1) {
 
 // Value references, as in modelDescription/variables.csv.
 constexpr std::uint32_t kCompensation = 1;
+constexpr std::uint32_t kStepPastUpdates = 4012;  // integrator.step_past_updates
 const std::uint32_t kQDesired[kDof] = {100, 101, 102, 103, 104, 105};
 const std::uint32_t kReadBack[kDof + 3] = {220, 221, 222, 223, 224, 225, 240, 241, 242};  // q_link, tool
 std::vector<std::uint32_t> allOutputs() {
@@ -160,9 +162,11 @@ public:
     dlclose(library_);
   }
 
-  void initialise(long mode, double t0, const JointVector& q0) {
+  // step_past: the integrator.step_past_updates parameter, s.
+  void initialise(long mode, double t0, const JointVector& q0, double step_past = 0.0) {
     if (version_ == 2) check(setup2_(instance_, 0, 0.0, t0, 0, 0.0));
     check(version_ == 2 ? int(enter2_(instance_)) : int(enter3_(instance_, false, 0.0, t0, false, 0.0)));
+    setReals(&kStepPastUpdates, 1, &step_past);
     if (version_ == 2) {
       const int m = static_cast<int>(mode);
       check(setInteger2_(instance_, &kCompensation, 1, &m));
@@ -222,11 +226,13 @@ void reportRates(benchmark::State& state, std::size_t steps, double step) {
       benchmark::Counter(static_cast<double>(steps) * step, benchmark::Counter::kIsRate);  // simulated s per s
 }
 
-// version 2 or 3; range(1): 1 reads all outputs; range(2): the communication step in ms.
+// version 2 or 3; range(1): 1 reads all outputs; range(2): the communication step in ms; range(3): how far
+// past a communication point CVODE may step, in ms (integrator.step_past_updates; 0: it stops at each).
 void BM_FmuSpiral(benchmark::State& state) {
   const int version = static_cast<int>(state.range(0));
   const bool all = state.range(1) != 0;
   const int step_ms = static_cast<int>(state.range(2));
+  const double step_past = static_cast<double>(state.range(3)) * 1e-3;
   const Spiral& s = spiral(step_ms);
   const std::vector<std::uint32_t> outputs = allOutputs();
   std::vector<double> read(outputs.size());
@@ -238,7 +244,7 @@ void BM_FmuSpiral(benchmark::State& state) {
       state.PauseTiming();
       fmu.reset();
       fmu = std::make_unique<Fmu>(version);
-      fmu->initialise(2, s.time[0], s.q[0]);
+      fmu->initialise(2, s.time[0], s.q[0], step_past);
       k = 0;
       state.ResumeTiming();
     }
@@ -256,12 +262,14 @@ void BM_FmuSpiral(benchmark::State& state) {
   reportRates(state, steps, step_ms * kStep);
 }
 BENCHMARK(BM_FmuSpiral)
-    ->ArgNames({"fmi", "all_outputs", "step_ms"})
-    ->Args({2, 0, 1})
-    ->Args({3, 0, 1})
-    ->Args({2, 1, 1})
-    ->Args({2, 0, 10})
-    ->Args({3, 0, 10})
+    ->ArgNames({"fmi", "all_outputs", "step_ms", "past_ms"})
+    ->Args({2, 0, 1, 0})
+    ->Args({3, 0, 1, 0})
+    ->Args({2, 1, 1, 0})
+    ->Args({2, 0, 10, 0})
+    ->Args({3, 0, 10, 0})
+    ->Args({2, 0, 1, 10})
+    ->Args({3, 0, 1, 10})
     ->Unit(benchmark::kMicrosecond)
     ->MinTime(2.0);
 
@@ -284,11 +292,12 @@ void BM_FmuCallsOnly(benchmark::State& state) {
 BENCHMARK(BM_FmuCallsOnly)->ArgName("fmi")->Arg(2)->Arg(3)->Unit(benchmark::kNanosecond);
 
 // The same work without the FMI layer; range(0): 1 with PlantOptions::smooth_reference (not what the FMU
-// uses; to compare), range(1): the communication step in ms.
+// uses; to compare), range(1): the communication step in ms, range(2): PlantOptions::step_past_updates_s in ms.
 void BM_DirectSpiral(benchmark::State& state) {
   PlantOptions options;
   options.smooth_reference = state.range(0) != 0;
   const int step_ms = static_cast<int>(state.range(1));
+  options.step_past_updates_s = static_cast<double>(state.range(2)) * 1e-3;
   const Spiral& s = spiral(step_ms);
   const std::string parameters = fmuDir(2) + "/resources/parameters.json";
   const ParameterSet loaded = loadParameterSet(parameters, s.robot);
@@ -376,11 +385,12 @@ void BM_DirectSpiral(benchmark::State& state) {
       static_cast<double>(statistics.jacobian_evaluations) / communication_steps;
 }
 BENCHMARK(BM_DirectSpiral)
-    ->ArgNames({"smooth", "step_ms"})
-    ->Args({0, 1})
-    ->Args({0, 10})
-    ->Args({1, 1})
-    ->Args({1, 10})
+    ->ArgNames({"smooth", "step_ms", "past_ms"})
+    ->Args({0, 1, 0})
+    ->Args({0, 10, 0})
+    ->Args({1, 1, 0})
+    ->Args({1, 10, 0})
+    ->Args({0, 1, 10})
     ->Unit(benchmark::kMicrosecond)
     ->MinTime(2.0);
 
@@ -408,8 +418,8 @@ int main(int argc, char** argv) {
   Reporter reporter;
   benchmark::RunSpecifiedBenchmarks(&reporter);
   // Per communication step: the direct run of that step, then the FMUs against it.
-  for (const int step_ms : {1, 10}) {
-    const std::string key = "step_ms:" + std::to_string(step_ms);
+  for (const auto& [step_ms, past_ms] : {std::pair{1, 0}, std::pair{10, 0}, std::pair{1, 10}}) {
+    const std::string key = "step_ms:" + std::to_string(step_ms) + "/past_ms:" + std::to_string(past_ms);
     auto ofStep = [&](const std::string& name) {  // the key, followed by the end or by "/min_time:..."
       const std::size_t at = name.find(key);
       return at != std::string::npos && (at + key.size() == name.size() || name[at + key.size()] == '/');
@@ -420,8 +430,12 @@ int main(int argc, char** argv) {
     }
     if (!(direct > 0.0)) continue;
     const double step_us = step_ms * kStep * 1e6;
-    std::printf("\nRX170 spiral, %d ms communication step, stiffness + kinematic compensation (CPU time per step)\n",
-                step_ms);
+    std::printf("\nRX170 spiral, %d ms communication step, stiffness + kinematic compensation (CPU time per step)%s\n",
+                step_ms,
+                past_ms > 0 ? (", CVODE stepping up to " + std::to_string(past_ms) +
+                               " ms past the communication points (integrator.step_past_updates)")
+                                  .c_str()
+                            : "");
     std::printf("  %-46s %8.2f us/step %6.0fx real time\n", "direct (plant + compensator)", direct, step_us / direct);
     for (const auto& [name, us] : reporter.per_step) {
       if (name.rfind("BM_FmuSpiral", 0) != 0 || !ofStep(name)) continue;

@@ -35,6 +35,8 @@ inline constexpr IntegratorOption kIntegratorOptions[] = {
      [](PlantOptions& o, double v) { o.newton_setup_gamma_change = v; }},
     {"even_steps", [](const PlantOptions& o) { return o.even_steps ? 1.0 : 0.0; },
      [](PlantOptions& o, double v) { o.even_steps = v != 0.0; }},
+    {"step_past_updates_s", [](const PlantOptions& o) { return o.step_past_updates_s; },
+     [](PlantOptions& o, double v) { o.step_past_updates_s = v; }},
     {"tracking_envelope_rad", [](const PlantOptions& o) { return o.tracking_envelope_rad; },
      [](PlantOptions& o, double v) { o.tracking_envelope_rad = v; }},
     {"joint_limit_margin_rad", [](const PlantOptions& o) { return o.joint_limit_margin_rad; },

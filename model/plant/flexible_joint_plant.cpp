@@ -199,6 +199,7 @@ struct StructuredLinearSolver {
 struct FlexibleJointPlant::Solver {
   SUNContext context = nullptr;
   N_Vector y = nullptr;
+  N_Vector y_now = nullptr;  // the state at the plant's time when CVODE is ahead of it (step_past_updates_s)
   N_Vector absolute_tolerances = nullptr;
   SUNMatrix jacobian = nullptr;
   SUNLinearSolver linear_solver = nullptr;
@@ -215,6 +216,7 @@ struct FlexibleJointPlant::Solver {
     if (linear_solver) SUNLinSolFree(linear_solver);
     if (jacobian) SUNMatDestroy(jacobian);
     if (absolute_tolerances) N_VDestroy(absolute_tolerances);
+    if (y_now) N_VDestroy(y_now);
     if (y) N_VDestroy(y);
     if (context) SUNContext_Free(&context);
   }
@@ -387,8 +389,9 @@ FlexibleJointPlant::FlexibleJointPlant(const JointErrorModel& truth, std::vector
   Solver& s = *solver_;
   check(SUNContext_Create(nullptr, &s.context), "SUNContext_Create");
   s.y = N_VNew_Serial(stateSize(), s.context);
+  s.y_now = N_VNew_Serial(stateSize(), s.context);
   s.jacobian = SUNDenseMatrix(stateSize(), stateSize(), s.context);
-  if (!s.y || !s.jacobian) throw SolverError("plant: SUNDIALS could not allocate the state");
+  if (!s.y || !s.y_now || !s.jacobian) throw SolverError("plant: SUNDIALS could not allocate the state");
   useFastVectorOperations(s.y);  // before CVODE clones its own vectors from it
   if (analytic_slope_ && options_.analytic_jacobian && options_.structured_linear_solver) {
     s.structured = std::make_unique<StructuredLinearSolver>(n_);
@@ -437,6 +440,11 @@ FlexibleJointPlant::FlexibleJointPlant(const JointErrorModel& truth, std::vector
   check(CVodeSetJacEvalFrequency(s.cvode, options_.jacobian_reuse_steps), "CVodeSetJacEvalFrequency");
   check(CVodeSetLSetupFrequency(s.cvode, options_.newton_setup_steps), "CVodeSetLSetupFrequency");
   check(CVodeSetDeltaGammaMaxLSetup(s.cvode, options_.newton_setup_gamma_change), "CVodeSetDeltaGammaMaxLSetup");
+  if (!(std::isfinite(options_.step_past_updates_s) && options_.step_past_updates_s >= 0.0 &&
+        options_.step_past_updates_s <= 1.0)) {
+    throw InvalidArgument("plant: step_past_updates_s must be in [0, 1] s, not " +
+                          std::to_string(options_.step_past_updates_s));
+  }
   reference_ = JointVector::Zero(n_);
   reference_velocity_ = JointVector::Zero(n_);
   reference_acceleration_ = JointVector::Zero(n_);
@@ -476,6 +484,7 @@ void FlexibleJointPlant::reset(const JointVector& command, double start_time) {
   feedforward_offset_.setZero(n_);
   feedforward_offset_rate_.setZero(n_);
   blend_duration_ = 0.0;
+  ahead_ = false;
   double* y = N_VGetArrayPointer(solver_->y);
   for (int j = 0; j < n_; ++j) {
     y[j] = q[j];
@@ -1050,10 +1059,13 @@ void FlexibleJointPlant::advance(double end_time) {
   Solver& s = *solver_;
   if (restart_) {
     s.before_restart = statistics_;
+    if (ahead_) N_VScale(1.0, s.y_now, s.y);  // from the state at time_, not from CVODE's last step ahead of it
+    ahead_ = false;
     check(CVodeReInit(s.cvode, time_, s.y), "CVodeReInit");
     restart_ = false;
   }
-  check(CVodeSetStopTime(s.cvode, end_time), "CVodeSetStopTime");
+  const bool past = options_.step_past_updates_s > 0.0;
+  if (!past) check(CVodeSetStopTime(s.cvode, end_time), "CVodeSetStopTime");
   // The work budget of this advance: a floor for the start-up transients plus a rate per simulated second
   // far above what the plant needs (about 800 steps per second on the paper's spiral), so that a plant
   // that cannot be integrated fails within seconds instead of running for minutes.
@@ -1062,7 +1074,9 @@ void FlexibleJointPlant::advance(double end_time) {
   s.last_error.clear();
   realtype reached = time_;
   int flag = 0;
-  if (options_.even_steps) {
+  if (past) {
+    flag = integratePast(end_time, static_cast<long>(budget), reached);
+  } else if (options_.even_steps) {
     flag = integrateEvenly(end_time, static_cast<long>(budget), reached);  // counts the budget itself
   } else {
     check(CVodeSetMaxNumSteps(s.cvode, static_cast<long>(budget)), "CVodeSetMaxNumSteps");
@@ -1091,6 +1105,7 @@ void FlexibleJointPlant::advance(double end_time) {
     // Keep the last good state: CVODE leaves y at the last successful step.
     time_ = reached;
     restart_ = true;
+    ahead_ = false;
     if (flag == CV_TOO_MUCH_WORK) {
       throw SolverError("plant: the integration spent its work budget (" + std::to_string(static_cast<long>(budget)) +
                         " CVODE steps, CV_TOO_MUCH_WORK) between t = " + std::to_string(reached) + " s and " +
@@ -1102,9 +1117,36 @@ void FlexibleJointPlant::advance(double end_time) {
     throw SolverError("plant: CVODE failed between t = " + std::to_string(reached) + " s and " +
                       std::to_string(end_time) + " s: " + (s.last_error.empty() ? flagName(flag) : s.last_error));
   }
+  if (past) {
+    // CVODE's last step ends at or beyond end_time and began before it: its interpolant covers end_time.
+    check(CVodeGetDky(s.cvode, end_time, 0, s.y_now), "CVodeGetDky");
+    ahead_ = true;
+  }
   time_ = end_time;
   checkWatchdog();
 }
+
+// PlantOptions::step_past_updates_s: CVODE's own steps, one per call, until one ends at or beyond end_time; the
+// stop time only bounds how far past it they may go. Steps already beyond end_time (an earlier advance's) are
+// not taken again. The count of calls keeps the advance's work budget.
+int FlexibleJointPlant::integratePast(double end_time, long budget, double& reached) {
+  Solver& s = *solver_;
+  realtype at = time_;
+  if (CVodeGetCurrentTime(s.cvode, &at) != CV_SUCCESS) at = time_;
+  reached = at;
+  if (at >= end_time) return CV_SUCCESS;
+  const double limit = end_time + options_.step_past_updates_s;
+  check(CVodeSetStopTime(s.cvode, limit), "CVodeSetStopTime");
+  for (long step = 0; step < budget; ++step) {
+    const int flag = CVode(s.cvode, limit, s.y, &at, CV_ONE_STEP);
+    reached = at;
+    if (flag < 0) return flag;
+    if (at >= end_time) return CV_SUCCESS;
+  }
+  return CV_TOO_MUCH_WORK;
+}
+
+const double* FlexibleJointPlant::now() const { return N_VGetArrayPointer(ahead_ ? solver_->y_now : solver_->y); }
 
 // PlantOptions::even_steps: one CVODE step per call. When what is left of the advance is more than CVODE's
 // planned step but less than two, the stop time is set at its middle, so that the advance ends in two equal
@@ -1148,7 +1190,7 @@ void FlexibleJointPlant::setWatchdog(double tracking_envelope_rad, double joint_
 
 void FlexibleJointPlant::checkWatchdog() {
   const Robot& robot = truth_.robot();
-  const double* y = N_VGetArrayPointer(solver_->y);
+  const double* y = now();
   char text[400];
   for (int j = 0; j < n_ && tripped_.empty(); ++j) {
     const Joint& joint = robot.joints[j];
@@ -1176,21 +1218,15 @@ void FlexibleJointPlant::checkWatchdog() {
   if (!tripped_.empty()) throw PlantLimitError(tripped_);
 }
 
-JointVector FlexibleJointPlant::linkPositions() const {
-  return Eigen::Map<const Eigen::VectorXd>(N_VGetArrayPointer(solver_->y), n_);
-}
-JointVector FlexibleJointPlant::linkVelocities() const {
-  return Eigen::Map<const Eigen::VectorXd>(N_VGetArrayPointer(solver_->y) + n_, n_);
-}
-JointVector FlexibleJointPlant::motorPositions() const {
-  return Eigen::Map<const Eigen::VectorXd>(N_VGetArrayPointer(solver_->y) + 2 * n_, n_);
-}
+JointVector FlexibleJointPlant::linkPositions() const { return Eigen::Map<const Eigen::VectorXd>(now(), n_); }
+JointVector FlexibleJointPlant::linkVelocities() const { return Eigen::Map<const Eigen::VectorXd>(now() + n_, n_); }
+JointVector FlexibleJointPlant::motorPositions() const { return Eigen::Map<const Eigen::VectorXd>(now() + 2 * n_, n_); }
 JointVector FlexibleJointPlant::motorVelocities() const {
-  return Eigen::Map<const Eigen::VectorXd>(N_VGetArrayPointer(solver_->y) + 3 * n_, n_);
+  return Eigen::Map<const Eigen::VectorXd>(now() + 3 * n_, n_);
 }
 
 JointVector FlexibleJointPlant::motorTorques() {
-  const double* y = N_VGetArrayPointer(solver_->y);
+  const double* y = now();
   const Eigen::Map<const Eigen::VectorXd> state(y, stateSize());
   JointVector torque;
   computeMotorTorques(time_, state.segment(2 * n_, n_), state.segment(3 * n_, n_), state.segment(4 * n_, n_), torque);
@@ -1221,12 +1257,12 @@ double FlexibleJointPlant::mechanicalEnergy() {
   return energy;
 }
 
-const double* FlexibleJointPlant::state() const { return N_VGetArrayPointer(solver_->y); }
+const double* FlexibleJointPlant::state() const { return now(); }
 
 PlantState FlexibleJointPlant::saveState() {
   PlantState state;
   state.time = time_;
-  const double* y = N_VGetArrayPointer(solver_->y);
+  const double* y = now();
   state.y.assign(y, y + stateSize());
   state.reference = reference_;
   state.reference_velocity = reference_velocity_;
@@ -1272,6 +1308,7 @@ void FlexibleJointPlant::restoreState(const PlantState& state) {
     throw InvalidArgument("plant: the saved state's blend duration is not finite and non-negative");
   }
   time_ = state.time;
+  ahead_ = false;
   std::copy(state.y.begin(), state.y.end(), N_VGetArrayPointer(solver_->y));
   reference_ = state.reference;
   reference_velocity_ = state.reference_velocity;

@@ -83,6 +83,12 @@ struct PlantOptions {
   // from the sliver's size at order 1. fmu_bench at 10 ms updates: 4.94 -> 3.22 steps and 1.20 -> 0.25 Newton
   // matrices per update. false: one CVODE call per advance with its end as the only stop time, as before.
   bool even_steps = true;
+  // How far past the end of an advance CVODE may step, in s (0: it stops at every advance's end). With
+  // updates shorter than CVODE's own step (a 1 ms co-simulation), CVODE then takes its own steps through
+  // several updates, the state at each update's end is interpolated from its last step, and an update's
+  // new reference takes over from CVODE's next step on: an update lands late by at most this time, with the
+  // reference extrapolated over it in the meantime. even_steps does not apply then.
+  double step_past_updates_s = 0.0;
   bool control = true;         // false: no motor torque at all (free response)
   bool motors_locked = false;  // true: motor positions held where they are (static tests)
 };
@@ -239,6 +245,10 @@ private:
   JointVector windup_gain_;  // per joint, 1 / (ki Tt): how fast a clamped excess pulls the integral back
   double time_ = 0.0;
   bool restart_ = true;  // the integrator restarts (fresh history) before the next step
+  bool ahead_ = false;   // CVODE has stepped past time_ (step_past_updates_s): the state now is interpolated
+  // The state at time_: CVODE's own when it stopped there, the interpolated one when it is ahead.
+  const double* now() const;
+  int integratePast(double end_time, long budget, double& reached);
   std::string tripped_;  // why the watchdog stopped the run; empty while it runs
   JointVector reference_, reference_velocity_, reference_acceleration_, feedforward_, feedforward_rate_;
   double reference_time_ = 0.0;

@@ -1,0 +1,164 @@
+// PlantOptions::step_past_updates_s: CVODE steps through updates shorter than its own steps, the state at each
+// update is interpolated from its last step, and an update's reference takes over from CVODE's next step on.
+// Against the plant that stops at every update: fewer steps at 1 ms updates, the same motion within a few
+// microradians (the updates land late), the same motion within the tolerances when the reference never
+// changes (so the interpolated state is the state at the update, not CVODE's ahead of it), and a saved state or
+// a restart continues from the state at the update.
+#include <cmath>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "tests/plant/plant_test_support.hpp"
+
+#include "model/common/errors.hpp"
+#include "model/io/parameter_file.hpp"
+#include "model/plant/flexible_joint_plant.hpp"
+
+namespace jointcomp {
+namespace {
+
+using namespace plant_testing;
+
+constexpr double kPast = 0.01;  // s
+
+std::unique_ptr<FlexibleJointPlant> makePlant(double step_past) {
+  static const JointErrorModel model = loadParameterFile(kParameters, rx170());
+  PlantOptions options;
+  options.step_past_updates_s = step_past;
+  return std::make_unique<FlexibleJointPlant>(model, loadDriveParameters(kParameters, *rx170()), options);
+}
+
+const JointVector& centre() {
+  static const JointVector q = joints({20.0, 45.0, 70.0, 30.0, 50.0, 10.0});
+  return q;
+}
+
+// Every drive swings slowly from rest through a cosine (as in test_plant_even_steps.cpp), the reference
+// updated at k * update with its value and rate there.
+void setSwingReference(FlexibleJointPlant& plant, double t) {
+  const JointVector amplitude = joints({3.0, 2.0, 2.5, 4.0, 3.0, 2.0});
+  const double hertz[6] = {0.1, 0.12, 0.14, 0.16, 0.18, 0.2};
+  JointVector q = centre(), v = JointVector::Zero(6);
+  for (int j = 0; j < 6; ++j) {
+    const double w = 2.0 * kPi * hertz[j];
+    q[j] += amplitude[j] * (1.0 - std::cos(w * t));
+    v[j] = amplitude[j] * w * std::sin(w * t);
+  }
+  plant.setReference(q, v);
+}
+
+struct Track {
+  std::vector<JointVector> links;  // after each update
+  PlantStatistics statistics;
+  bool on_time = true;
+};
+
+// `updates` updates of `update` seconds from the plant's current time; swing: a new reference at each.
+Track follow(FlexibleJointPlant& plant, double update, int updates, bool swing) {
+  Track track;
+  const double start = plant.time();
+  for (int k = 0; k < updates; ++k) {
+    const double t = start + k * update;
+    if (swing) setSwingReference(plant, t);
+    plant.advance(start + (k + 1) * update);
+    track.on_time = track.on_time && plant.time() == start + (k + 1) * update;
+    track.links.push_back(plant.linkPositions());
+  }
+  track.statistics = plant.statistics();
+  return track;
+}
+
+double largestDifference(const Track& a, const Track& b) {
+  double largest = 0.0;
+  for (std::size_t i = 0; i < a.links.size() && i < b.links.size(); ++i) {
+    largest = std::max(largest, (a.links[i] - b.links[i]).cwiseAbs().maxCoeff());
+  }
+  return largest;
+}
+
+TEST(PlantStepPast, ShortUpdatesCostFewerStepsAndFollowTheStoppingRunWithinMicroradians) {
+  auto stopping = makePlant(0.0);
+  auto past = makePlant(kPast);
+  stopping->reset(centre());
+  past->reset(centre());
+  const Track a = follow(*stopping, 0.001, 1000, true);
+  const Track b = follow(*past, 0.001, 1000, true);
+  EXPECT_TRUE(b.on_time);
+  EXPECT_GE(a.statistics.steps, 1000);  // one step per update at least, when it stops at each
+  EXPECT_LT(b.statistics.steps, 0.6 * a.statistics.steps)
+      << b.statistics.steps << " steps against " << a.statistics.steps;
+  const double largest = largestDifference(a, b);
+  EXPECT_LT(largest, 5e-6);
+  EXPECT_GT(largest, 0.0);
+}
+
+// The reference is set once: both plants integrate the same equations, so the interpolated states agree with
+// the stopping run's within the tolerances (CVODE's own state ahead of the update would be 1e-4 rad off).
+TEST(PlantStepPast, AReferenceThatNeverChangesGivesTheStoppingRunsMotion) {
+  auto stopping = makePlant(0.0);
+  auto past = makePlant(kPast);
+  const JointVector target = centre() + joints({0.5, -0.4, 0.3, 0.6, -0.5, 0.4});
+  for (FlexibleJointPlant* plant : {stopping.get(), past.get()}) {
+    plant->reset(centre());
+    plant->setReference(target, JointVector::Zero(6));
+  }
+  const Track a = follow(*stopping, 0.001, 300, false);
+  const Track b = follow(*past, 0.001, 300, false);
+  EXPECT_TRUE(b.on_time);
+  EXPECT_LT(b.statistics.steps, a.statistics.steps);
+  double moved = 0.0;
+  for (const JointVector& q : a.links) moved = std::max(moved, (q - centre()).cwiseAbs().maxCoeff());
+  EXPECT_GT(moved, 1e-3) << "the links move";
+  EXPECT_LT(largestDifference(a, b), 1e-6);  // rtol 1e-6 on angles near 1 rad
+}
+
+TEST(PlantStepPast, ASavedStateContinuesIdenticallyHereAndInAnotherPlant) {
+  auto plant = makePlant(kPast);
+  plant->reset(centre());
+  follow(*plant, 0.001, 137, true);
+  const PlantState saved = plant->saveState();
+  const Track first = follow(*plant, 0.001, 200, true);
+  plant->restoreState(saved);
+  const Track again = follow(*plant, 0.001, 200, true);
+  auto other = makePlant(kPast);
+  other->restoreState(saved);
+  const Track elsewhere = follow(*other, 0.001, 200, true);
+  ASSERT_EQ(first.links.size(), 200u);
+  for (std::size_t i = 0; i < first.links.size(); ++i) {
+    ASSERT_EQ(first.links[i], again.links[i]) << "update " << i;
+    ASSERT_EQ(first.links[i], elsewhere.links[i]) << "update " << i;
+  }
+}
+
+// A restart (here a new tool wrench) starts CVODE afresh from the state at the update, not from its last step
+// ahead of it: nothing moves at the restart, and the motion goes on as without it (within the tolerances).
+TEST(PlantStepPast, ARestartContinuesFromTheStateAtTheUpdate) {
+  auto plant = makePlant(kPast);
+  auto reference = makePlant(kPast);
+  plant->reset(centre());
+  reference->reset(centre());
+  follow(*plant, 0.001, 101, true);
+  follow(*reference, 0.001, 101, true);
+  const JointVector before = plant->linkPositions();
+  plant->setToolWrench(Vector6::Zero());
+  EXPECT_EQ(plant->linkPositions(), before);
+  EXPECT_EQ(plant->time(), reference->time());
+  const Track restarted = follow(*plant, 0.001, 20, true);
+  const Track going_on = follow(*reference, 0.001, 20, true);
+  EXPECT_LT(largestDifference(restarted, going_on), 5e-6);
+}
+
+TEST(PlantStepPast, OutOfRangeValuesAreRefusedWithTheOptionNamed) {
+  for (const double value : {-0.001, 1.5, std::nan("")}) {
+    try {
+      makePlant(value);
+      ADD_FAILURE() << value << " was accepted";
+    } catch (const InvalidArgument& error) {
+      EXPECT_NE(std::string(error.what()).find("step_past_updates_s"), std::string::npos) << error.what();
+    }
+  }
+}
+
+}  // namespace
+}  // namespace jointcomp
