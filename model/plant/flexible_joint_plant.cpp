@@ -478,6 +478,7 @@ void FlexibleJointPlant::reset(const JointVector& command, double start_time) {
   reference_time_ = start_time;
   staticFeedforward(command, feedforward_);
   feedforward_rate_.setZero(n_);
+  feedforward_pending_ = false;
   blend_offset_.setZero(n_);
   blend_offset_velocity_.setZero(n_);
   blend_offset_acceleration_.setZero(n_);
@@ -506,6 +507,7 @@ void FlexibleJointPlant::setReference(const JointVector& position, const JointVe
   // static-load feed-forward with its rate along the motion, so that the controller's output is nearly
   // continuous across updates and the integrator is not knocked back to small steps at each one.
   const double since_last = time_ - reference_time_;
+  if (options_.smooth_reference) ensureFeedforward();  // the blend starts from the running feed-forward
   // The reference as it runs now, before the update: the blend starts from it.
   JointVector before_value(n_), before_velocity(n_), before_acceleration(n_), before_feedforward(n_),
       before_feedforward_rate(n_);
@@ -525,15 +527,8 @@ void FlexibleJointPlant::setReference(const JointVector& position, const JointVe
   reference_ = position;
   reference_velocity_ = velocity;
   reference_time_ = time_;
-  staticFeedforward(position, feedforward_);
-  // Its rate along the motion in closed form at the same pose; a difference quotient only when a load effect
-  // does not know its rate.
-  if (!loadTorqueRateAtCurrentPose(truth_, load_mask_, ws_, ctx_, velocity, feedforward_rate_)) {
-    constexpr double kRateStep = 1e-4;  // s
-    JointVector ahead;
-    staticFeedforward(position + velocity * kRateStep, ahead);
-    feedforward_rate_ = (ahead - feedforward_) / kRateStep;
-  }
+  feedforward_pending_ = true;
+  if (options_.smooth_reference) ensureFeedforward();
   // The new extrapolation takes over from the old one over the interval the last update took (the next
   // one is expected as long); a second update at the same time keeps the blend's duration.
   if (!options_.smooth_reference) {
@@ -556,8 +551,23 @@ void FlexibleJointPlant::setReference(const JointVector& position, const JointVe
   }
 }
 
+// The static-load feed-forward at the last update's reference, and its rate along the update's velocity in
+// closed form at the same pose; a difference quotient only when a load effect does not know its rate.
+void FlexibleJointPlant::ensureFeedforward() {
+  if (!feedforward_pending_) return;
+  feedforward_pending_ = false;
+  staticFeedforward(reference_, feedforward_);
+  if (!loadTorqueRateAtCurrentPose(truth_, load_mask_, ws_, ctx_, reference_velocity_, feedforward_rate_)) {
+    constexpr double kRateStep = 1e-4;  // s
+    JointVector ahead;
+    staticFeedforward(reference_ + reference_velocity_ * kRateStep, ahead);
+    feedforward_rate_ = (ahead - feedforward_) / kRateStep;
+  }
+}
+
 void FlexibleJointPlant::setToolWrench(const Vector6& wrench) {
   if (!wrench.allFinite()) throw InvalidArgument("plant: tool wrench is not finite");
+  ensureFeedforward();  // at the loads of its update
   ctx_.tool_wrench = wrench;
   restart_ = true;  // a step in the load: start the integrator afresh
 }
@@ -566,6 +576,7 @@ void FlexibleJointPlant::setPayload(double mass, const Eigen::Vector3d& com_in_t
   if (!std::isfinite(mass) || mass < 0.0 || !com_in_tool.allFinite()) {
     throw InvalidArgument("plant: payload mass must be finite and non-negative, its centre finite");
   }
+  ensureFeedforward();  // at the loads of its update
   ctx_.payload_mass = mass;
   ctx_.payload_com = com_in_tool;
   restart_ = true;
@@ -804,6 +815,7 @@ void FlexibleJointPlant::linkAcceleration(const JointVector& q, const JointVecto
 }
 
 void FlexibleJointPlant::derivative(double t, const double* y, double* ydot) {
+  ensureFeedforward();
   const PlantStateParts parts(y, n_);
   const JointVector &q = parts.q, &qd = parts.qd, &p = parts.p, &pd = parts.pd, &integral = parts.integral;
 
@@ -883,6 +895,7 @@ void FlexibleJointPlant::linkDerivativesByDifferences(const JointVector& q, cons
 // Closed form (the link accelerations' q and qd columns by tangent passes of inverse dynamics) except the
 // transmission error's curvature, a central difference of the effects' own slopes.
 void FlexibleJointPlant::jacobian(double t, const double* y, double* jacobian) {
+  ensureFeedforward();
   if (!analytic_slope_) {
     throw InvalidArgument("plant: no analytic Jacobian: an effect of the transmission error does not give its slope");
   }
@@ -1226,6 +1239,7 @@ JointVector FlexibleJointPlant::motorVelocities() const {
 }
 
 JointVector FlexibleJointPlant::motorTorques() {
+  ensureFeedforward();
   const double* y = now();
   const Eigen::Map<const Eigen::VectorXd> state(y, stateSize());
   JointVector torque;
@@ -1260,6 +1274,7 @@ double FlexibleJointPlant::mechanicalEnergy() {
 const double* FlexibleJointPlant::state() const { return now(); }
 
 PlantState FlexibleJointPlant::saveState() {
+  ensureFeedforward();
   PlantState state;
   state.time = time_;
   const double* y = now();
@@ -1315,6 +1330,7 @@ void FlexibleJointPlant::restoreState(const PlantState& state) {
   reference_acceleration_ = state.reference_acceleration;
   feedforward_ = state.feedforward;
   feedforward_rate_ = state.feedforward_rate;
+  feedforward_pending_ = false;
   reference_time_ = state.reference_time;
   JointVector* blend_targets[] = {&blend_offset_, &blend_offset_velocity_, &blend_offset_acceleration_,
                                   &feedforward_offset_, &feedforward_offset_rate_};

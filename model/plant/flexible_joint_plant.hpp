@@ -246,6 +246,12 @@ private:
   double time_ = 0.0;
   bool restart_ = true;  // the integrator restarts (fresh history) before the next step
   bool ahead_ = false;   // CVODE has stepped past time_ (step_past_updates_s): the state now is interpolated
+  // The static feed-forward of the last update and its rate, computed when first needed (the right-hand side,
+  // the Jacobian, motorTorques, saveState): with step_past_updates_s most updates are replaced by the next one
+  // before CVODE takes a step. The same values as when computed at the update: what they read (the reference
+  // and the loads) is set before, and a change of the loads first computes the pending ones.
+  bool feedforward_pending_ = false;
+  void ensureFeedforward();
   // The state at time_: CVODE's own when it stopped there, the interpolated one when it is ahead.
   const double* now() const;
   int integratePast(double end_time, long budget, double& reached);
