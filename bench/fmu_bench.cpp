@@ -270,6 +270,7 @@ BENCHMARK(BM_FmuSpiral)
     ->Args({3, 0, 10, 0})
     ->Args({2, 0, 1, 10})
     ->Args({3, 0, 1, 10})
+    ->Args({2, 0, 10, 10})
     ->Unit(benchmark::kMicrosecond)
     ->MinTime(2.0);
 
@@ -391,6 +392,7 @@ BENCHMARK(BM_DirectSpiral)
     ->Args({1, 1, 0})
     ->Args({1, 10, 0})
     ->Args({0, 1, 10})
+    ->Args({0, 10, 10})
     ->Unit(benchmark::kMicrosecond)
     ->MinTime(2.0);
 
@@ -418,7 +420,7 @@ int main(int argc, char** argv) {
   Reporter reporter;
   benchmark::RunSpecifiedBenchmarks(&reporter);
   // Per communication step: the direct run of that step, then the FMUs against it.
-  for (const auto& [step_ms, past_ms] : {std::pair{1, 0}, std::pair{10, 0}, std::pair{1, 10}}) {
+  for (const auto& [step_ms, past_ms] : {std::pair{1, 0}, std::pair{10, 0}, std::pair{1, 10}, std::pair{10, 10}}) {
     const std::string key = "step_ms:" + std::to_string(step_ms) + "/past_ms:" + std::to_string(past_ms);
     auto ofStep = [&](const std::string& name) {  // the key, followed by the end or by "/min_time:..."
       const std::size_t at = name.find(key);

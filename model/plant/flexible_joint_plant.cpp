@@ -1077,7 +1077,15 @@ void FlexibleJointPlant::advance(double end_time) {
     check(CVodeReInit(s.cvode, time_, s.y), "CVodeReInit");
     restart_ = false;
   }
-  const bool past = options_.step_past_updates_s > 0.0;
+  // Stepping past the end pays only for advances shorter than CVODE's step; a longer one ends on its time
+  // (from where CVODE is, if it is ahead), as without the option.
+  bool past = false;
+  if (options_.step_past_updates_s > 0.0) {
+    realtype at = time_, planned = 0.0;  // planned: 0 before the first step after a (re)start
+    if (CVodeGetCurrentTime(s.cvode, &at) != CV_SUCCESS) at = time_;
+    if (CVodeGetCurrentStep(s.cvode, &planned) != CV_SUCCESS) planned = 0.0;
+    past = at >= end_time || end_time - time_ < planned;
+  }
   if (!past) check(CVodeSetStopTime(s.cvode, end_time), "CVodeSetStopTime");
   // The work budget of this advance: a floor for the start-up transients plus a rate per simulated second
   // far above what the plant needs (about 800 steps per second on the paper's spiral), so that a plant
@@ -1134,6 +1142,8 @@ void FlexibleJointPlant::advance(double end_time) {
     // CVODE's last step ends at or beyond end_time and began before it: its interpolant covers end_time.
     check(CVodeGetDky(s.cvode, end_time, 0, s.y_now), "CVodeGetDky");
     ahead_ = true;
+  } else {
+    ahead_ = false;  // stopped on end_time: y is the state there
   }
   time_ = end_time;
   checkWatchdog();
@@ -1168,7 +1178,8 @@ const double* FlexibleJointPlant::now() const { return N_VGetArrayPointer(ahead_
 // advance's work budget.
 int FlexibleJointPlant::integrateEvenly(double end_time, long budget, double& reached) {
   Solver& s = *solver_;
-  realtype at = time_;
+  realtype at = time_;  // or CVODE's time, when it stepped past time_ (step_past_updates_s)
+  if (CVodeGetCurrentTime(s.cvode, &at) != CV_SUCCESS) at = time_;
   for (long step = 0; step < budget; ++step) {
     realtype planned = 0.0;  // 0 before CVODE's first step after a (re)start: it chooses that one itself
     if (CVodeGetCurrentStep(s.cvode, &planned) != CV_SUCCESS) planned = 0.0;

@@ -93,6 +93,20 @@ TEST(PlantStepPast, ShortUpdatesCostFewerStepsAndFollowTheStoppingRunWithinMicro
   EXPECT_GT(largest, 0.0);
 }
 
+// Updates longer than CVODE's steps end on their time, as without the option (CVODE steps past one only when
+// its own step is longer than the update, as near rest): no more steps, and the same motion within microradians.
+TEST(PlantStepPast, UpdatesLongerThanCvodesStepsCostNoMoreSteps) {
+  auto stopping = makePlant(0.0);
+  auto past = makePlant(kPast);
+  stopping->reset(centre());
+  past->reset(centre());
+  const Track a = follow(*stopping, 0.01, 200, true);
+  const Track b = follow(*past, 0.01, 200, true);
+  EXPECT_TRUE(b.on_time);
+  EXPECT_LE(b.statistics.steps, a.statistics.steps) << b.statistics.steps << " steps against " << a.statistics.steps;
+  EXPECT_LT(largestDifference(a, b), 5e-6);
+}
+
 // The reference is set once: both plants integrate the same equations, so the interpolated states agree with
 // the stopping run's within the tolerances (CVODE's own state ahead of the update would be 1e-4 rad off).
 TEST(PlantStepPast, AReferenceThatNeverChangesGivesTheStoppingRunsMotion) {
