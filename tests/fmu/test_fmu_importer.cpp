@@ -857,6 +857,33 @@ TEST_P(FmuTest, VaryingCommunicationStepsMatchTheDirectRunBitForBit) {
   }
 }
 
+// An integrator option through the FMU against the plant: the FMU's run (started by `start_fmu`) must be the
+// plant's with `options` bit for bit; returned: how many steps and how far (worst link, rad) it ends from the
+// plant with the default options, to show that the option reached the plant and what it costs.
+struct OptionEffect {
+  std::size_t steps = 0, differing = 0;
+  double largest = 0.0;
+};
+OptionEffect throughTheFmuAsThePlant(Master& m, const JointErrorModel& truth, const PlantOptions& options,
+                                     std::size_t end, bool varying) {
+  const Record fmu = run(m, 0, end, varying);
+  const Record direct = runDirectly(2, truth, end, varying, options);
+  const Record defaults = runDirectly(2, truth, end, varying);
+  OptionEffect effect;
+  EXPECT_EQ(fmu.q_link.size(), direct.q_link.size());
+  EXPECT_EQ(fmu.q_link.size(), defaults.q_link.size());
+  effect.steps = std::min({fmu.q_link.size(), direct.q_link.size(), defaults.q_link.size()});
+  for (std::size_t i = 0; i < effect.steps; ++i) {
+    EXPECT_EQ(fmu.q_link[i], direct.q_link[i]) << "step " << i;
+    EXPECT_EQ(fmu.q_ref[i], direct.q_ref[i]) << "step " << i;
+    if (fmu.q_link[i] != defaults.q_link[i]) ++effect.differing;
+    for (int j = 0; j < kDof; ++j) {
+      effect.largest = std::max(effect.largest, std::abs(fmu.q_link[i][j] - defaults.q_link[i][j]));
+    }
+  }
+  return effect;
+}
+
 // integrator.even_steps reaches the plant: switched off, the FMU takes CVODE's own steps, the plant's with
 // PlantOptions::even_steps off bit for bit, and on steps of up to 5 ms those are other steps than the
 // default's (the ending in two equal steps), which end within the tolerance's reach of them.
@@ -864,53 +891,29 @@ TEST_P(FmuTest, EvenStepsOffIsThePlantsOwnStepsBitForBit) {
   const JointErrorModel truth = truthModel();
   auto m = makeMaster(GetParam());
   start(*m, 2, &truth, false);
-  const std::size_t end = 3000;
-  const Record fmu = run(*m, 0, end, true);
   PlantOptions uneven;
   uneven.even_steps = false;
-  const Record direct = runDirectly(2, truth, end, true, uneven);
-  const Record even = runDirectly(2, truth, end, true);
-  ASSERT_EQ(fmu.q_link.size(), direct.q_link.size());
-  ASSERT_EQ(fmu.q_link.size(), even.q_link.size());
-  std::size_t differing_from_even = 0;
-  double largest_difference = 0.0;
-  for (std::size_t i = 0; i < fmu.q_link.size(); ++i) {
-    ASSERT_EQ(fmu.q_link[i], direct.q_link[i]) << "step " << i;
-    if (fmu.q_link[i] != even.q_link[i]) ++differing_from_even;
-    for (int j = 0; j < kDof; ++j) {
-      largest_difference = std::max(largest_difference, std::abs(fmu.q_link[i][j] - even.q_link[i][j]));
-    }
-  }
-  EXPECT_GT(differing_from_even, fmu.q_link.size() / 2);
-  EXPECT_LT(largest_difference, 1e-6);
+  const OptionEffect effect = throughTheFmuAsThePlant(*m, truth, uneven, 3000, true);
+  EXPECT_GT(effect.differing, effect.steps / 2);
+  EXPECT_LT(effect.largest, 1e-6);
   EXPECT_EQ(m->terminate(), kOK);
 }
 
 // integrator.step_past_updates: at 1 ms steps CVODE steps through several communication points; the FMU is
 // the plant with PlantOptions::step_past_updates_s bit for bit, its links stay within a few microradians of
-// the run that stops at every point (the new inputs land up to one CVODE step late), it takes fewer CVODE
-// steps than communication steps, and a state saved mid-run continues identically.
+// the run that stops at every point (the new inputs land up to one CVODE step late), and a state saved mid-run
+// continues identically.
 TEST_P(FmuTest, SteppingPastCommunicationPointsIsThePlantsAndStaysNearTheStoppingRun) {
   const JointErrorModel truth = truthModel();
   constexpr double kPast = 0.01;
   auto m = makeMaster(GetParam());
   start(*m, 2, &truth, true, kPast);
   const std::size_t end = 6000;
-  const Record fmu = run(*m, 0, end, false);
   PlantOptions past;
   past.step_past_updates_s = kPast;
-  const Record direct = runDirectly(2, truth, end, false, past);
-  const Record stopping = runDirectly(2, truth, end, false);
-  ASSERT_EQ(fmu.q_link.size(), direct.q_link.size());
-  ASSERT_EQ(fmu.q_link.size(), stopping.q_link.size());
-  double largest = 0.0;
-  for (std::size_t i = 0; i < fmu.q_link.size(); ++i) {
-    ASSERT_EQ(fmu.q_link[i], direct.q_link[i]) << "step " << i;
-    ASSERT_EQ(fmu.q_ref[i], direct.q_ref[i]) << "step " << i;
-    for (int j = 0; j < kDof; ++j) largest = std::max(largest, std::abs(fmu.q_link[i][j] - stopping.q_link[i][j]));
-  }
-  EXPECT_LT(largest, 5e-6);
-  EXPECT_GT(largest, 0.0) << "the option reached the plant";
+  const OptionEffect effect = throughTheFmuAsThePlant(*m, truth, past, end, false);
+  EXPECT_LT(effect.largest, 5e-6);
+  EXPECT_GT(effect.largest, 0.0) << "the option reached the plant";
 
   void* state = nullptr;
   ASSERT_EQ(m->getState(&state), kOK);

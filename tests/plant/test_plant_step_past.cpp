@@ -5,6 +5,7 @@
 // changes (so the interpolated state is the state at the update, not CVODE's ahead of it), and a saved state or
 // a restart continues from the state at the update.
 #include <cmath>
+#include <utility>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -77,13 +78,17 @@ double largestDifference(const Track& a, const Track& b) {
   return largest;
 }
 
-TEST(PlantStepPast, ShortUpdatesCostFewerStepsAndFollowTheStoppingRunWithinMicroradians) {
+// The swing from rest, on a plant that stops at every update and on one that steps past them.
+std::pair<Track, Track> swingStoppingAndPast(double update, int updates) {
   auto stopping = makePlant(0.0);
   auto past = makePlant(kPast);
   stopping->reset(centre());
   past->reset(centre());
-  const Track a = follow(*stopping, 0.001, 1000, true);
-  const Track b = follow(*past, 0.001, 1000, true);
+  return {follow(*stopping, update, updates, true), follow(*past, update, updates, true)};
+}
+
+TEST(PlantStepPast, ShortUpdatesCostFewerStepsAndFollowTheStoppingRunWithinMicroradians) {
+  const auto [a, b] = swingStoppingAndPast(0.001, 1000);
   EXPECT_TRUE(b.on_time);
   EXPECT_GE(a.statistics.steps, 1000);  // one step per update at least, when it stops at each
   EXPECT_LT(b.statistics.steps, 0.6 * a.statistics.steps)
@@ -96,12 +101,7 @@ TEST(PlantStepPast, ShortUpdatesCostFewerStepsAndFollowTheStoppingRunWithinMicro
 // Updates longer than CVODE's steps end on their time, as without the option (CVODE steps past one only when
 // its own step is longer than the update, as near rest): no more steps, and the same motion within microradians.
 TEST(PlantStepPast, UpdatesLongerThanCvodesStepsCostNoMoreSteps) {
-  auto stopping = makePlant(0.0);
-  auto past = makePlant(kPast);
-  stopping->reset(centre());
-  past->reset(centre());
-  const Track a = follow(*stopping, 0.01, 200, true);
-  const Track b = follow(*past, 0.01, 200, true);
+  const auto [a, b] = swingStoppingAndPast(0.01, 200);
   EXPECT_TRUE(b.on_time);
   EXPECT_LE(b.statistics.steps, a.statistics.steps) << b.statistics.steps << " steps against " << a.statistics.steps;
   EXPECT_LT(largestDifference(a, b), 5e-6);
