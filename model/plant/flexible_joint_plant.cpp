@@ -1178,8 +1178,8 @@ const double* FlexibleJointPlant::now() const { return N_VGetArrayPointer(ahead_
 // advance's work budget.
 int FlexibleJointPlant::integrateEvenly(double end_time, long budget, double& reached) {
   Solver& s = *solver_;
-  realtype at = time_;  // or CVODE's time, when it stepped past time_ (step_past_updates_s)
-  if (CVodeGetCurrentTime(s.cvode, &at) != CV_SUCCESS) at = time_;
+  realtype at = time_;
+  if (ahead_ && CVodeGetCurrentTime(s.cvode, &at) != CV_SUCCESS) at = time_;  // CVODE stepped past time_ before
   for (long step = 0; step < budget; ++step) {
     realtype planned = 0.0;  // 0 before CVODE's first step after a (re)start: it chooses that one itself
     if (CVodeGetCurrentStep(s.cvode, &planned) != CV_SUCCESS) planned = 0.0;
