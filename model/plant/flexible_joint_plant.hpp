@@ -83,11 +83,11 @@ struct PlantOptions {
   // from the sliver's size at order 1. fmu_bench at 10 ms updates: 4.94 -> 3.22 steps and 1.20 -> 0.25 Newton
   // matrices per update. false: one CVODE call per advance with its end as the only stop time, as before.
   bool even_steps = true;
-  // How far past the end of an advance CVODE may step, in s (0: it stops at every advance's end). With
-  // updates shorter than CVODE's own step (a 1 ms co-simulation), CVODE then takes its own steps through
-  // several updates, the state at each update's end is interpolated from its last step, and an update's
-  // new reference takes over from CVODE's next step on: an update lands late by at most this time, with the
-  // reference extrapolated over it in the meantime. even_steps does not apply then.
+  // How far past the end of an advance CVODE may step, in s (0: it stops at every advance's end). An advance
+  // shorter than CVODE's planned step (a 1 ms co-simulation) then does not stop CVODE: it takes its own steps
+  // through several updates, the state at each update's end is interpolated from its last step, and an
+  // update's new reference takes over from CVODE's next step on, so it lands up to one CVODE step late, the
+  // old reference extrapolated until then. A longer advance still ends on its time (even_steps applies).
   double step_past_updates_s = 0.0;
   bool control = true;         // false: no motor torque at all (free response)
   bool motors_locked = false;  // true: motor positions held where they are (static tests)
@@ -211,6 +211,10 @@ private:
   ReferencePoint referencePoint(int joint, double t) const;
   void checkWatchdog();
   int integrateEvenly(double end_time, long budget, double& reached);
+  int integratePast(double end_time, long budget, double& reached);
+  void ensureFeedforward();
+  // The state at time_: CVODE's own when it stopped there, the interpolated one when it is ahead.
+  const double* now() const;
   void transmissionError(const JointVector& p, const JointVector& q, JointVector& error);
   void transmissionTorques(const JointVector& p, const JointVector& pd, const JointVector& q, const JointVector& qd,
                            JointVector& link_torque, JointVector& motor_reaction);
@@ -246,15 +250,11 @@ private:
   double time_ = 0.0;
   bool restart_ = true;  // the integrator restarts (fresh history) before the next step
   bool ahead_ = false;   // CVODE has stepped past time_ (step_past_updates_s): the state now is interpolated
-  // The static feed-forward of the last update and its rate, computed when first needed (the right-hand side,
-  // the Jacobian, motorTorques, saveState): with step_past_updates_s most updates are replaced by the next one
-  // before CVODE takes a step. The same values as when computed at the update: what they read (the reference
-  // and the loads) is set before, and a change of the loads first computes the pending ones.
+  // The static feed-forward of the last update and its rate are computed when first needed (the right-hand
+  // side, the Jacobian, motorTorques, saveState): with step_past_updates_s most updates are replaced by the
+  // next one before CVODE takes a step. The same values as when computed at the update: what they read (the
+  // reference and the loads) is set before, and a change of the loads first computes the pending ones.
   bool feedforward_pending_ = false;
-  void ensureFeedforward();
-  // The state at time_: CVODE's own when it stopped there, the interpolated one when it is ahead.
-  const double* now() const;
-  int integratePast(double end_time, long budget, double& reached);
   std::string tripped_;  // why the watchdog stopped the run; empty while it runs
   JointVector reference_, reference_velocity_, reference_acceleration_, feedforward_, feedforward_rate_;
   double reference_time_ = 0.0;
