@@ -8,12 +8,12 @@
 #include <vector>
 
 #include "fmu/demo_move.hpp"
-#include "fmu/integrator_options.hpp"
 #include "fmu/variable_binding.hpp"
 #include "model/common/bits.hpp"
 #include "model/common/errors.hpp"
 #include "model/io/parameter_file.hpp"
 #include "model/io/robot_file.hpp"
+#include "model/plant/plant_options_by_name.hpp"
 #include "model/robot/kinematics.hpp"
 
 namespace jointcomp::fmu {
@@ -460,7 +460,7 @@ Status Instance::setupExperiment(const char* function, bool tolerance_defined, d
     }
     // The importer's tolerance becomes the integrator's relative tolerance (and its parameter's value).
     for (int i = 0; i < table::kCount; ++i) {
-      const IntegratorOption* option = models_->binding.option(i);
+      const PlantOptionByName* option = models_->binding.option(i);
       if (option && std::strcmp(option->name, "relative_tolerance") == 0) state_.values[i] = tolerance;
     }
   }

@@ -14,11 +14,11 @@
 
 #include <nlohmann/json.hpp>
 
-#include "fmu/integrator_options.hpp"
 #include "model/io/atomic_file.hpp"
 #include "model/io/parameter_file.hpp"
 #include "model/io/robot_file.hpp"
 #include "model/plant/flexible_joint_plant.hpp"
+#include "model/plant/plant_options_by_name.hpp"
 #include "model/robot/load_urdf.hpp"
 
 namespace {
@@ -70,7 +70,7 @@ int run(const std::string& urdf, const std::string& parameters, const std::strin
       if (item.value().is_number()) values["drives"][joint_name + "." + item.key()] = item.value();
     }
   }
-  for (const fmu::IntegratorOption& option : fmu::kIntegratorOptions) {
+  for (const PlantOptionByName& option : kPlantOptionsByName) {
     values["integrator"][option.name] = option.get(options);
   }
 

@@ -46,7 +46,7 @@ VariableBinding::VariableBinding(const ParameterSet& base, const Robot& robot, c
         break;
       }
       case table::Binding::Integrator:
-        option_[static_cast<std::size_t>(i)] = findIntegratorOption(v.key);
+        option_[static_cast<std::size_t>(i)] = findPlantOption(v.key);
         if (!option_[static_cast<std::size_t>(i)]) {
           throw Error(std::string("no integrator option '") + v.key + "' (FMU variable '" + v.name + "')");
         }
@@ -92,7 +92,7 @@ VariableBinding::Models VariableBinding::apply(const ParameterSet& base, const R
     throw ParameterError(std::string("controller parameters: ") + error.what());
   }
   for (int i = 0; i < table::kCount; ++i) {
-    if (const IntegratorOption* o = option(i)) o->set(built.options, values[static_cast<std::size_t>(i)]);
+    if (const PlantOptionByName* o = option(i)) o->set(built.options, values[static_cast<std::size_t>(i)]);
   }
   return built;
 }

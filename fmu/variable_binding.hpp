@@ -8,8 +8,8 @@
 #include <string>
 #include <vector>
 
-#include "fmu/integrator_options.hpp"
 #include "model/io/parameter_file.hpp"
+#include "model/plant/plant_options_by_name.hpp"
 
 namespace jointcomp::fmu {
 
@@ -34,7 +34,7 @@ public:
   Models apply(const ParameterSet& base, const Robot& robot, const std::vector<double>& values) const;
 
   // The integrator option a variable binds, nullptr for the others.
-  const IntegratorOption* option(int index) const { return option_[static_cast<std::size_t>(index)]; }
+  const PlantOptionByName* option(int index) const { return option_[static_cast<std::size_t>(index)]; }
 
 private:
   struct EffectSlot {
@@ -43,7 +43,7 @@ private:
   };
   std::vector<EffectSlot> effect_slot_;
   std::vector<int> drive_slot_;  // index among driveParameters(), -1 for the others
-  std::vector<const IntegratorOption*> option_;
+  std::vector<const PlantOptionByName*> option_;
 };
 
 }  // namespace jointcomp::fmu

@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include "api_support.hpp"
+#include "json_options.hpp"
 #include "model/common/json_fields.hpp"
 #include "model/common/strict_json.hpp"
 #include "model/experiment/campaign_simulation.hpp"
@@ -27,28 +28,6 @@ using namespace jointcomp::capi;
 namespace {
 
 constexpr double kDegree = 3.14159265358979323846 / 180.0;
-
-// Reads options_json (NULL: no options) with `read`, which asks JsonFields for each key it knows; unknown
-// keys and bad values become JC_ERROR_INVALID_ARGUMENT naming the key (e.g. "options_json.seed: ...").
-template <class Read>
-void readOptions(const char* options_json, Read&& read) {
-  nlohmann::json options = nlohmann::json::object();
-  try {
-    if (options_json) options = parseStrictJson(options_json, "options_json");
-  } catch (const ParameterError& error) {
-    invalid(error.what());
-  }
-  if (!options.is_object()) invalid("options_json must be a JSON object, like {\"seed\": 3}");
-  try {
-    JsonFields fields(options, "options_json");
-    read(fields);
-    fields.rejectUnknownKeys();
-  } catch (const ParameterError& error) {
-    invalid(error.what());
-  } catch (const InvalidArgument& error) {
-    invalid(error.what());
-  }
-}
 
 int positiveInteger(JsonFields& fields, const std::string& key) {
   const int value = fields.integer(key);

@@ -2,6 +2,8 @@
 #include <algorithm>
 
 #include "api_support.hpp"
+#include "json_options.hpp"
+#include "model/plant/plant_options_by_name.hpp"
 
 using namespace jointcomp;
 using namespace jointcomp::capi;
@@ -33,18 +35,38 @@ void readJoints(jc_plant* plant, double* values, int32_t values_len, Read read) 
   copyJoints(read(*handle.plant), values);
 }
 
+// A plant of the robot with the options of options_json (NULL: the defaults), by the names of
+// kPlantOptionsByName, the FMU's too.
+void createPlant(jc_robot* robot, const char* options_json, jc_plant** plant) {
+  jc_robot& source = robotHandle(robot);
+  requirePointer(plant, "plant");
+  if (source.drives.empty()) invalid("the robot's parameters have no \"plant\" object (drives and controller gains)");
+  PlantOptions options;
+  readOptions(options_json, [&options](JsonFields& fields) {
+    for (const PlantOptionByName& option : kPlantOptionsByName) {
+      if (!fields.has(option.name)) continue;
+      // The plant checks each value's range and names the option.
+      switch (option.kind) {
+        case PlantOptionByName::Kind::Switch: option.set(options, fields.flagOr(option.name, false) ? 1.0 : 0.0); break;
+        case PlantOptionByName::Kind::Integer: option.set(options, fields.integer(option.name)); break;
+        case PlantOptionByName::Kind::Number: option.set(options, fields.number(option.name)); break;
+      }
+    }
+  });
+  auto created = std::make_unique<FlexibleJointPlant>(source.model, source.drives, options);
+  *plant = new jc_plant(std::move(created));
+}
+
 }  // namespace
 
 extern "C" {
 
 jc_status jc_plant_create(jc_robot* robot, jc_plant** plant) {
-  return CAPI_ENTRY({
-    jc_robot& source = robotHandle(robot);
-    requirePointer(plant, "plant");
-    if (source.drives.empty()) invalid("the robot's parameters have no \"plant\" object (drives and controller gains)");
-    auto created = std::make_unique<FlexibleJointPlant>(source.model, source.drives);
-    *plant = new jc_plant(std::move(created));
-  });
+  return CAPI_ENTRY({ createPlant(robot, nullptr, plant); });
+}
+
+jc_status jc_plant_create_with_options(jc_robot* robot, const char* options_json, jc_plant** plant) {
+  return CAPI_ENTRY({ createPlant(robot, options_json, plant); });
 }
 
 jc_status jc_plant_free(jc_plant* plant) {

@@ -949,6 +949,12 @@ int main(void) {
   EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "plant is NULL", jc_plant_create(robot, NULL));
   EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "robot is NULL", jc_plant_create(NULL, &no_plant));
   EXPECT_OK(jc_plant_create(robot, &plant));
+  /* Options by name (jointcomp.h lists them); an unknown one is refused, naming it. */
+  EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "step_past",
+                jc_plant_create_with_options(robot, "{\"step_past\": 1}", &no_plant));
+  EXPECT_OK(jc_plant_create_with_options(robot, "{\"step_past_updates_s\": 0.01, \"max_order\": 2}", &no_plant));
+  EXPECT_OK(jc_plant_free(no_plant));
+  no_plant = NULL;
 
   test_queries(robot, bare);
   test_handles(robot, plant);

@@ -251,6 +251,52 @@ TEST_F(CapiMatchesCore, SpiralPlanTrajectoryCompensationAndExperiment) {
   }
 }
 
+// jc_plant_create_with_options: the options of options_json reach the plant, by the names of PlantOptions;
+// its run is the core plant's with those options, bit for bit, and not the default plant's.
+TEST_F(CapiMatchesCore, PlantWithOptionsIsTheCorePlantWithThem) {
+  PlantOptions options;
+  options.step_past_updates_s = 0.01;
+  options.relative_tolerance = 1e-7;
+  options.max_order = 2;
+  options.even_steps = false;
+  options.tracking_envelope_rad = 0.3;
+  FlexibleJointPlant plant(*model_, drives_, options);
+  jc_plant* api_plant = nullptr;
+  jc_plant* api_default = nullptr;
+  ASSERT_EQ(jc_plant_create_with_options(handle_,
+                                         "{\"step_past_updates_s\": 0.01, \"relative_tolerance\": 1e-7, "
+                                         "\"max_order\": 2, \"even_steps\": false, \"tracking_envelope_rad\": 0.3}",
+                                         &api_plant),
+            JC_OK)
+      << jc_last_error();
+  ASSERT_EQ(jc_plant_create_with_options(handle_, "{}", &api_default), JC_OK) << jc_last_error();
+  const JointVector start = postures()[1];
+  const JointVector velocity = (JointVector(6) << 0.05, -0.03, 0.04, 0.1, -0.1, 0.2).finished();
+  plant.reset(start, 0.0);
+  ASSERT_EQ(jc_plant_reset(api_plant, start.data(), 6, 0.0), JC_OK);
+  ASSERT_EQ(jc_plant_reset(api_default, start.data(), 6, 0.0), JC_OK);
+  int differing_from_default = 0;
+  for (int k = 1; k <= 300; ++k) {
+    const JointVector reference = start + velocity * (k * 0.001);
+    plant.setReference(reference, velocity);
+    plant.advance(k * 0.001);
+    double values[6], defaults[6];
+    for (jc_plant* api : {api_plant, api_default}) {
+      ASSERT_EQ(jc_plant_set_reference(api, reference.data(), 6, velocity.data(), 6), JC_OK);
+      ASSERT_EQ(jc_plant_advance(api, k * 0.001), JC_OK) << jc_last_error();
+      ASSERT_EQ(jc_plant_link_positions(api, api == api_plant ? values : defaults, 6), JC_OK);
+    }
+    ASSERT_TRUE(sameBits(plant.linkPositions().data(), values, 6)) << "update " << k;
+    if (!sameBits(values, defaults, 6)) ++differing_from_default;
+  }
+  int64_t counts[5];
+  ASSERT_EQ(jc_plant_statistics(api_plant, counts, 5), JC_OK);
+  EXPECT_EQ(counts[0], plant.statistics().steps);
+  EXPECT_GT(differing_from_default, 150);
+  EXPECT_EQ(jc_plant_free(api_plant), JC_OK);
+  EXPECT_EQ(jc_plant_free(api_default), JC_OK);
+}
+
 TEST_F(CapiMatchesCore, PlantSteppingAndSnapshots) {
   FlexibleJointPlant plant(*model_, drives_);
   jc_plant* api_plant = nullptr;

@@ -10,6 +10,7 @@
 #include <functional>
 #include <limits>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -385,6 +386,30 @@ TEST_F(CapiMisuse, PlantsNeedDrives) {
   EXPECT_EQ(plant, nullptr);
   EXPECT_INVALID("jc_plant_create", "plant", jc_plant_create(robot_, nullptr));
   EXPECT_EQ(jc_robot_free(kinematic_only), JC_OK);
+}
+
+// Plant options: an unknown name, a value of the wrong type or out of range, text that is not a JSON object:
+// each refused with the option named, and no plant made.
+TEST_F(CapiMisuse, PlantOptionsAreCheckedByName) {
+  const std::pair<const char*, const char*> bad[] = {
+      {"{\"step_past\": 0.01}", "step_past"},
+      {"{\"step_past_updates_s\": 2.0}", "step_past_updates_s"},
+      {"{\"step_past_updates_s\": -0.001}", "step_past_updates_s"},
+      {"{\"max_order\": 2.5}", "max_order"},
+      {"{\"max_order\": 9}", "max_order"},
+      {"{\"even_steps\": 1}", "even_steps"},
+      {"{\"relative_tolerance\": 0}", "tolerances"},
+      {"{\"jacobian_reuse_steps\": 0}", "jacobian_reuse_steps"},
+      {"{\"tracking_envelope_rad\": \"wide\"}", "tracking_envelope_rad"},
+      {"[1, 2]", "JSON object"},
+      {"{\"max_order\": 3", "options_json"},
+  };
+  for (const auto& [options, fragment] : bad) {
+    jc_plant* plant = nullptr;
+    EXPECT_INVALID("jc_plant_create_with_options", fragment, jc_plant_create_with_options(robot_, options, &plant))
+        << options;
+    EXPECT_EQ(plant, nullptr) << options;
+  }
 }
 
 // ---- Arrays, lengths, values -------------------------------------------------------------------------------

@@ -198,6 +198,15 @@ JOINTCOMP_API jc_status jc_spiral_experiment(jc_robot* robot, int32_t use_plant,
    freed afterwards. State y = [q, qd, p, pd, integral of the position error] (5 n). */
 
 JOINTCOMP_API jc_status jc_plant_create(jc_robot* robot, jc_plant** plant);
+/* The same with the integrator's and the watchdog's options: options_json is a JSON object (NULL or "{}" for
+   the defaults) with any of the keys relative_tolerance, absolute_tolerance (rad), velocity_tolerance_factor
+   (1/s), max_step (s, 0: unbounded), max_steps_per_advance, max_order (1 to 5), jacobian_reuse_steps,
+   newton_setup_steps, newton_setup_gamma_change, even_steps (true/false), step_past_updates_s (s, 0 to 1),
+   tracking_envelope_rad and joint_limit_margin_rad, as PlantOptions in model/plant/flexible_joint_plant.hpp
+   and the FMU's integrator.* parameters describe them. step_past_updates_s > 0 lets CVODE step through
+   updates shorter than its own step (a reference then takes effect up to one CVODE step late; faster at
+   1 ms updates). An unknown key or a value out of range is JC_ERROR_INVALID_ARGUMENT naming it. */
+JOINTCOMP_API jc_status jc_plant_create_with_options(jc_robot* robot, const char* options_json, jc_plant** plant);
 JOINTCOMP_API jc_status jc_plant_free(jc_plant* plant);
 JOINTCOMP_API jc_status jc_plant_dof(jc_plant* plant, int32_t* dof);
 /* Starts at rest in static equilibrium with the motors at `command` (n), at start_time (s). */

@@ -67,6 +67,7 @@ PROTOTYPES = {
     "jc_spiral_plan": (_i32, [_handle, _double_p, _i32, _double_p, _i32, _double_p, _i32, _double_p, _i32]),
     "jc_spiral_experiment": (_i32, [_handle, _i32, _double_p, _i32, _double_p, _i32]),
     "jc_plant_create": (_i32, [_handle, _handle_p]),
+    "jc_plant_create_with_options": (_i32, [_handle, _text, _handle_p]),
     "jc_plant_free": (_i32, [_handle]),
     "jc_plant_dof": (_i32, [_handle, _int32_p]),
     "jc_plant_reset": (_i32, [_handle, _double_p, _i32, _f64]),

@@ -365,7 +365,7 @@ class Robot(OwnedHandle):
                 _native.pointer(error_array), _length(error_array)))
         return SpiralExperiment([Metrics(*row) for row in metrics.tolist()], error_array, bool(use_plant))
 
-    def plant(self):
-        """A new flexible-joint plant of this robot (see jointcomp.Plant)."""
+    def plant(self, **options):
+        """A new flexible-joint plant of this robot, with the integrator's options (see jointcomp.Plant)."""
         from .plant import Plant
-        return Plant(self)
+        return Plant(self, **options)

@@ -1,21 +1,23 @@
-// The plant's options by name (the integrator's and the watchdog's), as the FMU's "integrator:" parameters
-// bind to them. Shared by
-// the build-time tool (which lists their defaults as start values) and the instance (which sets them).
+// The plant's options by name (the integrator's and the watchdog's), as numbers: one table for the FMU's
+// "integrator:" parameters (its build-time tool lists their defaults as start values, the instance sets
+// them) and the C API's plant options (jc_plant_create_with_options), so that both know the same names.
 #pragma once
 
 #include <cstring>
 
 #include "model/plant/flexible_joint_plant.hpp"
 
-namespace jointcomp::fmu {
+namespace jointcomp {
 
-struct IntegratorOption {
+struct PlantOptionByName {
+  enum class Kind { Number, Integer, Switch };  // a switch is 0 or 1 as a number
   const char* name;
   double (*get)(const PlantOptions& options);
   void (*set)(PlantOptions& options, double value);
+  Kind kind = Kind::Number;
 };
 
-inline constexpr IntegratorOption kIntegratorOptions[] = {
+inline constexpr PlantOptionByName kPlantOptionsByName[] = {
     {"relative_tolerance", [](const PlantOptions& o) { return o.relative_tolerance; },
      [](PlantOptions& o, double v) { o.relative_tolerance = v; }},
     {"absolute_tolerance", [](const PlantOptions& o) { return o.absolute_tolerance; },
@@ -24,17 +26,19 @@ inline constexpr IntegratorOption kIntegratorOptions[] = {
      [](PlantOptions& o, double v) { o.velocity_tolerance_factor = v; }},
     {"max_step", [](const PlantOptions& o) { return o.max_step; }, [](PlantOptions& o, double v) { o.max_step = v; }},
     {"max_steps_per_advance", [](const PlantOptions& o) { return static_cast<double>(o.max_steps_per_advance); },
-     [](PlantOptions& o, double v) { o.max_steps_per_advance = static_cast<long>(v); }},
+     [](PlantOptions& o, double v) { o.max_steps_per_advance = static_cast<long>(v); },
+     PlantOptionByName::Kind::Integer},
     {"max_order", [](const PlantOptions& o) { return static_cast<double>(o.max_order); },
-     [](PlantOptions& o, double v) { o.max_order = static_cast<int>(v); }},
+     [](PlantOptions& o, double v) { o.max_order = static_cast<int>(v); }, PlantOptionByName::Kind::Integer},
     {"jacobian_reuse_steps", [](const PlantOptions& o) { return static_cast<double>(o.jacobian_reuse_steps); },
-     [](PlantOptions& o, double v) { o.jacobian_reuse_steps = static_cast<long>(v); }},
+     [](PlantOptions& o, double v) { o.jacobian_reuse_steps = static_cast<long>(v); },
+     PlantOptionByName::Kind::Integer},
     {"newton_setup_steps", [](const PlantOptions& o) { return static_cast<double>(o.newton_setup_steps); },
-     [](PlantOptions& o, double v) { o.newton_setup_steps = static_cast<long>(v); }},
+     [](PlantOptions& o, double v) { o.newton_setup_steps = static_cast<long>(v); }, PlantOptionByName::Kind::Integer},
     {"newton_setup_gamma_change", [](const PlantOptions& o) { return o.newton_setup_gamma_change; },
      [](PlantOptions& o, double v) { o.newton_setup_gamma_change = v; }},
     {"even_steps", [](const PlantOptions& o) { return o.even_steps ? 1.0 : 0.0; },
-     [](PlantOptions& o, double v) { o.even_steps = v != 0.0; }},
+     [](PlantOptions& o, double v) { o.even_steps = v != 0.0; }, PlantOptionByName::Kind::Switch},
     {"step_past_updates_s", [](const PlantOptions& o) { return o.step_past_updates_s; },
      [](PlantOptions& o, double v) { o.step_past_updates_s = v; }},
     {"tracking_envelope_rad", [](const PlantOptions& o) { return o.tracking_envelope_rad; },
@@ -44,11 +48,11 @@ inline constexpr IntegratorOption kIntegratorOptions[] = {
 };
 
 // The option of that name, nullptr if there is none.
-inline const IntegratorOption* findIntegratorOption(const char* name) {
-  for (const IntegratorOption& option : kIntegratorOptions) {
+inline const PlantOptionByName* findPlantOption(const char* name) {
+  for (const PlantOptionByName& option : kPlantOptionsByName) {
     if (std::strcmp(option.name, name) == 0) return &option;
   }
   return nullptr;
 }
 
-}  // namespace jointcomp::fmu
+}  // namespace jointcomp
