@@ -1,6 +1,8 @@
 #include "model/common/json_fields.hpp"
 
+#include <climits>
 #include <cmath>
+#include <cstdint>
 
 #include "model/common/errors.hpp"
 
@@ -59,6 +61,11 @@ double JsonFields::numberOr(const std::string& key, double fallback) {
 int JsonFields::integer(const std::string& key) {
   const nlohmann::json& value = require(key);
   if (!value.is_number_integer()) fail(key, "expected an integer");
+  // Beyond int's range the conversion would wrap to another number, silently: refused instead.
+  if (value.is_number_unsigned() ? value.get<std::uint64_t>() > static_cast<std::uint64_t>(INT_MAX)
+                                 : value.get<std::int64_t>() < INT_MIN || value.get<std::int64_t>() > INT_MAX) {
+    fail(key, "out of range: " + value.dump());
+  }
   return value.get<int>();
 }
 

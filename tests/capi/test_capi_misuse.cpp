@@ -400,6 +400,7 @@ TEST_F(CapiMisuse, PlantOptionsAreCheckedByName) {
       {"{\"even_steps\": 1}", "even_steps"},
       {"{\"relative_tolerance\": 0}", "tolerances"},
       {"{\"jacobian_reuse_steps\": 0}", "jacobian_reuse_steps"},
+      {"{\"max_steps_per_advance\": 4294967301}", "max_steps_per_advance"},  // 2^32 + 5 would wrap to 5
       {"{\"tracking_envelope_rad\": \"wide\"}", "tracking_envelope_rad"},
       {"[1, 2]", "JSON object"},
       {"{\"max_order\": 3", "options_json"},
