@@ -1,4 +1,7 @@
-"""What the classes owning a library handle share: release on close, ``with`` and garbage collection."""
+"""What the classes owning a library handle share: release on close, ``with`` and garbage collection; and
+the options_json text of keyword options."""
+
+import json
 
 import numpy as np
 
@@ -43,3 +46,14 @@ class OwnedHandle:
         if self._handle is None:
             raise InvalidArgumentError("this %s was closed" % type(self).__name__)
         return self._handle
+
+
+def options_json(options):
+    """Keyword options as the C API's options_json text (numpy scalars and arrays become plain JSON)."""
+    def plain(value):
+        if hasattr(value, "tolist"):
+            return value.tolist()
+        if isinstance(value, (list, tuple)):
+            return [plain(v) for v in value]
+        return value
+    return json.dumps({key: plain(value) for key, value in options.items()}).encode("utf-8")

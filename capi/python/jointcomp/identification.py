@@ -21,6 +21,7 @@ import json
 import os
 
 from . import _native
+from ._handle import options_json as _options
 from .robot import Robot
 
 
@@ -49,17 +50,6 @@ def _read_text(function, handle):
     buffer = ctypes.create_string_buffer(length.value + 1)
     _native.check(function(handle, buffer, len(buffer), ctypes.byref(length)))
     return buffer.value.decode("utf-8")
-
-
-def _options(options):
-    """Keyword options as the options_json text (numpy scalars and arrays become plain JSON)."""
-    def plain(value):
-        if hasattr(value, "tolist"):
-            return value.tolist()
-        if isinstance(value, (list, tuple)):
-            return [plain(v) for v in value]
-        return value
-    return json.dumps({key: plain(value) for key, value in options.items()}).encode("utf-8")
 
 
 def _paths(paths, name):

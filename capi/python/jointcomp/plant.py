@@ -2,12 +2,11 @@
 
 import collections
 import ctypes
-import json
 
 import numpy as np
 
 from . import _native
-from ._handle import OwnedHandle, float_array as _array
+from ._handle import OwnedHandle, float_array as _array, options_json
 
 PlantStatistics = collections.namedtuple(
     "PlantStatistics", "steps rhs_evaluations jacobian_evaluations error_test_failures convergence_failures")
@@ -32,8 +31,8 @@ class Plant(OwnedHandle):
         self._handle = None
         handle = ctypes.c_void_p()
         if options:
-            text = json.dumps(options).encode("utf-8")
-            _native.check(_native.lib.jc_plant_create_with_options(robot.handle, text, ctypes.byref(handle)))
+            _native.check(_native.lib.jc_plant_create_with_options(robot.handle, options_json(options),
+                                                                   ctypes.byref(handle)))
         else:
             _native.check(_native.lib.jc_plant_create(robot.handle, ctypes.byref(handle)))
         self._handle = handle

@@ -122,7 +122,7 @@ def test_the_plant_outlives_its_robot(robot):
 def test_integrator_options_reach_the_plant(robot):
     """Keyword options by PlantOptions' names: stepping past 1 ms updates takes fewer CVODE steps and ends within
     microradians of the plant that stops at each; an unknown name or a value out of range raises, naming it."""
-    stopping, past = robot.plant(), robot.plant(step_past_updates_s=0.01, even_steps=True)
+    stopping, past = robot.plant(), robot.plant(step_past_updates_s=np.float64(0.01), max_order=np.int64(3))
     for plant in (stopping, past):
         plant.reset(POSTURE)
         drive(plant, np.array(POSTURE), 400, period=0.001)
