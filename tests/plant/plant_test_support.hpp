@@ -35,6 +35,25 @@ inline JointVector joints(std::initializer_list<double> degrees) {
   return q;
 }
 
+// A slow swing of every drive from rest through a cosine about `centre()` (amplitudes 2 to 4 degrees, 0.1 to
+// 0.2 Hz: slow enough that CVODE's steps are a few ms, as on the paper's spiral; swings of 5 to 15 degrees at
+// 0.2 to 0.45 Hz held CVODE near 0.4 ms): its value q and rate v at t, as a co-simulation master feeds them.
+inline const JointVector& swingCentre() {
+  static const JointVector q = joints({20.0, 45.0, 70.0, 30.0, 50.0, 10.0});
+  return q;
+}
+inline void swingAt(double t, JointVector& q, JointVector& v) {
+  const JointVector amplitude = joints({3.0, 2.0, 2.5, 4.0, 3.0, 2.0});
+  const double hertz[6] = {0.1, 0.12, 0.14, 0.16, 0.18, 0.2};
+  q = swingCentre();
+  v = JointVector::Zero(6);
+  for (int j = 0; j < 6; ++j) {
+    const double w = 2.0 * kPi * hertz[j];
+    q[j] += amplitude[j] * (1.0 - std::cos(w * t));
+    v[j] = amplitude[j] * w * std::sin(w * t);
+  }
+}
+
 // Transmission error of the gears at motor positions p (joint units), written out from the harmonics:
 // the angle of stage s's input shaft is (G p)_j divided by the ratios of the stages before it.
 inline JointVector transmissionErrorAt(const JointErrorModel& model, const JointVector& p) {

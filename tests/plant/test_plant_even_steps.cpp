@@ -24,29 +24,18 @@ struct SwingRun {
   bool every_advance_ended_on_time = true;
 };
 
-// Every drive swings from rest through a cosine for `seconds` (amplitudes 2 to 4 degrees, 0.1 to 0.2 Hz: slow
-// enough that CVODE's steps are a few ms, as on the paper's spiral; swings of 5 to 15 degrees at 0.2 to 0.45 Hz
-// held CVODE near 0.4 ms, where no update is short of a step), the reference updated
-// every `update` seconds with its value and rate there, as a co-simulation master would.
+// The slow swing (plant_test_support.hpp) for `seconds`, the reference updated every `update` seconds.
 SwingRun swing(bool even_steps, double update, double seconds) {
   const JointErrorModel model = loadParameterFile(kParameters, rx170());
   PlantOptions options;
   options.even_steps = even_steps;
   FlexibleJointPlant plant(model, loadDriveParameters(kParameters, *rx170()), options);
-  const JointVector centre = joints({20.0, 45.0, 70.0, 30.0, 50.0, 10.0});
-  const JointVector amplitude = joints({3.0, 2.0, 2.5, 4.0, 3.0, 2.0});
-  const double hertz[6] = {0.1, 0.12, 0.14, 0.16, 0.18, 0.2};
-  plant.reset(centre);
+  plant.reset(swingCentre());
   SwingRun run;
   const int updates = static_cast<int>(std::lround(seconds / update));
   for (int k = 0; k < updates; ++k) {
-    const double t = k * update;
-    JointVector q = centre, v = JointVector::Zero(6);
-    for (int j = 0; j < 6; ++j) {
-      const double w = 2.0 * kPi * hertz[j];
-      q[j] += amplitude[j] * (1.0 - std::cos(w * t));
-      v[j] = amplitude[j] * w * std::sin(w * t);
-    }
+    JointVector q, v;
+    swingAt(k * update, q, v);
     plant.setReference(q, v);
     plant.advance((k + 1) * update);
     run.every_advance_ended_on_time = run.every_advance_ended_on_time && plant.time() == (k + 1) * update;

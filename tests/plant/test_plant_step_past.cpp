@@ -30,22 +30,9 @@ std::unique_ptr<FlexibleJointPlant> makePlant(double step_past) {
   return std::make_unique<FlexibleJointPlant>(model, loadDriveParameters(kParameters, *rx170()), options);
 }
 
-const JointVector& centre() {
-  static const JointVector q = joints({20.0, 45.0, 70.0, 30.0, 50.0, 10.0});
-  return q;
-}
-
-// Every drive swings slowly from rest through a cosine (as in test_plant_even_steps.cpp), the reference
-// updated at k * update with its value and rate there.
 void setSwingReference(FlexibleJointPlant& plant, double t) {
-  const JointVector amplitude = joints({3.0, 2.0, 2.5, 4.0, 3.0, 2.0});
-  const double hertz[6] = {0.1, 0.12, 0.14, 0.16, 0.18, 0.2};
-  JointVector q = centre(), v = JointVector::Zero(6);
-  for (int j = 0; j < 6; ++j) {
-    const double w = 2.0 * kPi * hertz[j];
-    q[j] += amplitude[j] * (1.0 - std::cos(w * t));
-    v[j] = amplitude[j] * w * std::sin(w * t);
-  }
+  JointVector q, v;
+  swingAt(t, q, v);
   plant.setReference(q, v);
 }
 
@@ -82,8 +69,8 @@ double largestDifference(const Track& a, const Track& b) {
 std::pair<Track, Track> swingStoppingAndPast(double update, int updates) {
   auto stopping = makePlant(0.0);
   auto past = makePlant(kPast);
-  stopping->reset(centre());
-  past->reset(centre());
+  stopping->reset(swingCentre());
+  past->reset(swingCentre());
   return {follow(*stopping, update, updates, true), follow(*past, update, updates, true)};
 }
 
@@ -112,9 +99,9 @@ TEST(PlantStepPast, UpdatesLongerThanCvodesStepsCostNoMoreSteps) {
 TEST(PlantStepPast, AReferenceThatNeverChangesGivesTheStoppingRunsMotion) {
   auto stopping = makePlant(0.0);
   auto past = makePlant(kPast);
-  const JointVector target = centre() + joints({0.5, -0.4, 0.3, 0.6, -0.5, 0.4});
+  const JointVector target = swingCentre() + joints({0.5, -0.4, 0.3, 0.6, -0.5, 0.4});
   for (FlexibleJointPlant* plant : {stopping.get(), past.get()}) {
-    plant->reset(centre());
+    plant->reset(swingCentre());
     plant->setReference(target, JointVector::Zero(6));
   }
   const Track a = follow(*stopping, 0.001, 300, false);
@@ -122,14 +109,14 @@ TEST(PlantStepPast, AReferenceThatNeverChangesGivesTheStoppingRunsMotion) {
   EXPECT_TRUE(b.on_time);
   EXPECT_LT(b.statistics.steps, a.statistics.steps);
   double moved = 0.0;
-  for (const JointVector& q : a.links) moved = std::max(moved, (q - centre()).cwiseAbs().maxCoeff());
+  for (const JointVector& q : a.links) moved = std::max(moved, (q - swingCentre()).cwiseAbs().maxCoeff());
   EXPECT_GT(moved, 1e-3) << "the links move";
   EXPECT_LT(largestDifference(a, b), 1e-6);  // rtol 1e-6 on angles near 1 rad
 }
 
 TEST(PlantStepPast, ASavedStateContinuesIdenticallyHereAndInAnotherPlant) {
   auto plant = makePlant(kPast);
-  plant->reset(centre());
+  plant->reset(swingCentre());
   follow(*plant, 0.001, 137, true);
   const PlantState saved = plant->saveState();
   const Track first = follow(*plant, 0.001, 200, true);
@@ -150,8 +137,8 @@ TEST(PlantStepPast, ASavedStateContinuesIdenticallyHereAndInAnotherPlant) {
 TEST(PlantStepPast, ARestartContinuesFromTheStateAtTheUpdate) {
   auto plant = makePlant(kPast);
   auto reference = makePlant(kPast);
-  plant->reset(centre());
-  reference->reset(centre());
+  plant->reset(swingCentre());
+  reference->reset(swingCentre());
   follow(*plant, 0.001, 101, true);
   follow(*reference, 0.001, 101, true);
   const JointVector before = plant->linkPositions();
@@ -172,7 +159,7 @@ TEST(PlantStepPast, TheFeedforwardComputedWhenNeededIsTheOneOfItsUpdate) {
   Track tracks[2];
   int which = 0;
   for (FlexibleJointPlant* plant : {lazy.get(), eager.get()}) {
-    plant->reset(centre());
+    plant->reset(swingCentre());
     for (int k = 0; k < 300; ++k) {
       setSwingReference(*plant, k * 0.001);
       if (plant == eager.get()) plant->motorTorques();
