@@ -199,10 +199,14 @@ def project_rotation(m):
     return u @ np.diag([1.0, 1.0, np.sign(np.linalg.det(u @ vt))]) @ vt
 
 
-def orientations(raw_path, trafo_path):
+def read_raw_ipa(raw_path):
+    """An IPA file as it is: its header and its values (decimal commas read, empty cells NaN)."""
     rows = [line.strip().split(";") for line in open(raw_path, encoding="latin-1")]
-    header = rows[0]
-    values = np.array([[float(c.replace(",", ".")) if c else np.nan for c in r] for r in rows[1:]])
+    return rows[0], np.array([[float(c.replace(",", ".")) if c else np.nan for c in r] for r in rows[1:]])
+
+
+def orientations(raw_path, trafo_path):
+    header, values = read_raw_ipa(raw_path)
     joints = ["shoulder_pan_joint", "shoulder_lift_joint", "elbow_joint", "wrist_1_joint", "wrist_2_joint",
               "wrist_3_joint"]
     q = values[:, [header.index(j) for j in joints]]
@@ -248,10 +252,8 @@ def orientations(raw_path, trafo_path):
 
 def goal_groups(raw_path, rows):
     """Series B's rows grouped by their goal (the commanded T-Mac pose), from the raw IPA file."""
-    lines = [line.strip().split(";") for line in open(raw_path, encoding="latin-1")]
-    header = lines[0]
-    columns = [header.index(c) for c in ("Goal x", "Goal y", "Goal z", "Goal roll", "Goal pitch", "Goal yaw")]
-    goals = np.array([[float(r[c].replace(",", ".")) for c in columns] for r in lines[1:]])
+    header, values = read_raw_ipa(raw_path)
+    goals = values[:, [header.index(c) for c in ("Goal x", "Goal y", "Goal z", "Goal roll", "Goal pitch", "Goal yaw")]]
     if len(goals) != rows:
         sys.exit("%s: %d rows, but the campaign has %d (the importer keeps every row)" % (raw_path, len(goals), rows))
     groups = {}
