@@ -14,6 +14,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "fmu/fmu_plant_options.hpp"
 #include "model/io/atomic_file.hpp"
 #include "model/io/parameter_file.hpp"
 #include "model/io/robot_file.hpp"
@@ -36,7 +37,7 @@ int run(const std::string& urdf, const std::string& parameters, const std::strin
   const ParameterSet loaded_parameters = loadParameterSet(parameters, robot);
   const JointErrorModel& model = loaded_parameters.model;
   const std::vector<DriveParameters>& drives = loaded_parameters.drives;
-  const PlantOptions options;
+  const PlantOptions options = fmuPlantOptions();
   FlexibleJointPlant plant(model, drives, options);  // what the FMU will build must build
 
   nlohmann::ordered_json values;

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cstdio>
 
+#include "fmu/fmu_plant_options.hpp"
 #include "jointcomp_fmu_variables.hpp"
 #include "model/common/errors.hpp"
 
@@ -57,7 +58,7 @@ VariableBinding::VariableBinding(const ParameterSet& base, const Robot& robot, c
 
 VariableBinding::Models VariableBinding::apply(const ParameterSet& base, const Robot& robot,
                                                const std::vector<double>& values) const {
-  Models built{base.model, base.model, base.drives, PlantOptions()};
+  Models built{base.model, base.model, base.drives, fmuPlantOptions()};
   for (int e = 0; e < base.model.effectCount(); ++e) {
     std::vector<double> truth_values = built.truth.effect(e).parameters();
     std::vector<double> nominal_values = built.nominal.effect(e).parameters();

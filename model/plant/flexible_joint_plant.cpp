@@ -440,6 +440,11 @@ FlexibleJointPlant::FlexibleJointPlant(const JointErrorModel& truth, std::vector
   check(CVodeSetJacEvalFrequency(s.cvode, options_.jacobian_reuse_steps), "CVodeSetJacEvalFrequency");
   check(CVodeSetLSetupFrequency(s.cvode, options_.newton_setup_steps), "CVodeSetLSetupFrequency");
   check(CVodeSetDeltaGammaMaxLSetup(s.cvode, options_.newton_setup_gamma_change), "CVodeSetDeltaGammaMaxLSetup");
+  if (!(std::isfinite(options_.step_past_tolerance_rad) && options_.step_past_tolerance_rad >= 0.0 &&
+        options_.step_past_tolerance_rad <= 10.0)) {
+    throw InvalidArgument("plant: step_past_tolerance_rad must be in [0, 10] rad, not " +
+                          std::to_string(options_.step_past_tolerance_rad));
+  }
   if (!(std::isfinite(options_.step_past_updates_s) && options_.step_past_updates_s >= 0.0 &&
         options_.step_past_updates_s <= 1.0)) {
     throw InvalidArgument("plant: step_past_updates_s must be in [0, 1] s, not " +
@@ -508,6 +513,19 @@ void FlexibleJointPlant::setReference(const JointVector& position, const JointVe
   // continuous across updates and the integrator is not knocked back to small steps at each one.
   const double since_last = time_ - reference_time_;
   if (options_.smooth_reference) ensureFeedforward();  // the blend starts from the running feed-forward
+  // Stepping past updates, CVODE may have integrated the old reference beyond time_ already: the new one
+  // takes over from CVODE's next step only if it stays within step_past_tolerance_rad of the old one there.
+  realtype ahead_time = time_;
+  if (ahead_ && !restart_ && CVodeGetCurrentTime(solver_->cvode, &ahead_time) != CV_SUCCESS) ahead_time = time_;
+  // (CVODE ending a step on time_ within its roundoff, as it takes a stop time, is not ahead of it.)
+  const bool check_departure =
+      ahead_time - time_ > 100.0 * std::numeric_limits<double>::epsilon() * std::max(1.0, std::fabs(time_));
+  const double departure_times[3] = {time_, 0.5 * (time_ + ahead_time), ahead_time};
+  JointVector old_reference[3];
+  for (int k = 0; k < 3 && check_departure; ++k) {
+    old_reference[k].resize(n_);
+    for (int j = 0; j < n_; ++j) old_reference[k][j] = referenceAt(j, departure_times[k]);
+  }
   // The reference as it runs now, before the update: the blend starts from it.
   JointVector before_value(n_), before_velocity(n_), before_acceleration(n_), before_feedforward(n_),
       before_feedforward_rate(n_);
@@ -548,6 +566,19 @@ void FlexibleJointPlant::setReference(const JointVector& position, const JointVe
     blend_offset_acceleration_.setZero(n_);
     feedforward_offset_.setZero(n_);
     feedforward_offset_rate_.setZero(n_);
+  }
+  if (check_departure) {
+    ++statistics_.updates_stepped_past;
+    double departure = 0.0;
+    for (int k = 0; k < 3; ++k) {
+      for (int j = 0; j < n_; ++j) {
+        departure = std::max(departure, std::fabs(referenceAt(j, departure_times[k]) - old_reference[k][j]));
+      }
+    }
+    if (!(departure <= options_.step_past_tolerance_rad)) {
+      ++statistics_.updates_restarted;
+      restart_ = true;  // from the state at time_ (advance takes it from y_now), with the new reference
+    }
   }
 }
 

@@ -41,6 +41,8 @@ inline constexpr PlantOptionByName kPlantOptionsByName[] = {
      [](PlantOptions& o, double v) { o.even_steps = v != 0.0; }, PlantOptionByName::Kind::Switch},
     {"step_past_updates_s", [](const PlantOptions& o) { return o.step_past_updates_s; },
      [](PlantOptions& o, double v) { o.step_past_updates_s = v; }},
+    {"step_past_tolerance_rad", [](const PlantOptions& o) { return o.step_past_tolerance_rad; },
+     [](PlantOptions& o, double v) { o.step_past_tolerance_rad = v; }},
     {"tracking_envelope_rad", [](const PlantOptions& o) { return o.tracking_envelope_rad; },
      [](PlantOptions& o, double v) { o.tracking_envelope_rad = v; }},
     {"joint_limit_margin_rad", [](const PlantOptions& o) { return o.joint_limit_margin_rad; },

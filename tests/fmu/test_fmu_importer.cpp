@@ -34,6 +34,7 @@
 
 #include "fmu/fmi2_api.hpp"
 #include "fmu/fmi3_api.hpp"
+#include "fmu/fmu_plant_options.hpp"
 #include "model/compensation/compensator.hpp"
 #include "model/compensation/feed_rate.hpp"
 #include "model/compensation/joint_trajectory.hpp"
@@ -615,8 +616,9 @@ void setTruth(Master& m, const JointErrorModel& truth) {
 }
 
 // Instantiates and initialises at the spiral's first sample.
+// step_past_updates: integrator.step_past_updates, s (negative: the FMU's default, fmuPlantOptions()).
 void start(Master& m, long mode, const JointErrorModel* truth = nullptr, bool even_steps = true,
-           double step_past_updates = 0.0) {
+           double step_past_updates = -1.0) {
   ASSERT_TRUE(m.instantiate()) << m.log();
   ASSERT_EQ(m.enterInitialization(spiral().time[0]), kOK) << m.log();
   ASSERT_EQ(m.setEnumeration(m.vr("compensation"), mode), kOK) << m.log();
@@ -624,7 +626,7 @@ void start(Master& m, long mode, const JointErrorModel* truth = nullptr, bool ev
   if (!even_steps) {
     ASSERT_EQ(m.setBoolean(m.vr("integrator.even_steps"), false), kOK) << m.log();
   }
-  if (step_past_updates != 0.0) {
+  if (step_past_updates >= 0.0) {
     ASSERT_EQ(m.setReals({m.vr("integrator.step_past_updates")}, {step_past_updates}), kOK) << m.log();
   }
   ASSERT_EQ(m.setReals(m.vrs("q_desired_", kDof), values(spiral().q[0])), kOK) << m.log();
@@ -685,7 +687,7 @@ JointVector parabolaSlope(const JointVector& q, double t, const JointVector& las
 
 // The same sequence on the plant and the compensator directly (fmu/instance.hpp, steps 1-4).
 Record runDirectly(long mode, const JointErrorModel& truth, std::size_t to, bool varying,
-                   const PlantOptions& options = PlantOptions{}) {
+                   const PlantOptions& options = fmuPlantOptions()) {
   const Spiral& s = spiral();
   const JointErrorModel nominal = nominalModel();
   const std::vector<DriveParameters> drives = loadDriveParameters(unzipped(2) + "/resources/parameters.json", *s.robot);
@@ -763,7 +765,7 @@ TEST_P(FmuTest, DescribesItselfAndExportsTheStandardVersion) {
   }
   const ModelDescription md = readModelDescription(GetParam());
   EXPECT_EQ(md.outputs.size(), 51u);
-  EXPECT_EQ(md.vr.size(), 151u);
+  EXPECT_EQ(md.vr.size(), 152u);
   EXPECT_FALSE(md.token.empty());
 }
 
@@ -802,8 +804,10 @@ TEST_P(FmuTest, RegressionThroughTheFmuEqualsTheCApi) {
     ASSERT_EQ(fmu.q_link.size(), end - 1);
     ASSERT_EQ(fmu.q_ref.size(), end - 1);
 
+    // The FMU's default options (fmuPlantOptions()) by name.
     jc_plant* plant = nullptr;
-    ASSERT_EQ(jc_plant_create(robot, &plant), JC_OK) << jc_last_error();
+    ASSERT_EQ(jc_plant_create_with_options(robot, "{\"step_past_updates_s\": 0.01}", &plant), JC_OK) << jc_last_error();
+    ASSERT_EQ(fmuPlantOptions().step_past_updates_s, 0.01);
     const Spiral& s = spiral();
     auto reference = [&](const JointVector& q, const JointVector& v) {
       JointVector ref = q;
@@ -859,16 +863,16 @@ TEST_P(FmuTest, VaryingCommunicationStepsMatchTheDirectRunBitForBit) {
 
 // An integrator option through the FMU against the plant: the FMU's run (started by `start_fmu`) must be the
 // plant's with `options` bit for bit; returned: how many steps and how far (worst link, rad) it ends from the
-// plant with the default options, to show that the option reached the plant and what it costs.
+// plant with the `baseline` options, to show that the option reached the plant and what it costs.
 struct OptionEffect {
   std::size_t steps = 0, differing = 0;
   double largest = 0.0;
 };
 OptionEffect throughTheFmuAsThePlant(Master& m, const JointErrorModel& truth, const PlantOptions& options,
-                                     std::size_t end, bool varying) {
+                                     std::size_t end, bool varying, const PlantOptions& baseline = fmuPlantOptions()) {
   const Record fmu = run(m, 0, end, varying);
   const Record direct = runDirectly(2, truth, end, varying, options);
-  const Record defaults = runDirectly(2, truth, end, varying);
+  const Record defaults = runDirectly(2, truth, end, varying, baseline);
   OptionEffect effect;
   EXPECT_EQ(fmu.q_link.size(), direct.q_link.size());
   EXPECT_EQ(fmu.q_link.size(), defaults.q_link.size());
@@ -891,7 +895,7 @@ TEST_P(FmuTest, EvenStepsOffIsThePlantsOwnStepsBitForBit) {
   const JointErrorModel truth = truthModel();
   auto m = makeMaster(GetParam());
   start(*m, 2, &truth, false);
-  PlantOptions uneven;
+  PlantOptions uneven = fmuPlantOptions();
   uneven.even_steps = false;
   const OptionEffect effect = throughTheFmuAsThePlant(*m, truth, uneven, 3000, true);
   EXPECT_GT(effect.differing, effect.steps / 2);
@@ -899,21 +903,19 @@ TEST_P(FmuTest, EvenStepsOffIsThePlantsOwnStepsBitForBit) {
   EXPECT_EQ(m->terminate(), kOK);
 }
 
-// integrator.step_past_updates: at 1 ms steps CVODE steps through several communication points; the FMU is
-// the plant with PlantOptions::step_past_updates_s bit for bit, its links stay within a few microradians of
-// the run that stops at every point (the new inputs land up to one CVODE step late), and a state saved mid-run
-// continues identically.
+// By default (integrator.step_past_updates = 0.01 s) at 1 ms steps CVODE steps through several
+// communication points; the FMU is the plant with fmuPlantOptions() bit for bit, its links stay within a few
+// microradians of the run that stops at every point (the smooth spiral's new inputs stay within the departure
+// tolerance, so they take over from CVODE's next step), and a state saved mid-run continues identically.
 TEST_P(FmuTest, SteppingPastCommunicationPointsIsThePlantsAndStaysNearTheStoppingRun) {
   const JointErrorModel truth = truthModel();
-  constexpr double kPast = 0.01;
   auto m = makeMaster(GetParam());
-  start(*m, 2, &truth, true, kPast);
+  start(*m, 2, &truth);
   const std::size_t end = 6000;
-  PlantOptions past;
-  past.step_past_updates_s = kPast;
-  const OptionEffect effect = throughTheFmuAsThePlant(*m, truth, past, end, false);
+  ASSERT_GT(fmuPlantOptions().step_past_updates_s, 0.0);
+  const OptionEffect effect = throughTheFmuAsThePlant(*m, truth, fmuPlantOptions(), end, false, PlantOptions{});
   EXPECT_LT(effect.largest, 5e-6);
-  EXPECT_GT(effect.largest, 0.0) << "the option reached the plant";
+  EXPECT_GT(effect.largest, 0.0) << "the default steps past the communication points";
 
   void* state = nullptr;
   ASSERT_EQ(m->getState(&state), kOK);
@@ -923,6 +925,33 @@ TEST_P(FmuTest, SteppingPastCommunicationPointsIsThePlantsAndStaysNearTheStoppin
   ASSERT_FALSE(first.outputs.empty());
   EXPECT_EQ(first.outputs, again.outputs);
   EXPECT_EQ(m->freeState(&state), kOK);
+  EXPECT_EQ(m->terminate(), kOK);
+}
+
+// integrator.step_past_updates = 0: CVODE stops at every communication point, the library's default plant bit
+// for bit; and integrator.step_past_tolerance reaches the plant (0 rad: every changed input restarts CVODE at
+// its communication point, which is the stopping run within the tolerances).
+TEST_P(FmuTest, StoppingAtEveryCommunicationPointIsTheLibrarysDefaultPlant) {
+  const JointErrorModel truth = truthModel();
+  {
+    auto m = makeMaster(GetParam());
+    start(*m, 2, &truth, true, 0.0);
+    const OptionEffect effect = throughTheFmuAsThePlant(*m, truth, PlantOptions{}, 3000, true);
+    EXPECT_GT(effect.differing, 0u) << "stopping is not the FMU's default";
+    EXPECT_EQ(m->terminate(), kOK);
+  }
+  auto m = makeMaster(GetParam());
+  ASSERT_TRUE(m->instantiate()) << m->log();
+  ASSERT_EQ(m->enterInitialization(spiral().time[0]), kOK) << m->log();
+  ASSERT_EQ(m->setEnumeration(m->vr("compensation"), 2), kOK) << m->log();
+  setTruth(*m, truth);
+  ASSERT_EQ(m->setReals({m->vr("integrator.step_past_tolerance")}, {0.0}), kOK) << m->log();
+  ASSERT_EQ(m->setReals(m->vrs("q_desired_", kDof), values(spiral().q[0])), kOK) << m->log();
+  ASSERT_EQ(m->exitInitialization(), kOK) << m->log();
+  PlantOptions restarting = fmuPlantOptions();
+  restarting.step_past_tolerance_rad = 0.0;
+  const OptionEffect effect = throughTheFmuAsThePlant(*m, truth, restarting, 1500, false, PlantOptions{});
+  EXPECT_LT(effect.largest, 1e-6);
   EXPECT_EQ(m->terminate(), kOK);
 }
 

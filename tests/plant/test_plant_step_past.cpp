@@ -1,5 +1,7 @@
 // PlantOptions::step_past_updates_s: CVODE steps through updates shorter than its own steps, the state at each
-// update is interpolated from its last step, and an update's reference takes over from CVODE's next step on.
+// update is interpolated from its last step, and an update's reference takes over from CVODE's next step on,
+// unless it departs from the reference CVODE already integrated by more than step_past_tolerance_rad (then
+// CVODE restarts at the update, and a jump of the input takes effect on time).
 // Against the plant that stops at every update: fewer steps at 1 ms updates, the same motion within a few
 // microradians (the updates land late), the same motion within the tolerances when the reference never
 // changes (so the interpolated state is the state at the update, not CVODE's ahead of it), and a saved state or
@@ -23,10 +25,12 @@ using namespace plant_testing;
 
 constexpr double kPast = 0.01;  // s
 
-std::unique_ptr<FlexibleJointPlant> makePlant(double step_past) {
+std::unique_ptr<FlexibleJointPlant> makePlant(double step_past,
+                                              double tolerance = PlantOptions().step_past_tolerance_rad) {
   static const JointErrorModel model = loadParameterFile(kParameters, rx170());
   PlantOptions options;
   options.step_past_updates_s = step_past;
+  options.step_past_tolerance_rad = tolerance;
   return std::make_unique<FlexibleJointPlant>(model, loadDriveParameters(kParameters, *rx170()), options);
 }
 
@@ -83,6 +87,61 @@ TEST(PlantStepPast, ShortUpdatesCostFewerStepsAndFollowTheStoppingRunWithinMicro
   const double largest = largestDifference(a, b);
   EXPECT_LT(largest, 5e-6);
   EXPECT_GT(largest, 0.0);
+  // A smooth swing stays within the departure tolerance: CVODE was ahead at most updates and never restarted.
+  EXPECT_GT(b.statistics.updates_stepped_past, 500);
+  EXPECT_EQ(b.statistics.updates_restarted, 0);
+  EXPECT_EQ(a.statistics.updates_stepped_past, 0);
+}
+
+// The swing with a step of 2 mrad on joint 2's reference from `jump_at` on (a master's correction), on the plant
+// that stops at every update and on one that steps past them with `tolerance`.
+std::pair<Track, Track> swingWithAJump(double tolerance, int jump_at, int updates) {
+  auto stopping = makePlant(0.0);
+  auto past = makePlant(kPast, tolerance);
+  Track tracks[2];
+  int which = 0;
+  for (FlexibleJointPlant* plant : {stopping.get(), past.get()}) {
+    plant->reset(swingCentre());
+    for (int k = 0; k < updates; ++k) {
+      JointVector q, v;
+      swingAt(k * 0.001, q, v);
+      if (k >= jump_at) q[1] += 2e-3;
+      plant->setReference(q, v);
+      plant->advance((k + 1) * 0.001);
+      tracks[which].links.push_back(plant->linkPositions());
+    }
+    tracks[which].statistics = plant->statistics();
+    ++which;
+  }
+  return {tracks[0], tracks[1]};
+}
+
+// An input that jumps departs from the reference CVODE already integrated past its update by far more than the
+// tolerance: CVODE restarts at the update, the jump takes effect there as on the stopping plant, and the
+// motion after it follows the stopping run's within microradians. Without the check (a tolerance of 10 rad)
+// the jump lands up to a CVODE step late and the links lag the stopping run's by much more.
+TEST(PlantStepPast, AnInputThatJumpsTakesEffectAtItsTime) {
+  // The jump comes at the first update from 0.4 s on at which CVODE is ahead (the runs are the same until then).
+  auto probe = makePlant(kPast);
+  probe->reset(swingCentre());
+  int jump_at = -1;
+  for (int k = 0; k < 600 && jump_at < 0; ++k) {
+    const long before = probe->statistics().updates_stepped_past;
+    setSwingReference(*probe, k * 0.001);
+    if (k >= 400 && probe->statistics().updates_stepped_past > before) jump_at = k;
+    probe->advance((k + 1) * 0.001);
+  }
+  ASSERT_GE(jump_at, 400) << "CVODE was never ahead of an update";
+  const auto [stopping, past] = swingWithAJump(PlantOptions().step_past_tolerance_rad, jump_at, 600);
+  const auto [stopping_again, late] = swingWithAJump(10.0, jump_at, 600);
+  EXPECT_GE(past.statistics.updates_restarted, 1);
+  EXPECT_LE(past.statistics.updates_restarted, 3);  // the jump (and the velocity estimate's echo), not the swing
+  EXPECT_EQ(late.statistics.updates_restarted, 0);
+  EXPECT_GT(past.statistics.updates_stepped_past, 300);
+  const double on_time = largestDifference(stopping, past);
+  const double delayed = largestDifference(stopping_again, late);
+  EXPECT_LT(on_time, 5e-6);
+  EXPECT_GT(delayed, 10.0 * on_time) << "delayed " << delayed << " rad, on time " << on_time << " rad";
 }
 
 // Updates longer than CVODE's steps end on their time, as without the option (CVODE steps past one only when
@@ -185,6 +244,12 @@ TEST(PlantStepPast, OutOfRangeValuesAreRefusedWithTheOptionNamed) {
       ADD_FAILURE() << value << " was accepted";
     } catch (const InvalidArgument& error) {
       EXPECT_NE(std::string(error.what()).find("step_past_updates_s"), std::string::npos) << error.what();
+    }
+    try {
+      makePlant(kPast, value * 1e3);  // -1, 1500, NaN rad
+      ADD_FAILURE() << value * 1e3 << " rad was accepted";
+    } catch (const InvalidArgument& error) {
+      EXPECT_NE(std::string(error.what()).find("step_past_tolerance_rad"), std::string::npos) << error.what();
     }
   }
 }

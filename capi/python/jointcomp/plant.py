@@ -24,7 +24,9 @@ class Plant(OwnedHandle):
     Keyword options set the integrator and the watchdog (``jc_plant_create_with_options``):
     ``relative_tolerance``, ``absolute_tolerance``, ``max_order``, ``step_past_updates_s``, ``even_steps``, ...;
     e.g. ``Plant(robot, step_past_updates_s=0.01)`` lets CVODE step through 1 ms updates (about twice as
-    fast; a reference then takes effect up to one CVODE step late). An unknown option raises.
+    fast; a reference within ``step_past_tolerance_rad``, 5 urad, of the one CVODE already integrated takes
+    effect from CVODE's next step, one that departs further restarts CVODE at its time). An unknown option
+    raises.
     """
 
     def __init__(self, robot, **options):
