@@ -395,6 +395,7 @@ TEST_F(CapiMisuse, PlantOptionsAreCheckedByName) {
       {"{\"step_past\": 0.01}", "step_past"},
       {"{\"step_past_updates_s\": 2.0}", "step_past_updates_s"},
       {"{\"step_past_updates_s\": -0.001}", "step_past_updates_s"},
+      {"{\"step_past_tolerance_rad\": -1e-6}", "step_past_tolerance_rad"},
       {"{\"max_order\": 2.5}", "max_order"},
       {"{\"max_order\": 9}", "max_order"},
       {"{\"even_steps\": 1}", "even_steps"},
