@@ -928,6 +928,62 @@ TEST_P(FmuTest, SteppingPastCommunicationPointsIsThePlantsAndStaysNearTheStoppin
   EXPECT_EQ(m->terminate(), kOK);
 }
 
+// The FMU's default steps past communication points, yet a master's correction is not delayed: inputs that
+// jump by 2 mrad on joint 2 at a communication point restart CVODE there (their reference departs from the one
+// CVODE integrated ahead by far more than integrator.step_past_tolerance), and the links follow the run that
+// stops at every point within microradians. With the check switched off (a tolerance of 10 rad) the same jump
+// lands up to a CVODE step late and the links lag by far more.
+TEST_P(FmuTest, AJumpOfTheInputsTakesEffectAtItsCommunicationPoint) {
+  const Spiral& s = spiral();
+  constexpr std::size_t kJumpAt = 1500, kEnd = 1800;
+  // tolerance < 0: the FMU's default; step_past: integrator.step_past_updates.
+  auto links = [&](double step_past, double tolerance) {
+    auto m = makeMaster(GetParam());
+    std::vector<std::vector<double>> record;
+    if (tolerance < 0.0) {
+      start(*m, 2, nullptr, true, step_past);
+    } else {
+      EXPECT_TRUE(m->instantiate()) << m->log();
+      EXPECT_EQ(m->enterInitialization(s.time[0]), kOK) << m->log();
+      EXPECT_EQ(m->setEnumeration(m->vr("compensation"), 2), kOK) << m->log();
+      EXPECT_EQ(m->setReals({m->vr("integrator.step_past_tolerance")}, {tolerance}), kOK) << m->log();
+      EXPECT_EQ(m->setReals(m->vrs("q_desired_", kDof), values(s.q[0])), kOK) << m->log();
+      EXPECT_EQ(m->exitInitialization(), kOK) << m->log();
+    }
+    const auto q_desired = m->vrs("q_desired_", kDof);
+    const auto q_link = m->vrs("q_link_", kDof);
+    for (std::size_t k = 0; k + 1 < kEnd; ++k) {
+      std::vector<double> q = values(s.q[k]);
+      if (k >= kJumpAt) q[1] += 2e-3;
+      EXPECT_EQ(m->setReals(q_desired, q), kOK);
+      if (m->doStep(s.time[k], s.time[k + 1] - s.time[k]) != kOK) {
+        ADD_FAILURE() << "step at t = " << s.time[k] << "\n" << m->log();
+        break;
+      }
+      std::vector<double> link;
+      EXPECT_EQ(m->getReals(q_link, link), kOK);
+      record.push_back(link);
+    }
+    EXPECT_EQ(m->terminate(), kOK);
+    return record;
+  };
+  const auto largest = [](const std::vector<std::vector<double>>& a, const std::vector<std::vector<double>>& b) {
+    double worst = 0.0;
+    for (std::size_t i = 0; i < a.size() && i < b.size(); ++i) {
+      for (std::size_t j = 0; j < a[i].size(); ++j) worst = std::max(worst, std::abs(a[i][j] - b[i][j]));
+    }
+    return worst;
+  };
+  const auto stopping = links(0.0, -1.0);
+  const auto by_default = links(-1.0, -1.0);
+  const auto unchecked = links(-1.0, 10.0);
+  ASSERT_EQ(by_default.size(), kEnd - 1);
+  const double on_time = largest(stopping, by_default);
+  const double late = largest(stopping, unchecked);
+  EXPECT_LT(on_time, 5e-6);
+  EXPECT_GT(late, 10.0 * on_time) << "late " << late << " rad, on time " << on_time << " rad";
+}
+
 // integrator.step_past_updates = 0: CVODE stops at every communication point, the library's default plant bit
 // for bit; and integrator.step_past_tolerance reaches the plant (0 rad: every changed input restarts CVODE at
 // its communication point, which is the stopping run within the tolerances).
