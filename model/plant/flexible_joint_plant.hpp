@@ -215,6 +215,7 @@ private:
   void computeMotorTorques(double t, const JointVector& p, const JointVector& pd, const JointVector& integral,
                            JointVector& torque, JointVector* clamped_excess = nullptr) const;
   double referenceAt(int joint, double t) const;
+  void referencesAt(double t, JointVector& position) const;  // referenceAt of every joint
   // The controller's reference of `joint` at t: value, rate and acceleration, and its static feed-forward
   // torque and that torque's rate (the rates feed the blend of the next update); feedforward_blend is the
   // blend's part of the feed-forward.
