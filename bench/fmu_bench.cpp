@@ -272,6 +272,7 @@ BENCHMARK(BM_FmuSpiral)
     ->Args({2, 0, 1, 10})
     ->Args({3, 0, 1, 10})
     ->Args({2, 0, 10, 10})
+    ->Args({3, 0, 10, 10})
     ->Unit(benchmark::kMicrosecond)
     ->MinTime(2.0);
 

@@ -525,10 +525,7 @@ void FlexibleJointPlant::setReference(const JointVector& position, const JointVe
       ahead_time - time_ > 100.0 * std::numeric_limits<double>::epsilon() * std::max(1.0, std::fabs(time_));
   const double departure_times[3] = {time_, 0.5 * (time_ + ahead_time), ahead_time};
   JointVector old_reference[3];
-  for (int k = 0; k < 3 && check_departure; ++k) {
-    old_reference[k].resize(n_);
-    referencesAt(departure_times[k], old_reference[k]);
-  }
+  for (int k = 0; k < 3 && check_departure; ++k) referencesAt(departure_times[k], old_reference[k]);
   // The reference as it runs now, before the update: the blend starts from it.
   JointVector before_value(n_), before_velocity(n_), before_acceleration(n_), before_feedforward(n_),
       before_feedforward_rate(n_);
