@@ -616,9 +616,10 @@ void setTruth(Master& m, const JointErrorModel& truth) {
 }
 
 // Instantiates and initialises at the spiral's first sample.
-// step_past_updates: integrator.step_past_updates, s (negative: the FMU's default, fmuPlantOptions()).
+// step_past_updates: integrator.step_past_updates, s, and step_past_tolerance: integrator.step_past_tolerance,
+// rad (negative: the FMU's defaults, fmuPlantOptions()).
 void start(Master& m, long mode, const JointErrorModel* truth = nullptr, bool even_steps = true,
-           double step_past_updates = -1.0) {
+           double step_past_updates = -1.0, double step_past_tolerance = -1.0) {
   ASSERT_TRUE(m.instantiate()) << m.log();
   ASSERT_EQ(m.enterInitialization(spiral().time[0]), kOK) << m.log();
   ASSERT_EQ(m.setEnumeration(m.vr("compensation"), mode), kOK) << m.log();
@@ -628,6 +629,9 @@ void start(Master& m, long mode, const JointErrorModel* truth = nullptr, bool ev
   }
   if (step_past_updates >= 0.0) {
     ASSERT_EQ(m.setReals({m.vr("integrator.step_past_updates")}, {step_past_updates}), kOK) << m.log();
+  }
+  if (step_past_tolerance >= 0.0) {
+    ASSERT_EQ(m.setReals({m.vr("integrator.step_past_tolerance")}, {step_past_tolerance}), kOK) << m.log();
   }
   ASSERT_EQ(m.setReals(m.vrs("q_desired_", kDof), values(spiral().q[0])), kOK) << m.log();
   ASSERT_EQ(m.exitInitialization(), kOK) << m.log();
@@ -936,20 +940,11 @@ TEST_P(FmuTest, SteppingPastCommunicationPointsIsThePlantsAndStaysNearTheStoppin
 TEST_P(FmuTest, AJumpOfTheInputsTakesEffectAtItsCommunicationPoint) {
   const Spiral& s = spiral();
   constexpr std::size_t kJumpAt = 1500, kEnd = 1800;
-  // tolerance < 0: the FMU's default; step_past: integrator.step_past_updates.
+  // Negative: the FMU's default (start()).
   auto links = [&](double step_past, double tolerance) {
     auto m = makeMaster(GetParam());
     std::vector<std::vector<double>> record;
-    if (tolerance < 0.0) {
-      start(*m, 2, nullptr, true, step_past);
-    } else {
-      EXPECT_TRUE(m->instantiate()) << m->log();
-      EXPECT_EQ(m->enterInitialization(s.time[0]), kOK) << m->log();
-      EXPECT_EQ(m->setEnumeration(m->vr("compensation"), 2), kOK) << m->log();
-      EXPECT_EQ(m->setReals({m->vr("integrator.step_past_tolerance")}, {tolerance}), kOK) << m->log();
-      EXPECT_EQ(m->setReals(m->vrs("q_desired_", kDof), values(s.q[0])), kOK) << m->log();
-      EXPECT_EQ(m->exitInitialization(), kOK) << m->log();
-    }
+    start(*m, 2, nullptr, true, step_past, tolerance);
     const auto q_desired = m->vrs("q_desired_", kDof);
     const auto q_link = m->vrs("q_link_", kDof);
     for (std::size_t k = 0; k + 1 < kEnd; ++k) {
@@ -997,13 +992,7 @@ TEST_P(FmuTest, StoppingAtEveryCommunicationPointIsTheLibrarysDefaultPlant) {
     EXPECT_EQ(m->terminate(), kOK);
   }
   auto m = makeMaster(GetParam());
-  ASSERT_TRUE(m->instantiate()) << m->log();
-  ASSERT_EQ(m->enterInitialization(spiral().time[0]), kOK) << m->log();
-  ASSERT_EQ(m->setEnumeration(m->vr("compensation"), 2), kOK) << m->log();
-  setTruth(*m, truth);
-  ASSERT_EQ(m->setReals({m->vr("integrator.step_past_tolerance")}, {0.0}), kOK) << m->log();
-  ASSERT_EQ(m->setReals(m->vrs("q_desired_", kDof), values(spiral().q[0])), kOK) << m->log();
-  ASSERT_EQ(m->exitInitialization(), kOK) << m->log();
+  start(*m, 2, &truth, true, -1.0, 0.0);
   PlantOptions restarting = fmuPlantOptions();
   restarting.step_past_tolerance_rad = 0.0;
   const OptionEffect effect = throughTheFmuAsThePlant(*m, truth, restarting, 1500, false, PlantOptions{});
