@@ -79,10 +79,15 @@ unsigned typeBit(table::Type type) {
   return 0;
 }
 
-// The output group of each variable (0 for non-outputs).
-struct GroupTable {
+// What every get and set asks of a variable, by index, looked up once instead of recomputed per value:
+// its output group (0 for non-outputs), its type's bit, and whether it is a desired input (q_desired,
+// qd_desired or qdd_desired: the inputs the robot follows unless it follows the demo move).
+struct VariableFlags {
   unsigned group[table::kCount] = {};
-  GroupTable() {
+  unsigned type_bit[table::kCount] = {};
+  bool desired_input[table::kCount] = {};
+  VariableFlags() {
+    for (int i = 0; i < table::kCount; ++i) type_bit[i] = typeBit(kVariables[i].type);
     for (int j = 0; j < table::kDof; ++j) {
       for (int index : {role::q_motor[j], role::qd_motor[j], role::q_link[j], role::qd_link[j], role::dq_actual[j]}) {
         group[index] = 1u;  // kStateOutputs
@@ -90,24 +95,19 @@ struct GroupTable {
       group[role::dq_predicted[j]] = 4u;  // kPredictedOutputs
       group[role::q_ref[j]] = 8u;         // kReferenceOutputs
       group[role::q_planned[j]] = 8u;
+      for (int index : {role::q_desired[j], role::qd_desired[j], role::qdd_desired[j]}) desired_input[index] = true;
     }
     for (int index : role::tool_position) group[index] = 2u;  // kToolOutputs
   }
 };
-const GroupTable kGroups;
+const VariableFlags kFlags;
 
 // The reference parameter's items (modelDescription/enumerations.csv, ReferenceSource).
 constexpr double kReferenceAuto = 0.0;
 constexpr double kReferenceDemo = 2.0;
 constexpr int kCompensationDynamic = 3;  // the CompensationMode item "dynamic"
 
-// q_desired or qd_desired: the inputs the robot follows unless it follows the demo move.
-bool isDesiredInput(int index) {
-  for (int j = 0; j < table::kDof; ++j) {
-    if (index == role::q_desired[j] || index == role::qd_desired[j] || index == role::qdd_desired[j]) return true;
-  }
-  return false;
-}
+bool isDesiredInput(int index) { return kFlags.desired_input[index]; }
 
 bool isFixedParameter(int index) {
   return kVariables[index].causality == table::Causality::Parameter &&
@@ -650,7 +650,7 @@ Status Instance::get(const char* function, unsigned types, const std::uint32_t v
     if (index < 0)
       return fail(Status::Error, function, "vr " + std::to_string(vrs[i]) + " is not a variable of this FMU");
     const table::Variable& v = kVariables[index];
-    if (!(typeBit(v.type) & types)) {
+    if (!(kFlags.type_bit[index] & types)) {
       return fail(Status::Error, function,
                   describeVariable(index) + " is of type " + typeName(v.type) + "; use its own function");
     }
@@ -659,7 +659,7 @@ Status Instance::get(const char* function, unsigned types, const std::uint32_t v
         return fail(Status::Error, function, describeVariable(index) + " is computed from initialization mode on");
       }
       outputs = true;
-      groups |= kGroups.group[index];
+      groups |= kFlags.group[index];
     }
   }
   if (outputs) {
@@ -697,7 +697,7 @@ Status Instance::set(const char* function, unsigned types, const std::uint32_t v
     if (index < 0)
       return fail(Status::Error, function, "vr " + std::to_string(vrs[i]) + " is not a variable of this FMU");
     const table::Variable& v = kVariables[index];
-    if (!(typeBit(v.type) & types)) {
+    if (!(kFlags.type_bit[index] & types)) {
       return fail(Status::Error, function,
                   describeVariable(index) + " is of type " + typeName(v.type) + "; use its own function");
     }
@@ -715,7 +715,7 @@ Status Instance::set(const char* function, unsigned types, const std::uint32_t v
         }
         break;
       case table::Causality::Input:
-        if (isDesiredInput(index) && !before_step && state_.demo) {
+        if (!before_step && state_.demo && isDesiredInput(index)) {
           return fail(Status::Error, function,
                       describeVariable(index) + ": the robot follows the built-in demo move (reference = " +
                           (state_.values[role::reference] == kReferenceDemo
@@ -727,6 +727,8 @@ Status Instance::set(const char* function, unsigned types, const std::uint32_t v
         break;
     }
     const double x = v.type == table::Type::Boolean ? (values[i] != T(0) ? 1.0 : 0.0) : static_cast<double>(values[i]);
+    // A finite real within its range, the inputs' every value, passes without the full check's call.
+    if (v.type == table::Type::Real && std::isfinite(x) && x >= v.min && x <= v.max) continue;
     const Status status = checkValue(function, index, x);
     if (status != Status::OK) return status;
   }
@@ -734,7 +736,7 @@ Status Instance::set(const char* function, unsigned types, const std::uint32_t v
     const int index = kIndexByValueReference[vrs[i]];  // checked by the first pass
     const table::Variable& v = kVariables[index];
     const double x = v.type == table::Type::Boolean ? (values[i] != T(0) ? 1.0 : 0.0) : static_cast<double>(values[i]);
-    if (isDesiredInput(index) && !state_.desired_inputs_set) {
+    if (!state_.desired_inputs_set && isDesiredInput(index)) {
       // Setting a desired input, even to its start value, makes reference = auto follow the inputs.
       state_.desired_inputs_set = true;
       if (state_.phase == kInitializationMode) state_.initialized = false;
