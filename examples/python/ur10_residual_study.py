@@ -17,11 +17,15 @@
 6. Series B's goals, each reached in two configurations (elbow up and down) back to back: how much of the
    residual the two share, what constant joint errors would share, and what smooth functions of the tool
    position or of joint 1's angle, fitted on B itself, leave of it (optional, needs --raw-b).
+7. The position residual against the T-Mac's own orientation residual (what a kinematic orientation model fitted
+   on A leaves of the measured orientations): coupled as by a fixed lever in the T-Mac's frame, fitted on A and
+   applied to B with B's measured orientations (optional, needs --raw-b and --raw-a).
 
 Usage, after `jointcomp import-ipa` of both series and
 `jointcomp calibrate --urdf model/robots/ur10.urdf --campaign A.csv --holdout B.csv --out DIR`:
     /usr/bin/python3 examples/python/ur10_residual_study.py DIR A.csv B.csv \
-        [--raw-b .../Series_B/measurements_joint_configurations.csv --trafo-b .../Series_B/Trafo_TM_F_init.txt]
+        [--raw-b .../Series_B/measurements_joint_configurations.csv --trafo-b .../Series_B/Trafo_TM_F_init.txt
+         [--raw-a .../Series_A/measurements_grid.csv --trafo-a .../Series_A/Trafo_TM_F_init.txt]]
 
 Kinematics: the UR10's published standard DH (data README), with the calibrated target's 93 mm; the
 Jacobians only need to be right to a few per cent, so the nominal kinematics serve.
@@ -205,6 +209,27 @@ def read_raw_ipa(raw_path):
     return rows[0], np.array([[float(c.replace(",", ".")) if c else np.nan for c in r] for r in rows[1:]])
 
 
+def fit_instrument_rotation(measured, flange, tool, instrument, fit_tool):
+    """Gauss-Newton on the instrument's rotation (and the T-Mac's on the flange when fit_tool), by finite
+    differences; the residual is the base-frame rotation vector of measured against predicted."""
+    def residual(instrument, tool):
+        return log_rotations(np.einsum("ij,njk,kl,nml->nim", instrument.T, measured, tool.T, flange))
+    count = 6 if fit_tool else 3
+    for _ in range(20):
+        r0 = residual(instrument, tool).reshape(-1)
+        jac = np.empty((len(r0), count))
+        for p in range(count):
+            step = np.zeros(3)
+            step[p % 3] = 1e-7
+            trial = (exp_rotation(step) @ instrument, tool) if p < 3 else (instrument, exp_rotation(step) @ tool)
+            jac[:, p] = (residual(*trial).reshape(-1) - r0) / 1e-7
+        delta = -np.linalg.lstsq(jac, r0, rcond=None)[0]
+        instrument = exp_rotation(delta[:3]) @ instrument
+        if fit_tool:
+            tool = exp_rotation(delta[3:]) @ tool
+    return instrument, tool, residual(instrument, tool)
+
+
 def orientations(raw_path, trafo_path):
     header, values = read_raw_ipa(raw_path)
     joints = ["shoulder_pan_joint", "shoulder_lift_joint", "elbow_joint", "wrist_1_joint", "wrist_2_joint",
@@ -216,24 +241,10 @@ def orientations(raw_path, trafo_path):
     rotations, _, _ = frames(q)
     flange = rotations[6]
     trafo = np.loadtxt(trafo_path)[:3, :3]
-
-    def residual(instrument, tool):  # base-frame rotation vectors of measured vs predicted
-        return log_rotations(np.einsum("ij,njk,kl,nml->nim", instrument.T, measured, tool.T, flange))
-
     best = None
     for tool in (trafo, trafo.T):  # the file's direction is not documented
         instrument = project_rotation(np.einsum("nij,kj,nlk->il", measured, tool, flange))
-        for _ in range(20):  # Gauss-Newton on both rotations, by finite differences
-            r0 = residual(instrument, tool).reshape(-1)
-            jac = np.empty((len(r0), 6))
-            for p in range(6):
-                step = np.zeros(3)
-                step[p % 3] = 1e-7
-                trial = (exp_rotation(step) @ instrument, tool) if p < 3 else (instrument, exp_rotation(step) @ tool)
-                jac[:, p] = (residual(*trial).reshape(-1) - r0) / 1e-7
-            delta = -np.linalg.lstsq(jac, r0, rcond=None)[0]
-            instrument, tool = exp_rotation(delta[:3]) @ instrument, exp_rotation(delta[3:]) @ tool
-        left = residual(instrument, tool)
+        left = fit_instrument_rotation(measured, flange, tool, instrument, True)[2]
         if best is None or rms(left) < rms(best):
             best = left
     # Every small rotation of every joint frame (offsets and placement rotations) and of the instrument.
@@ -248,6 +259,67 @@ def orientations(raw_path, trafo_path):
     print("3. T-Mac orientations of Series B: %.3f mrad after frame and tool rotations, %.3f mrad after every "
           "small rotation of every joint frame; poses measured twice with one joint vector agree to %.3f mrad "
           "(median, %d pairs)" % (1e3 * rms(best), 1e3 * rms(left), 1e3 * repeat, len(same_q)))
+
+
+def raw_orientations(raw_path, rows):
+    """The joint angles and the T-Mac's measured rotations (instrument frame) of a raw IPA file."""
+    header, values = read_raw_ipa(raw_path)
+    joints = ["shoulder_pan_joint", "shoulder_lift_joint", "elbow_joint", "wrist_1_joint", "wrist_2_joint",
+              "wrist_3_joint"]
+    q = values[:, [header.index(j) for j in joints]]
+    euler = values[:, [header.index("measurement_r" + a) for a in "xyz"]]
+    if len(q) != rows or not (np.isfinite(q).all() and np.isfinite(euler).all()):
+        sys.exit("%s: %d rows (the campaign has %d), every one with its joint angles and orientation expected"
+                 % (raw_path, len(q), rows))
+    return q, euler_xyz(euler)
+
+
+def orientation_coupling(raw_a, trafo_a, raw_b, a, b):
+    """Check 7: the position residual against the T-Mac's own orientation residual (what a full kinematic
+    orientation model fitted on A leaves), coupled as by a fixed lever in the T-Mac's frame: a rotation error
+    d of the T-Mac moves its reported point by d x (R l). The lever is fitted on A (with A's frame) and applied
+    to B with B's measured orientations (B's frame and instrument rotation re-fitted)."""
+    qa, ma = raw_orientations(raw_a, len(a[0]))
+    qb, mb = raw_orientations(raw_b, len(b[0]))
+    rotations_a, _, _ = frames(qa)
+    rotations_b, _, _ = frames(qb)
+    trafo = np.loadtxt(trafo_a)[:3, :3]
+    best = None
+    for tool in (trafo, trafo.T):  # the file's direction is not documented
+        start = project_rotation(np.einsum("nij,kj,nlk->il", ma, tool, rotations_a[6]))
+        fit = fit_instrument_rotation(ma, rotations_a[6], tool, start, True)
+        if best is None or rms(fit[2]) < rms(best[2]):
+            best = fit
+    instrument_a, tool, error_a = best
+
+    def kinematic_columns(rotations):  # every small rotation of every joint frame, base frame, rows x 3 x 21
+        return np.stack([rotations[k][:, :, axis] for k in range(7) for axis in range(3)], 2)
+
+    design_a = np.concatenate([kinematic_columns(rotations_a), np.tile(np.eye(3), (len(qa), 1, 1))], 2)
+    model = np.linalg.lstsq(design_a.reshape(-1, 24), error_a.reshape(-1), rcond=None)[0]
+    left_a = error_a - (design_a.reshape(-1, 24) @ model).reshape(-1, 3)
+    start = project_rotation(np.einsum("nij,kj,nlk->il", mb, tool, rotations_b[6]))
+    instrument_b, _, error_b = fit_instrument_rotation(mb, rotations_b[6], tool, start, False)
+    left_b = error_b - (kinematic_columns(rotations_b).reshape(-1, 21) @ model[:21]).reshape(-1, 3)
+    left_b -= left_b.mean(0)  # B's own constant rotation, as its frame
+    tracker_a, tracker_b = left_a @ instrument_a.T, left_b @ instrument_b.T  # into each instrument's frame
+
+    def lever_columns(error, measured):  # d x (R e_k) for the lever's three components in the T-Mac frame
+        return np.stack([np.cross(error, measured[:, :, k]) for k in range(3)], 2)
+
+    ra, rb = a[3], b[3]
+    columns = np.concatenate([lever_columns(tracker_a, ma), frame_columns(a[1])], 2).reshape(-1, 9)
+    fit = np.linalg.lstsq(columns, ra.reshape(-1), rcond=None)[0]
+    a_after = rms((ra.reshape(-1) - columns @ fit).reshape(-1, 3))
+    b_after = rms(without_frame(rb - (lever_columns(tracker_b, mb).reshape(-1, 3) @ fit[:3]).reshape(-1, 3), b[1]))
+    own = np.concatenate([lever_columns(tracker_b, mb), frame_columns(b[1])], 2).reshape(-1, 9)
+    fit_b = np.linalg.lstsq(own, rb.reshape(-1), rcond=None)[0]
+    b_own = rms((rb.reshape(-1) - own @ fit_b).reshape(-1, 3))
+    print("7. The T-Mac's orientation residual after A's kinematic orientation model: A %.3f mrad, B %.3f mrad; "
+          "as a lever in the T-Mac's frame (%.0f, %.0f, %.0f mm, fitted on A) it takes A from %.3f to %.3f mm and, "
+          "with B's measured orientations, B from %.3f to %.3f mm (a lever fitted on B itself, (%.0f, %.0f, %.0f) "
+          "mm: %.3f mm)" % (1e3 * rms(left_a), 1e3 * rms(left_b), *fit[:3], rms(ra), a_after,
+                            rms(without_frame(rb, b[1])), b_after, *fit_b[:3], b_own))
 
 
 def goal_groups(raw_path, rows):
@@ -419,6 +491,8 @@ def main():
     parser.add_argument("--neighbours", type=int, default=3)
     parser.add_argument("--raw-b", help="Series B's raw IPA file, for the orientation check")
     parser.add_argument("--trafo-b", help="Series B's Trafo_TM_F_init.txt, with --raw-b")
+    parser.add_argument("--raw-a", help="Series A's raw IPA file, with --raw-b: the orientation coupling (check 7)")
+    parser.add_argument("--trafo-a", help="Series A's Trafo_TM_F_init.txt, with --raw-a")
     arguments = parser.parse_args()
     residuals = "%s/residuals.csv" % arguments.calibration
     a = read_campaign(arguments.series_a) + (read_residuals(residuals, arguments.series_a.split("/")[-1]),)
@@ -434,6 +508,10 @@ def main():
             sys.exit("--raw-b needs --trafo-b")
         orientations(arguments.raw_b, arguments.trafo_b)
         configurations(arguments.raw_b, b)
+        if arguments.raw_a:
+            if not arguments.trafo_a:
+                sys.exit("--raw-a needs --trafo-a")
+            orientation_coupling(arguments.raw_a, arguments.trafo_a, arguments.raw_b, a, b)
     tracker(a, b, 3)
     temperatures = (read_temperatures(arguments.series_a), read_temperatures(arguments.series_b))
     if any(t is None for t in temperatures):

@@ -20,8 +20,8 @@ model="$(dirname "$0")/../../model/robots/ur10.urdf"
 "$jointcomp" calibrate --urdf "$model" --campaign "$work/A.csv" --holdout "$work/B.csv" --out "$work/calibrate" \
   --no-plot >/dev/null
 "$python" "$(dirname "$0")/../../examples/python/ur10_residual_study.py" "$work/calibrate" "$work/A.csv" "$work/B.csv" \
-  --max-order 30 --raw-b "$raw_b" \
-  --trafo-b "$data/Series_B/Trafo_TM_F_init.txt" >"$work/study.txt"
+  --max-order 30 --raw-b "$raw_b" --trafo-b "$data/Series_B/Trafo_TM_F_init.txt" \
+  --raw-a "$data/Series_A/measurements_grid.csv" --trafo-a "$data/Series_A/Trafo_TM_F_init.txt" >"$work/study.txt"
 cat "$work/study.txt"
 "$python" - "$work/study.txt" <<'PY'
 import re, sys
@@ -59,5 +59,10 @@ fields = re.search(r"\(degree 4, [0-9]+ parameters\) leaves ([0-9.]+) mm and har
                    r"([0-9.]+) mm of B's ([0-9.]+) mm", text)
 position_field, joint_1, b_total = map(float, fields.groups())
 assert position_field > 0.8 * b_total and joint_1 > 0.8 * b_total, fields.groups()  # neither explains B, even on B
+coupling = re.search(r"it takes A from ([0-9.]+) to ([0-9.]+) mm and, with B's measured orientations, B from ([0-9.]+) "
+                     r"to ([0-9.]+) mm", text)
+a_before, a_coupled, b_before, b_coupled = map(float, coupling.groups())
+assert a_coupled < 0.85 * a_before, coupling.groups()  # the position residual goes with the T-Mac's orientation residual
+assert b_coupled < 0.90 * b_before, coupling.groups()  # and the coupling fitted on A carries to B
 print("the UR10 study holds")
 PY
