@@ -230,27 +230,43 @@ def fit_instrument_rotation(measured, flange, tool, instrument, fit_tool):
     return instrument, tool, residual(instrument, tool)
 
 
-def orientations(raw_path, trafo_path):
+def raw_joints_and_orientations(raw_path):
+    """The joint angles and the T-Mac's measured rotations (intrinsic XYZ, deg) of every row of a raw IPA file."""
     header, values = read_raw_ipa(raw_path)
     joints = ["shoulder_pan_joint", "shoulder_lift_joint", "elbow_joint", "wrist_1_joint", "wrist_2_joint",
               "wrist_3_joint"]
     q = values[:, [header.index(j) for j in joints]]
     euler = values[:, [header.index("measurement_r" + a) for a in "xyz"]]
+    return q, euler
+
+
+def instrument_and_tool(measured, flange, trafo_path):
+    """The instrument's rotation and the T-Mac's on the flange, fitted to the measured rotations from the trafo
+    file's rotation taken either way round (the file's direction is not documented): the better fit."""
+    trafo = np.loadtxt(trafo_path)[:3, :3]
+    best = None
+    for tool in (trafo, trafo.T):
+        start = project_rotation(np.einsum("nij,kj,nlk->il", measured, tool, flange))
+        fit = fit_instrument_rotation(measured, flange, tool, start, True)
+        if best is None or rms(fit[2]) < rms(best[2]):
+            best = fit
+    return best
+
+
+def kinematic_orientation_columns(rotations):
+    """Every small rotation of every joint frame (offsets and placement rotations), base frame, then the
+    instrument's (a constant rotation): rows x 3 x 24."""
+    joint_frames = np.stack([rotations[k][:, :, axis] for k in range(7) for axis in range(3)], 2)
+    return np.concatenate([joint_frames, np.tile(np.eye(3), (len(joint_frames), 1, 1))], 2)
+
+
+def orientations(raw_path, trafo_path):
+    q, euler = raw_joints_and_orientations(raw_path)
     keep = np.isfinite(q).all(1) & np.isfinite(euler).all(1)
     q, measured = q[keep], euler_xyz(euler[keep])
     rotations, _, _ = frames(q)
-    flange = rotations[6]
-    trafo = np.loadtxt(trafo_path)[:3, :3]
-    best = None
-    for tool in (trafo, trafo.T):  # the file's direction is not documented
-        instrument = project_rotation(np.einsum("nij,kj,nlk->il", measured, tool, flange))
-        left = fit_instrument_rotation(measured, flange, tool, instrument, True)[2]
-        if best is None or rms(left) < rms(best):
-            best = left
-    # Every small rotation of every joint frame (offsets and placement rotations) and of the instrument.
-    columns = [np.stack([rotations[k][:, :, axis] for k in range(7) for axis in range(3)], 2)]
-    columns.append(np.tile(np.eye(3), (len(q), 1, 1)))
-    design = np.concatenate(columns, 2).reshape(-1, 24)
+    best = instrument_and_tool(measured, rotations[6], trafo_path)[2]
+    design = kinematic_orientation_columns(rotations).reshape(-1, 24)
     y = best.reshape(-1)
     left = (y - design @ np.linalg.lstsq(design, y, rcond=None)[0]).reshape(-1, 3)
     same_q = np.array([(i, j) for i in range(len(q)) for j in range(i + 1, min(i + 20, len(q)))
@@ -261,13 +277,9 @@ def orientations(raw_path, trafo_path):
           "(median, %d pairs)" % (1e3 * rms(best), 1e3 * rms(left), 1e3 * repeat, len(same_q)))
 
 
-def raw_orientations(raw_path, rows):
-    """The joint angles and the T-Mac's measured rotations (instrument frame) of a raw IPA file."""
-    header, values = read_raw_ipa(raw_path)
-    joints = ["shoulder_pan_joint", "shoulder_lift_joint", "elbow_joint", "wrist_1_joint", "wrist_2_joint",
-              "wrist_3_joint"]
-    q = values[:, [header.index(j) for j in joints]]
-    euler = values[:, [header.index("measurement_r" + a) for a in "xyz"]]
+def campaign_orientations(raw_path, rows):
+    """raw_joints_and_orientations for a campaign imported with every row: each row must have both."""
+    q, euler = raw_joints_and_orientations(raw_path)
     if len(q) != rows or not (np.isfinite(q).all() and np.isfinite(euler).all()):
         sys.exit("%s: %d rows (the campaign has %d), every one with its joint angles and orientation expected"
                  % (raw_path, len(q), rows))
@@ -279,28 +291,17 @@ def orientation_coupling(raw_a, trafo_a, raw_b, a, b):
     orientation model fitted on A leaves), coupled as by a fixed lever in the T-Mac's frame: a rotation error
     d of the T-Mac moves its reported point by d x (R l). The lever is fitted on A (with A's frame) and applied
     to B with B's measured orientations (B's frame and instrument rotation re-fitted)."""
-    qa, ma = raw_orientations(raw_a, len(a[0]))
-    qb, mb = raw_orientations(raw_b, len(b[0]))
+    qa, ma = campaign_orientations(raw_a, len(a[0]))
+    qb, mb = campaign_orientations(raw_b, len(b[0]))
     rotations_a, _, _ = frames(qa)
     rotations_b, _, _ = frames(qb)
-    trafo = np.loadtxt(trafo_a)[:3, :3]
-    best = None
-    for tool in (trafo, trafo.T):  # the file's direction is not documented
-        start = project_rotation(np.einsum("nij,kj,nlk->il", ma, tool, rotations_a[6]))
-        fit = fit_instrument_rotation(ma, rotations_a[6], tool, start, True)
-        if best is None or rms(fit[2]) < rms(best[2]):
-            best = fit
-    instrument_a, tool, error_a = best
-
-    def kinematic_columns(rotations):  # every small rotation of every joint frame, base frame, rows x 3 x 21
-        return np.stack([rotations[k][:, :, axis] for k in range(7) for axis in range(3)], 2)
-
-    design_a = np.concatenate([kinematic_columns(rotations_a), np.tile(np.eye(3), (len(qa), 1, 1))], 2)
+    instrument_a, tool, error_a = instrument_and_tool(ma, rotations_a[6], trafo_a)
+    design_a = kinematic_orientation_columns(rotations_a)
     model = np.linalg.lstsq(design_a.reshape(-1, 24), error_a.reshape(-1), rcond=None)[0]
     left_a = error_a - (design_a.reshape(-1, 24) @ model).reshape(-1, 3)
     start = project_rotation(np.einsum("nij,kj,nlk->il", mb, tool, rotations_b[6]))
     instrument_b, _, error_b = fit_instrument_rotation(mb, rotations_b[6], tool, start, False)
-    left_b = error_b - (kinematic_columns(rotations_b).reshape(-1, 21) @ model[:21]).reshape(-1, 3)
+    left_b = error_b - (kinematic_orientation_columns(rotations_b)[:, :, :21].reshape(-1, 21) @ model[:21]).reshape(-1, 3)
     left_b -= left_b.mean(0)  # B's own constant rotation, as its frame
     tracker_a, tracker_b = left_a @ instrument_a.T, left_b @ instrument_b.T  # into each instrument's frame
 
