@@ -27,6 +27,7 @@ Compensator::Compensator(const JointErrorModel& model, EffectMask mask, FixedPoi
       other_command_effects_.push_back(i);
     }
   }
+  loads_read_kinematics_ = loadsReadKinematics(model, mask);
   // G's nonzero entries row by row (the diagonal and the few couplings of a 6 x 6 matrix).
   const JointMatrix& g = model.gears().motorFromJoint();
   gear_row_start_[0] = 0;
@@ -75,15 +76,29 @@ constexpr double kLargestNewtonSlope = 0.5;
 void Compensator::prepare(JointContext& ctx, bool along_path) {
   const Robot& robot = model_.robot();
   checkJointVector(robot, ctx.q, "planned q");
-  // compensate() keeps the plain FK (sinCos's bits, and no anchors to store); compensateFrom() starts the
+  // compensate() takes the plain sines (sinCos's bits, and no anchors to store); compensateFrom() starts the
   // anchors with its first call.
-  if (along_path) {
-    forwardKinematicsNear(robot, ws_.robot, ctx.q, joint_anchors_, joint_anchors_set_);
-    joint_anchors_set_ = true;
+  if (!loads_read_kinematics_ && ctx.payload_mass == 0.0 && ctx.tool_wrench.isZero(0.0)) {
+    // Gravity alone needs no poses: a third of the arithmetic of the forward kinematics and their sum.
+    double cosines[kMaxJoints], sines[kMaxJoints];
+    if (along_path) {
+      for (int i = 0; i < robot.dof(); ++i) {
+        sinCosNear(ctx.q[i], joint_anchors_set_, joint_anchors_[static_cast<std::size_t>(i)], sines[i], cosines[i]);
+      }
+      joint_anchors_set_ = true;
+    } else {
+      sinCosBatch(ctx.q.data(), robot.dof(), sines, cosines);
+    }
+    loadTorqueInJointFrames(model_, mask_, ws_, ctx, cosines, sines);
   } else {
-    forwardKinematics(robot, ws_.robot, ctx.q);
+    if (along_path) {
+      forwardKinematicsNear(robot, ws_.robot, ctx.q, joint_anchors_, joint_anchors_set_);
+      joint_anchors_set_ = true;
+    } else {
+      forwardKinematics(robot, ws_.robot, ctx.q);
+    }
+    loadTorqueAtCurrentPose(model_, mask_, ws_, ctx);
   }
-  loadTorqueAtCurrentPose(model_, mask_, ws_, ctx);
   // Errors that do not read the command (compliance at ctx.q's load) are the same at every iteration.
   fixed_dq_.setZero(ctx.q.size());
   for (const int i : fixed_effects_) model_.effect(i).addJointError(robot, ctx, fixed_dq_);

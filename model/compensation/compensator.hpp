@@ -64,7 +64,10 @@ private:
   };
   std::vector<Transmission> transmission_errors_;
   std::vector<TransmissionErrorEffect::Anchor> anchors_;
-  bool anchors_set_ = false;         // by an earlier call (each harmonic's sine and cosine at some phase, from sinCos)
+  bool anchors_set_ = false;  // by an earlier call (each harmonic's sine and cosine at some phase, from sinCos)
+  // No selected load reads the forward kinematics: with no payload or wrench in the context, the load
+  // torque comes from the joints' sines and cosines alone (gravity in joint frames).
+  bool loads_read_kinematics_ = true;
   JointAngleAnchors joint_anchors_;  // the joint angles' sines and cosines, by compensateFrom
   bool joint_anchors_set_ = false;
   std::vector<int> other_command_effects_;

@@ -72,6 +72,9 @@ public:
 
   // Load effects: add this effect's contribution to ctx.load_torque (ws holds forward kinematics at ctx.q).
   virtual void addLoadTorque(const Robot& robot, const RobotWorkspace& ws, JointContext& ctx) const;
+  // False when addLoadTorque reads only ctx (not ws): a caller that needs the load torque alone may then
+  // skip the forward kinematics. Every load effect reads them unless it says otherwise.
+  virtual bool loadTorqueReadsKinematics() const { return role() == EffectRole::Load; }
   // Load effects: add the rate of this effect's contribution along the joint velocity qd, (d tau/dq) qd, to
   // `rate` and return true; false when the effect does not know it (the plant's feed-forward then takes a
   // difference quotient). At ctx.q, with ws at it.

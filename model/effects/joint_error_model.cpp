@@ -68,6 +68,24 @@ void loadTorqueAtCurrentPose(const JointErrorModel& model, EffectMask mask, Join
   if (ctx.inertial_torque.size() == ctx.load_torque.size()) ctx.load_torque += ctx.inertial_torque;
 }
 
+void loadTorqueInJointFrames(const JointErrorModel& model, EffectMask mask, JointErrorWorkspace& ws, JointContext& ctx,
+                             const double* cosines, const double* sines) {
+  if (ctx.payload_mass != 0.0 || !ctx.tool_wrench.isZero(0.0)) {
+    throw InvalidArgument(
+        "loadTorqueInJointFrames: a payload or a tool wrench needs the tool's pose (computeLoadTorque)");
+  }
+  gravityTorquesInJointFrames(model.robot(), cosines, sines, ctx.load_torque);
+  addNonGravityLoadsAtCurrentPose(model, mask, ws, ctx);  // the load effects alone: none reads ws.robot
+  if (ctx.inertial_torque.size() == ctx.load_torque.size()) ctx.load_torque += ctx.inertial_torque;
+}
+
+bool loadsReadKinematics(const JointErrorModel& model, EffectMask mask) {
+  for (int i = 0; i < model.effectCount(); ++i) {
+    if (((mask >> i) & 1U) && model.effect(i).loadTorqueReadsKinematics()) return true;
+  }
+  return false;
+}
+
 void addNonGravityLoadsAtCurrentPose(const JointErrorModel& model, EffectMask mask, JointErrorWorkspace& ws,
                                      JointContext& ctx) {
   const Robot& robot = model.robot();

@@ -62,6 +62,13 @@ struct JointErrorWorkspace {
 void computeLoadTorque(const JointErrorModel& model, EffectMask mask, JointErrorWorkspace& ws, JointContext& ctx);
 // The same at the pose of the last forward kinematics in ws.robot (which must be of ctx.q).
 void loadTorqueAtCurrentPose(const JointErrorModel& model, EffectMask mask, JointErrorWorkspace& ws, JointContext& ctx);
+// The same from the joints' cosines and sines at ctx.q, without forward kinematics (gravity in joint
+// frames, dynamics.hpp), for a caller that needs the load torque alone. Only where loadsReadKinematics is
+// false for the mask and ctx has no payload and no tool wrench (which need the tool's pose; InvalidArgument).
+void loadTorqueInJointFrames(const JointErrorModel& model, EffectMask mask, JointErrorWorkspace& ws, JointContext& ctx,
+                             const double* cosines, const double* sines);
+// True when a selected load effect reads the forward kinematics (Effect::loadTorqueReadsKinematics).
+bool loadsReadKinematics(const JointErrorModel& model, EffectMask mask);
 // The rate of that load torque along the joint velocity qd, (d load_torque / dq) qd, into `rate` (ctx's
 // inertial torque held), at the last forward kinematics in ws.robot (of ctx.q); false when a selected load
 // effect does not know its rate (`rate` is then incomplete).

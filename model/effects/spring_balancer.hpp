@@ -28,6 +28,7 @@ public:
   std::string type() const override { return kType; }
   EffectRole role() const override { return EffectRole::Load; }
   void addLoadTorque(const Robot& robot, const RobotWorkspace& ws, JointContext& ctx) const override;
+  bool loadTorqueReadsKinematics() const override { return false; }  // a function of its joint's angle
   bool addLoadTorqueRate(const Robot& robot, const RobotWorkspace& ws, const JointContext& ctx, const JointVector& qd,
                          JointVector& rate) const override;
   std::vector<std::string> parameterNames() const override;

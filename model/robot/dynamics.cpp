@@ -106,6 +106,48 @@ void gravityTorquesAtCurrentPose(const Robot& robot, RobotWorkspace& ws, JointVe
 }
 
 namespace {
+// Rot(axis, angle) v from the angle's cosine and sine (the transpose's product with -s); the usual z axis
+// turns two coordinates.
+[[gnu::always_inline]] inline Eigen::Vector3d turnedAboutAxis(const Eigen::Vector3d& axis, double c, double s,
+                                                              const Eigen::Vector3d& v) {
+  if (axis.x() == 0.0 && axis.y() == 0.0 && axis.z() == 1.0)
+    return {c * v.x() - s * v.y(), s * v.x() + c * v.y(), v.z()};
+  return c * v + s * axis.cross(v) + ((1.0 - c) * axis.dot(v)) * axis;
+}
+}  // namespace
+
+void gravityTorquesInJointFrames(const Robot& robot, const double* cosines, const double* sines, JointVector& tau) {
+  requireInertials(robot);
+  const int n = robot.dof();
+  tau.resize(n);
+  // Gravity in body i's frame: g_i = Rot_i^T P_i^T g_(i-1), from the root's.
+  std::array<Eigen::Vector3d, kMaxJoints> gravity;
+  Eigen::Vector3d g = robot.gravity;
+  for (int i = 0; i < n; ++i) {
+    const Joint& joint = robot.joints[static_cast<std::size_t>(i)];
+    const Eigen::Matrix3d placement = joint.placement.linear();  // a plain 3 x 3: the products on it unroll
+    g = turnedAboutAxis(joint.axis, cosines[i], -sines[i], placement.transpose() * g);
+    gravity[static_cast<std::size_t>(i)] = g;
+  }
+  // h_i = sum_{j >= i} m_j (c_j - o_i) in body i's frame: h_i = m_i c_i + M_(i+1) t_(i+1) + P_(i+1) Rot_(i+1) h_(i+1),
+  // and tau_i = -axis_i . (h_i x g_i), the world formula's triple product in body i's frame.
+  Eigen::Vector3d moment = Eigen::Vector3d::Zero();
+  double distal_mass = 0.0;
+  for (int i = n - 1; i >= 0; --i) {
+    const Joint& joint = robot.joints[static_cast<std::size_t>(i)];
+    if (i < n - 1) {
+      const Joint& next = robot.joints[static_cast<std::size_t>(i + 1)];
+      const Eigen::Matrix3d placement = next.placement.linear();
+      moment = placement * turnedAboutAxis(next.axis, cosines[i + 1], sines[i + 1], moment) +
+               distal_mass * next.placement.translation();
+    }
+    moment += joint.body.mass * joint.body.com;
+    distal_mass += joint.body.mass;
+    tau[i] = -joint.axis.dot(moment.cross(gravity[static_cast<std::size_t>(i)]));
+  }
+}
+
+namespace {
 
 // The velocities the torque rates need, from the last forward kinematics and qd: each axis turns with the
 // bodies before its joint, each joint origin moves with them (a joint's own rotation moves neither).

@@ -11,6 +11,11 @@ namespace jointcomp {
 void gravityTorques(const Robot& robot, RobotWorkspace& ws, const JointVector& q, JointVector& tau);
 // The same at the configuration of the last forwardKinematics call.
 void gravityTorquesAtCurrentPose(const Robot& robot, RobotWorkspace& ws, JointVector& tau);
+// The same from the joints' cosines and sines (robot.dof() of each), without forward kinematics: gravity
+// carried out along the chain into each body's frame and the distal first moments carried back, both in
+// joint frames, about a third of the arithmetic of the chain's poses. For a caller that needs gravity
+// alone (offline compensation); equal to gravityTorques up to rounding.
+void gravityTorquesInJointFrames(const Robot& robot, const double* cosines, const double* sines, JointVector& tau);
 
 // The rates of static torques along a motion, (d tau / dq) qd, for a feed-forward that follows the motion
 // without a second evaluation at q + qd dt; each at the last forwardKinematics call and added to `rate`.

@@ -23,6 +23,7 @@
 #include "model/compensation/joint_trajectory.hpp"
 #include "model/compensation/path.hpp"
 #include "model/effects/compliance.hpp"
+#include "model/effects/payload.hpp"
 #include "model/effects/periodic_table.hpp"
 #include "model/effects/spring_balancer.hpp"
 #include "model/experiment/spiral_experiment.hpp"
@@ -99,10 +100,16 @@ Settled settleAll(const JointErrorModel& truth, EffectMask mask, const JointTraj
 // generic calls (libm's sines, no Newton step, no anchors), until an iteration moves it by no more than
 // `tolerance` (1e-12: the compensator before its Newton steps, to the bit; 0: until it stops moving, the
 // point the compensator must land on).
+// `loads`: a payload and a tool wrench to hold (the context's other fields are not read).
 JointVector plainFixedPoint(const JointErrorModel& model, EffectMask mask, const JointVector& planned,
-                            double tolerance = 0.0) {
+                            double tolerance = 0.0, const JointContext* loads = nullptr) {
   JointErrorWorkspace ws(model.robot());
   JointContext ctx(model.robot().dof());
+  if (loads) {
+    ctx.payload_mass = loads->payload_mass;
+    ctx.payload_com = loads->payload_com;
+    ctx.tool_wrench = loads->tool_wrench;
+  }
   ctx.q = planned;
   computeLoadTorque(model, mask, ws, ctx);
   ctx.command = ctx.q;
@@ -421,6 +428,47 @@ TEST(Compensator, NewtonStepsLandOnThePlainFixedPoint) {
             << " rad (the former plain iteration to 1e-12: within " << from_former << " rad)\n";
   // Both stop when the map moves by <= 1e-12 rad and contract it by about 1e-2: well inside 1e-12 of it.
   EXPECT_LT(largest, 1e-13);
+}
+
+// The compensator takes gravity from the joints' sines alone (gravityTorquesInJointFrames) unless a load needs
+// the tool's pose: a payload or a wrench in the context, or a load effect that reads the kinematics (a
+// payload effect). Each way it lands on the plain fixed point with the forward kinematics' loads, and the
+// loads change the answer (so the comparison sees them).
+TEST(Compensator, LoadsThatNeedTheToolsPoseLandOnThePlainFixedPoint) {
+  const JointErrorModel bare = rx170Model();
+  JointErrorModel with_payload_effect = bare;
+  with_payload_effect.addEffect(std::make_unique<PayloadEffect>(bare.robot(), 20.0, Eigen::Vector3d(0.05, -0.02, 0.1)));
+  JointContext loads(6);
+  loads.payload_mass = 12.0;
+  loads.payload_com = Eigen::Vector3d(0.0, 0.03, 0.08);
+  loads.tool_wrench << 30.0, -20.0, 50.0, 4.0, -3.0, 2.0;
+  std::mt19937 rng(37u);
+  double largest = 0.0, smallest_load_effect = std::numeric_limits<double>::infinity();
+  for (int sample = 0; sample < 50; ++sample) {
+    const JointVector pose = randomPose(bare.robot(), rng);
+    for (int way = 0; way < 3; ++way) {
+      const JointErrorModel& model = way == 2 ? with_payload_effect : bare;
+      const EffectMask mask = model.allEffects();
+      Compensator compensator(model, mask);
+      JointContext ctx(6);
+      if (way == 1) {
+        ctx.payload_mass = loads.payload_mass;
+        ctx.payload_com = loads.payload_com;
+        ctx.tool_wrench = loads.tool_wrench;
+      }
+      ctx.q = pose;
+      JointVector reference;
+      ASSERT_TRUE(compensator.compensate(ctx, reference).converged) << "sample " << sample << " way " << way;
+      const JointVector plain = plainFixedPoint(model, mask, pose, 0.0, way == 1 ? &loads : nullptr);
+      largest = std::max(largest, (reference - plain).cwiseAbs().maxCoeff());
+      if (way > 0) {
+        smallest_load_effect =
+            std::min(smallest_load_effect, (plain - plainFixedPoint(bare, bare.allEffects(), pose)).norm());
+      }
+    }
+  }
+  EXPECT_LT(largest, 1e-13);
+  EXPECT_GT(smallest_load_effect, 1e-6);  // rad: the payload and wrench move the reference
 }
 
 // A guess far from the answer costs iterations, not accuracy; a guess that is not a number is an error.

@@ -100,6 +100,54 @@ TEST(Dynamics, GravityAtCurrentPoseEqualsGravityTorques) {
   }
 }
 
+// The RX170 with every joint axis tilted, every placement turned, and gravity off the vertical: the
+// joint-frame recursion's general-axis path, against the world-frame sum and the potential's gradient.
+Robot tiltedRx170() {
+  Robot robot = testing_support::rx170();
+  std::mt19937 rng(205u);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  for (Joint& joint : robot.joints) {
+    joint.axis = Eigen::Vector3d(normal(rng), normal(rng), normal(rng)).normalized();
+    joint.placement.linear() =
+        (Eigen::AngleAxisd(0.7 * normal(rng), Eigen::Vector3d(normal(rng), normal(rng), normal(rng)).normalized()) *
+         joint.placement.linear())
+            .eval();
+  }
+  robot.gravity = Eigen::Vector3d(1.2, -0.8, -9.7);
+  return robot;
+}
+
+TEST(Dynamics, GravityInJointFramesIsTheWorldSumAndTheGradientOfThePotentialEnergy) {
+  const Robot tilted = tiltedRx170();
+  std::vector<const Robot*> robots = bothRobots();
+  robots.push_back(&tilted);
+  for (const Robot* robot : robots) {
+    RobotWorkspace ws(*robot);
+    std::mt19937 rng(204u);
+    const double h = 1e-5;
+    for (int sample = 0; sample < 50; ++sample) {
+      const JointVector q = testing_support::randomConfiguration(*robot, rng);
+      double cosines[kMaxJoints], sines[kMaxJoints];
+      for (int i = 0; i < robot->dof(); ++i) {
+        cosines[i] = std::cos(q[i]);
+        sines[i] = std::sin(q[i]);
+      }
+      JointVector tau;
+      gravityTorquesInJointFrames(*robot, cosines, sines, tau);
+      ASSERT_EQ(tau.size(), robot->dof());
+      const JointVector world = gravityAt(*robot, q);
+      for (int i = 0; i < robot->dof(); ++i) {
+        EXPECT_NEAR(tau[i], world[i], 1e-12 * (1.0 + world.cwiseAbs().maxCoeff())) << robot->name << " joint " << i + 1;
+        JointVector plus = q, minus = q;
+        plus[i] += h;
+        minus[i] -= h;
+        const double gradient = (potentialEnergy(*robot, ws, plus) - potentialEnergy(*robot, ws, minus)) / (2.0 * h);
+        EXPECT_NEAR(tau[i], gradient, 1e-5) << robot->name << " joint " << i + 1;
+      }
+    }
+  }
+}
+
 TEST(Dynamics, MassMatrixIsSymmetricPositiveDefinite) {
   for (const Robot* robot : bothRobots()) {
     std::mt19937 rng(204u);
@@ -483,6 +531,8 @@ TEST(Dynamics, MissingInertialThrowsOnEveryDynamicsCallNamingTheLink) {
   };
   expectNamesLink([&] { gravityTorques(robot, ws, zero, tau); }, "gravityTorques");
   expectNamesLink([&] { gravityTorquesAtCurrentPose(robot, ws, tau); }, "gravityTorquesAtCurrentPose");
+  const double cosines[kMaxJoints] = {1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1}, sines[kMaxJoints] = {};
+  expectNamesLink([&] { gravityTorquesInJointFrames(robot, cosines, sines, tau); }, "gravityTorquesInJointFrames");
   expectNamesLink([&] { inverseDynamics(robot, ws, zero, zero, zero, tau); }, "inverseDynamics");
   expectNamesLink([&] { massMatrix(robot, ws, zero, mass); }, "massMatrix");
   expectNamesLink([&] { forwardDynamics(robot, ws, zero, zero, zero, tau); }, "forwardDynamics");
