@@ -333,8 +333,8 @@ void crossCheck(const std::string& label, Fixture& f) {
   KdlModel& kdl = f.kdl;
   const int n = robot.dof();
   RobotWorkspace ws(robot);
-  double worst_pose = 0, worst_jacobian = 0, worst_gravity = 0, worst_gravity_dp = 0, worst_rnea = 0, worst_mass = 0,
-         worst_fd = 0;
+  double worst_pose = 0, worst_jacobian = 0, worst_gravity = 0, worst_gravity_dp = 0, worst_gravity_frames = 0,
+         worst_rnea = 0, worst_mass = 0, worst_fd = 0;
   const int checks[] = {0, 1, 2, 3, 17, 42, 63};
   for (int k : checks) {
     const Sample& s = f.samples[k];
@@ -364,6 +364,11 @@ void crossCheck(const std::string& label, Fixture& f) {
     expectClose("gravity torques vs KDL ChainIdSolver_RNE", k, tau, fromKdl(kdl_tau), worst_gravity);
     requireKdl(kdl.dyn_param->JntToGravity(s.kq, kdl_tau), "ChainDynParam::JntToGravity");
     expectClose("gravity torques vs KDL ChainDynParam::JntToGravity", k, tau, fromKdl(kdl_tau), worst_gravity_dp);
+    double sines[jointcomp::kMaxJoints], cosines[jointcomp::kMaxJoints];
+    jointcomp::sinCosBatch(s.q.data(), n, sines, cosines);
+    jointcomp::gravityTorquesInJointFrames(robot, cosines, sines, tau);
+    expectClose("gravity torques in joint frames vs KDL ChainDynParam::JntToGravity", k, tau, fromKdl(kdl_tau),
+                worst_gravity_frames);
 
     jointcomp::inverseDynamics(robot, ws, s.q, s.qd, s.qdd, tau);
     requireKdl(kdl.rne->CartToJnt(s.kq, s.kqd, s.kqdd, kdl.no_wrenches, kdl_tau), "ChainIdSolver_RNE::CartToJnt");
@@ -387,10 +392,10 @@ void crossCheck(const std::string& label, Fixture& f) {
   std::fprintf(
       stderr,
       "robot_bench: cross-check against KDL passed for %s at %zu configurations (largest relative differences: "
-      "pose %.1e, Jacobian %.1e, gravity %.1e (RNE) %.1e (DynParam), RNEA %.1e, mass matrix %.1e, "
-      "forward dynamics %.1e; tolerance 1e-9)\n",
+      "pose %.1e, Jacobian %.1e, gravity %.1e (RNE) %.1e (DynParam) %.1e (ours in joint frames), RNEA %.1e, mass "
+      "matrix %.1e, forward dynamics %.1e; tolerance 1e-9)\n",
       label.c_str(), sizeof(checks) / sizeof(checks[0]), worst_pose, worst_jacobian, worst_gravity, worst_gravity_dp,
-      worst_rnea, worst_mass, worst_fd);
+      worst_gravity_frames, worst_rnea, worst_mass, worst_fd);
 }
 
 // ---------------------------------------------------------------------------------------------------
@@ -512,6 +517,21 @@ void BM_Ours_Gravity(benchmark::State& state) {
   const AllocationCounter allocations;
   for (auto _ : state) {
     jointcomp::gravityTorques(robot, ws, NEXT_SAMPLE.q, tau);
+    benchmark::DoNotOptimize(tau);
+  }
+  allocations.report(state);
+}
+// Gravity alone, without the chain's poses (what offline compensation uses): the sines, then the recursion in
+// joint frames.
+void BM_Ours_GravityInJointFrames(benchmark::State& state) {
+  BENCH_PROLOGUE;
+  JointVector tau(n);
+  double sines[jointcomp::kMaxJoints], cosines[jointcomp::kMaxJoints];
+  const AllocationCounter allocations;
+  for (auto _ : state) {
+    const JointVector& q = NEXT_SAMPLE.q;
+    jointcomp::sinCosBatch(q.data(), n, sines, cosines);
+    jointcomp::gravityTorquesInJointFrames(robot, cosines, sines, tau);
     benchmark::DoNotOptimize(tau);
   }
   allocations.report(state);
@@ -671,6 +691,7 @@ BENCHMARK(BM_Libm_SinCos);
 BENCHMARK(BM_Ours_Jacobian);
 BENCHMARK(BM_Kdl_Jacobian);
 BENCHMARK(BM_Ours_Gravity);
+BENCHMARK(BM_Ours_GravityInJointFrames);
 BENCHMARK(BM_Kdl_Gravity_RNE);
 BENCHMARK(BM_Kdl_Gravity_DynParam);
 BENCHMARK(BM_Ours_FkJacobianGravity);
