@@ -68,15 +68,44 @@ void loadTorqueAtCurrentPose(const JointErrorModel& model, EffectMask mask, Join
   if (ctx.inertial_torque.size() == ctx.load_torque.size()) ctx.load_torque += ctx.inertial_torque;
 }
 
+namespace {
+void requireNoToolLoads(const JointContext& ctx, const char* function) {
+  if (ctx.payload_mass != 0.0 || !ctx.tool_wrench.isZero(0.0)) {
+    throw InvalidArgument(std::string(function) +
+                          ": a payload or a tool wrench needs the tool's pose (computeLoadTorque)");
+  }
+}
+
+// The selected load effects' rates along qd added to `rate`; false at the first that does not know its own.
+bool addLoadEffectRates(const JointErrorModel& model, EffectMask mask, const JointErrorWorkspace& ws,
+                        const JointContext& ctx, const JointVector& qd, JointVector& rate) {
+  for (int i = 0; i < model.effectCount(); ++i) {
+    const Effect& effect = model.effect(i);
+    if (((mask >> i) & 1U) && effect.role() == EffectRole::Load &&
+        !effect.addLoadTorqueRate(model.robot(), ws.robot, ctx, qd, rate)) {
+      return false;
+    }
+  }
+  return true;
+}
+}  // namespace
+
 void loadTorqueInJointFrames(const JointErrorModel& model, EffectMask mask, JointErrorWorkspace& ws, JointContext& ctx,
                              const double* cosines, const double* sines) {
-  if (ctx.payload_mass != 0.0 || !ctx.tool_wrench.isZero(0.0)) {
-    throw InvalidArgument(
-        "loadTorqueInJointFrames: a payload or a tool wrench needs the tool's pose (computeLoadTorque)");
-  }
+  requireNoToolLoads(ctx, "loadTorqueInJointFrames");
   gravityTorquesInJointFrames(model.robot(), cosines, sines, ctx.load_torque);
   addNonGravityLoadsAtCurrentPose(model, mask, ws, ctx);  // the load effects alone: none reads ws.robot
   if (ctx.inertial_torque.size() == ctx.load_torque.size()) ctx.load_torque += ctx.inertial_torque;
+}
+
+bool loadTorqueAndRateInJointFrames(const JointErrorModel& model, EffectMask mask, JointErrorWorkspace& ws,
+                                    JointContext& ctx, const double* cosines, const double* sines,
+                                    const JointVector& qd, JointVector& rate) {
+  requireNoToolLoads(ctx, "loadTorqueAndRateInJointFrames");
+  gravityTorquesAndRateInJointFrames(model.robot(), cosines, sines, qd, ctx.load_torque, rate);
+  addNonGravityLoadsAtCurrentPose(model, mask, ws, ctx);
+  if (ctx.inertial_torque.size() == ctx.load_torque.size()) ctx.load_torque += ctx.inertial_torque;
+  return addLoadEffectRates(model, mask, ws, ctx, qd, rate);
 }
 
 bool loadsReadKinematics(const JointErrorModel& model, EffectMask mask) {
@@ -116,14 +145,7 @@ bool loadTorqueRateAtCurrentPose(const JointErrorModel& model, EffectMask mask, 
     // load_torque -= J^T w: the rate with the opposite wrench.
     addWrenchTorqueRateAtCurrentPose(robot, ws.robot, -ctx.tool_wrench, qd, rate);
   }
-  bool known = true;
-  for (int i = 0; i < model.effectCount() && known; ++i) {
-    const Effect& effect = model.effect(i);
-    if (((mask >> i) & 1U) && effect.role() == EffectRole::Load) {
-      known = effect.addLoadTorqueRate(robot, ws.robot, ctx, qd, rate);
-    }
-  }
-  return known;
+  return addLoadEffectRates(model, mask, ws, ctx, qd, rate);
 }
 
 void addSelectedJointErrors(const JointErrorModel& model, EffectMask mask, const JointContext& ctx, JointVector& dq) {

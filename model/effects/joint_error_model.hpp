@@ -67,6 +67,11 @@ void loadTorqueAtCurrentPose(const JointErrorModel& model, EffectMask mask, Join
 // false for the mask and ctx has no payload and no tool wrench (which need the tool's pose; InvalidArgument).
 void loadTorqueInJointFrames(const JointErrorModel& model, EffectMask mask, JointErrorWorkspace& ws, JointContext& ctx,
                              const double* cosines, const double* sines);
+// The same with its rate along qd (loadTorqueRateAtCurrentPose's, into `rate`); false when a selected load
+// effect does not know its rate (`rate` is then incomplete).
+bool loadTorqueAndRateInJointFrames(const JointErrorModel& model, EffectMask mask, JointErrorWorkspace& ws,
+                                    JointContext& ctx, const double* cosines, const double* sines,
+                                    const JointVector& qd, JointVector& rate);
 // True when a selected load effect reads the forward kinematics (Effect::loadTorqueReadsKinematics).
 bool loadsReadKinematics(const JointErrorModel& model, EffectMask mask);
 // The rate of that load torque along the joint velocity qd, (d load_torque / dq) qd, into `rate` (ctx's

@@ -361,6 +361,7 @@ FlexibleJointPlant::FlexibleJointPlant(const JointErrorModel& truth, std::vector
     }
     transmission_effects_.push_back(dynamic_cast<const TransmissionErrorEffect*>(&effect));
   }
+  loads_read_kinematics_ = loadsReadKinematics(truth_, load_mask_);
   if (!(options_.relative_tolerance > 0.0) || !(options_.absolute_tolerance > 0.0) ||
       !(options_.velocity_tolerance_factor > 0.0) || options_.max_step < 0.0 || options_.max_steps_per_advance < 1) {
     throw InvalidArgument("plant: tolerances must be positive, max_step non-negative, max_steps_per_advance >= 1");
@@ -463,9 +464,19 @@ FlexibleJointPlant::FlexibleJointPlant(const JointErrorModel& truth, std::vector
 
 FlexibleJointPlant::~FlexibleJointPlant() = default;
 
+bool FlexibleJointPlant::loadsWithoutKinematics() const {
+  return !loads_read_kinematics_ && ctx_.payload_mass == 0.0 && ctx_.tool_wrench.isZero(0.0);
+}
+
 void FlexibleJointPlant::staticFeedforward(const JointVector& position, JointVector& torque) {
   ctx_.q = position;
-  computeLoadTorque(truth_, load_mask_, ws_, ctx_);
+  if (loadsWithoutKinematics()) {
+    double sines[kMaxJoints], cosines[kMaxJoints];
+    sinCosBatch(position.data(), n_, sines, cosines);
+    loadTorqueInJointFrames(truth_, load_mask_, ws_, ctx_, cosines, sines);
+  } else {
+    computeLoadTorque(truth_, load_mask_, ws_, ctx_);
+  }
   torque = ctx_.load_torque;
 }
 
@@ -587,8 +598,20 @@ void FlexibleJointPlant::setReference(const JointVector& position, const JointVe
 void FlexibleJointPlant::ensureFeedforward() {
   if (!feedforward_pending_) return;
   feedforward_pending_ = false;
-  staticFeedforward(reference_, feedforward_);
-  if (!loadTorqueRateAtCurrentPose(truth_, load_mask_, ws_, ctx_, reference_velocity_, feedforward_rate_)) {
+  bool rate_known;
+  if (loadsWithoutKinematics()) {
+    // Gravity and its rate from the sines alone: a third of the forward kinematics' and the rate's arithmetic.
+    ctx_.q = reference_;
+    double sines[kMaxJoints], cosines[kMaxJoints];
+    sinCosBatch(reference_.data(), n_, sines, cosines);
+    rate_known = loadTorqueAndRateInJointFrames(truth_, load_mask_, ws_, ctx_, cosines, sines, reference_velocity_,
+                                                feedforward_rate_);
+    feedforward_ = ctx_.load_torque;
+  } else {
+    staticFeedforward(reference_, feedforward_);
+    rate_known = loadTorqueRateAtCurrentPose(truth_, load_mask_, ws_, ctx_, reference_velocity_, feedforward_rate_);
+  }
+  if (!rate_known) {
     constexpr double kRateStep = 1e-4;  // s
     JointVector ahead;
     staticFeedforward(reference_ + reference_velocity_ * kRateStep, ahead);

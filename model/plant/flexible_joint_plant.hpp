@@ -248,6 +248,8 @@ private:
   void linkDerivativesByDifferences(const JointVector& q, const JointVector& qd, const JointVector& spring_torque,
                                     const JointVector& qdd);
   void staticFeedforward(const JointVector& position, JointVector& torque);
+  // Without a payload, a tool wrench or a load effect that reads the poses.
+  bool loadsWithoutKinematics() const;
 
   JointErrorModel truth_;
   std::vector<DriveParameters> drives_;
@@ -255,6 +257,9 @@ private:
   int n_;
   int compliance_index_;
   EffectMask load_mask_;
+  // No load effect reads the forward kinematics: without a payload or a tool wrench the static feed-forward
+  // and its rate come from the joints' sines alone (gravity in joint frames, dynamics.hpp).
+  bool loads_read_kinematics_ = true;
   EffectMask error_mask_;       // joint-error effects other than compliance: the transmission error
   bool analytic_slope_ = true;  // every command-dependent effect of error_mask_ gives its motor slope
   // Per effect of truth_: the effect as a transmission error, or null (one dynamic_cast, not one per rhs).

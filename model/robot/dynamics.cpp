@@ -116,35 +116,66 @@ namespace {
 }
 }  // namespace
 
-void gravityTorquesInJointFrames(const Robot& robot, const double* cosines, const double* sines, JointVector& tau) {
+namespace {
+// tau_i = -axis_i . (h_i x g_i) in body i's frame, with g_i = Rot_i^T P_i^T g_(i-1) (gravity carried down
+// from the root's) and h_i = sum_{j >= i} m_j (c_j - o_i) = m_i c_i + M_(i+1) t_(i+1) + P_(i+1) Rot_(i+1) h_(i+1)
+// (the distal first moment carried back): the world formula's triple product in body i's frame. WithRate:
+// their derivatives along qd as well, from d(Rot_i)/dt = Rot_i [axis_i]x qd_i:
+// g_i' = Rot_i^T P_i^T g_(i-1)' - qd_i axis_i x g_i, h_i' = P_(i+1) Rot_(i+1) (h_(i+1)' + qd_(i+1) axis_(i+1) x
+// h_(i+1)).
+template <bool WithRate>
+void gravityInJointFrames(const Robot& robot, const double* cosines, const double* sines, const double* qd,
+                          JointVector& tau, JointVector* rate) {
   requireInertials(robot);
   const int n = robot.dof();
   tau.resize(n);
-  // Gravity in body i's frame: g_i = Rot_i^T P_i^T g_(i-1), from the root's.
-  std::array<Eigen::Vector3d, kMaxJoints> gravity;
-  Eigen::Vector3d g = robot.gravity;
+  if constexpr (WithRate) rate->resize(n);
+  std::array<Eigen::Vector3d, kMaxJoints> gravity, gravity_rate;
+  Eigen::Vector3d g = robot.gravity, g_rate = Eigen::Vector3d::Zero();
   for (int i = 0; i < n; ++i) {
     const Joint& joint = robot.joints[static_cast<std::size_t>(i)];
     const Eigen::Matrix3d placement = joint.placement.linear();  // a plain 3 x 3: the products on it unroll
     g = turnedAboutAxis(joint.axis, cosines[i], -sines[i], placement.transpose() * g);
     gravity[static_cast<std::size_t>(i)] = g;
+    if constexpr (WithRate) {
+      g_rate = turnedAboutAxis(joint.axis, cosines[i], -sines[i], placement.transpose() * g_rate) -
+               qd[i] * joint.axis.cross(g);
+      gravity_rate[static_cast<std::size_t>(i)] = g_rate;
+    }
   }
-  // h_i = sum_{j >= i} m_j (c_j - o_i) in body i's frame: h_i = m_i c_i + M_(i+1) t_(i+1) + P_(i+1) Rot_(i+1) h_(i+1),
-  // and tau_i = -axis_i . (h_i x g_i), the world formula's triple product in body i's frame.
-  Eigen::Vector3d moment = Eigen::Vector3d::Zero();
+  Eigen::Vector3d moment = Eigen::Vector3d::Zero(), moment_rate = Eigen::Vector3d::Zero();
   double distal_mass = 0.0;
   for (int i = n - 1; i >= 0; --i) {
     const Joint& joint = robot.joints[static_cast<std::size_t>(i)];
     if (i < n - 1) {
       const Joint& next = robot.joints[static_cast<std::size_t>(i + 1)];
       const Eigen::Matrix3d placement = next.placement.linear();
+      if constexpr (WithRate) {
+        moment_rate = placement * turnedAboutAxis(next.axis, cosines[i + 1], sines[i + 1],
+                                                  moment_rate + qd[i + 1] * next.axis.cross(moment));
+      }
       moment = placement * turnedAboutAxis(next.axis, cosines[i + 1], sines[i + 1], moment) +
                distal_mass * next.placement.translation();
     }
     moment += joint.body.mass * joint.body.com;
     distal_mass += joint.body.mass;
-    tau[i] = -joint.axis.dot(moment.cross(gravity[static_cast<std::size_t>(i)]));
+    const Eigen::Vector3d& g_i = gravity[static_cast<std::size_t>(i)];
+    tau[i] = -joint.axis.dot(moment.cross(g_i));
+    if constexpr (WithRate) {
+      (*rate)[i] = -joint.axis.dot(moment_rate.cross(g_i) + moment.cross(gravity_rate[static_cast<std::size_t>(i)]));
+    }
   }
+}
+}  // namespace
+
+void gravityTorquesInJointFrames(const Robot& robot, const double* cosines, const double* sines, JointVector& tau) {
+  gravityInJointFrames<false>(robot, cosines, sines, nullptr, tau, nullptr);
+}
+
+void gravityTorquesAndRateInJointFrames(const Robot& robot, const double* cosines, const double* sines,
+                                        const JointVector& qd, JointVector& tau, JointVector& rate) {
+  checkJointVector(robot, qd, "qd");
+  gravityInJointFrames<true>(robot, cosines, sines, qd.data(), tau, &rate);
 }
 
 namespace {

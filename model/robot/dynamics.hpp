@@ -16,6 +16,10 @@ void gravityTorquesAtCurrentPose(const Robot& robot, RobotWorkspace& ws, JointVe
 // joint frames, about a third of the arithmetic of the chain's poses. For a caller that needs gravity
 // alone (offline compensation); equal to gravityTorques up to rounding.
 void gravityTorquesInJointFrames(const Robot& robot, const double* cosines, const double* sines, JointVector& tau);
+// The same and its rate along qd, (d tau / dq) qd (addGravityTorqueRateAtCurrentPose's, into `rate`), for the
+// plant's static feed-forward.
+void gravityTorquesAndRateInJointFrames(const Robot& robot, const double* cosines, const double* sines,
+                                        const JointVector& qd, JointVector& tau, JointVector& rate);
 
 // The rates of static torques along a motion, (d tau / dq) qd, for a feed-forward that follows the motion
 // without a second evaluation at q + qd dt; each at the last forwardKinematics call and added to `rate`.

@@ -510,6 +510,46 @@ TEST(Dynamics, StaticTorqueRatesAreTheDerivativesAlongTheMotion) {
   }
 }
 
+// The joint-frame recursion's rate: a central difference of gravity along qd, and the world-frame rate.
+TEST(Dynamics, GravityRateInJointFramesIsTheDerivativeAlongTheMotion) {
+  const Robot tilted = tiltedRx170();
+  std::vector<const Robot*> robots = bothRobots();
+  robots.push_back(&tilted);
+  for (const Robot* robot : robots) {
+    RobotWorkspace ws(*robot);
+    std::mt19937 rng(1728u);
+    const double h = 1e-6;
+    const int n = robot->dof();
+    for (int sample = 0; sample < 50; ++sample) {
+      const JointVector q = testing_support::randomConfiguration(*robot, rng);
+      const JointVector qd = testing_support::randomVector(n, rng, 2.0);
+      double cosines[kMaxJoints], sines[kMaxJoints];
+      for (int i = 0; i < n; ++i) {
+        cosines[i] = std::cos(q[i]);
+        sines[i] = std::sin(q[i]);
+      }
+      JointVector tau, rate;
+      gravityTorquesAndRateInJointFrames(*robot, cosines, sines, qd, tau, rate);
+      JointVector tau_alone;
+      gravityTorquesInJointFrames(*robot, cosines, sines, tau_alone);
+      EXPECT_EQ(tau, tau_alone) << robot->name;  // the rate does not change the torques
+      const JointVector expected = (gravityAt(*robot, q + h * qd) - gravityAt(*robot, q - h * qd)) / (2.0 * h);
+      forwardKinematics(*robot, ws, q);
+      JointVector world = JointVector::Zero(n);
+      addGravityTorqueRateAtCurrentPose(*robot, ws, qd, world);
+      const double scale = std::max(1.0, expected.cwiseAbs().maxCoeff());
+      EXPECT_LT((rate - expected).cwiseAbs().maxCoeff(), 1e-6 * scale) << robot->name << " sample " << sample;
+      EXPECT_LT((rate - world).cwiseAbs().maxCoeff(), 1e-12 * scale) << robot->name << " sample " << sample;
+    }
+  }
+  const Robot& rx170 = testing_support::rx170();
+  const double cosines[kMaxJoints] = {1, 1, 1, 1, 1, 1}, sines[kMaxJoints] = {};
+  JointVector tau, rate;
+  JointVector qd = JointVector::Zero(6);
+  qd[2] = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_THROW(gravityTorquesAndRateInJointFrames(rx170, cosines, sines, qd, tau, rate), InvalidArgument);
+}
+
 TEST(Dynamics, MissingInertialThrowsOnEveryDynamicsCallNamingTheLink) {
   const Robot robot = loadRobotFromUrdfFile(testing_support::urdfTestFile("missing_inertial.urdf"));
   ASSERT_FALSE(robot.hasInertials());
