@@ -106,40 +106,62 @@ void gravityTorquesAtCurrentPose(const Robot& robot, RobotWorkspace& ws, JointVe
 }
 
 namespace {
-// Rot(axis, angle) v from the angle's cosine and sine (the transpose's product with -s); the usual z axis
-// turns two coordinates.
-[[gnu::always_inline]] inline Eigen::Vector3d turnedAboutAxis(const Eigen::Vector3d& axis, double c, double s,
-                                                              const Eigen::Vector3d& v) {
-  if (axis.x() == 0.0 && axis.y() == 0.0 && axis.z() == 1.0)
-    return {c * v.x() - s * v.y(), s * v.x() + c * v.y(), v.z()};
-  return c * v + s * axis.cross(v) + ((1.0 - c) * axis.dot(v)) * axis;
-}
-}  // namespace
+// Products with a joint's axis for gravityInJointFrames; ZAxes: every axis is the usual z axis, where each
+// is a shuffle of coordinates (the compiler cannot know that of a general axis without a branch per use).
+template <bool ZAxes>
+struct AxisProducts {
+  // Rot(axis, angle) v from the angle's cosine and sine (the transpose's product with -s).
+  static Eigen::Vector3d turned(const Eigen::Vector3d& axis, double c, double s, const Eigen::Vector3d& v) {
+    if constexpr (ZAxes) {
+      return {c * v.x() - s * v.y(), s * v.x() + c * v.y(), v.z()};
+    } else {
+      return c * v + s * axis.cross(v) + ((1.0 - c) * axis.dot(v)) * axis;
+    }
+  }
+  static Eigen::Vector3d cross(const Eigen::Vector3d& axis, const Eigen::Vector3d& v) {
+    if constexpr (ZAxes) {
+      return {-v.y(), v.x(), 0.0};
+    } else {
+      return axis.cross(v);
+    }
+  }
+  static double dot(const Eigen::Vector3d& axis, const Eigen::Vector3d& v) {
+    if constexpr (ZAxes) {
+      return v.z();
+    } else {
+      return axis.dot(v);
+    }
+  }
+};
 
-namespace {
+bool everyAxisIsZ(const Robot& robot) {
+  for (const Joint& joint : robot.joints) {
+    if (!(joint.axis.x() == 0.0 && joint.axis.y() == 0.0 && joint.axis.z() == 1.0)) return false;
+  }
+  return true;
+}
+
 // tau_i = -axis_i . (h_i x g_i) in body i's frame, with g_i = Rot_i^T P_i^T g_(i-1) (gravity carried down
 // from the root's) and h_i = sum_{j >= i} m_j (c_j - o_i) = m_i c_i + M_(i+1) t_(i+1) + P_(i+1) Rot_(i+1) h_(i+1)
 // (the distal first moment carried back): the world formula's triple product in body i's frame. WithRate:
 // their derivatives along qd as well, from d(Rot_i)/dt = Rot_i [axis_i]x qd_i:
-// g_i' = Rot_i^T P_i^T g_(i-1)' - qd_i axis_i x g_i, h_i' = P_(i+1) Rot_(i+1) (h_(i+1)' + qd_(i+1) axis_(i+1) x
-// h_(i+1)).
-template <bool WithRate>
+// g_i' = Rot_i^T P_i^T g_(i-1)' - qd_i axis_i x g_i,
+// h_i' = P_(i+1) Rot_(i+1) (h_(i+1)' + qd_(i+1) axis_(i+1) x h_(i+1)).
+template <bool WithRate, bool ZAxes>
 void gravityInJointFrames(const Robot& robot, const double* cosines, const double* sines, const double* qd,
                           JointVector& tau, JointVector* rate) {
-  requireInertials(robot);
+  using Axis = AxisProducts<ZAxes>;
   const int n = robot.dof();
-  tau.resize(n);
-  if constexpr (WithRate) rate->resize(n);
   std::array<Eigen::Vector3d, kMaxJoints> gravity, gravity_rate;
   Eigen::Vector3d g = robot.gravity, g_rate = Eigen::Vector3d::Zero();
   for (int i = 0; i < n; ++i) {
     const Joint& joint = robot.joints[static_cast<std::size_t>(i)];
     const Eigen::Matrix3d placement = joint.placement.linear();  // a plain 3 x 3: the products on it unroll
-    g = turnedAboutAxis(joint.axis, cosines[i], -sines[i], placement.transpose() * g);
+    g = Axis::turned(joint.axis, cosines[i], -sines[i], placement.transpose() * g);
     gravity[static_cast<std::size_t>(i)] = g;
     if constexpr (WithRate) {
-      g_rate = turnedAboutAxis(joint.axis, cosines[i], -sines[i], placement.transpose() * g_rate) -
-               qd[i] * joint.axis.cross(g);
+      g_rate = Axis::turned(joint.axis, cosines[i], -sines[i], placement.transpose() * g_rate) -
+               qd[i] * Axis::cross(joint.axis, g);
       gravity_rate[static_cast<std::size_t>(i)] = g_rate;
     }
   }
@@ -151,31 +173,45 @@ void gravityInJointFrames(const Robot& robot, const double* cosines, const doubl
       const Joint& next = robot.joints[static_cast<std::size_t>(i + 1)];
       const Eigen::Matrix3d placement = next.placement.linear();
       if constexpr (WithRate) {
-        moment_rate = placement * turnedAboutAxis(next.axis, cosines[i + 1], sines[i + 1],
-                                                  moment_rate + qd[i + 1] * next.axis.cross(moment));
+        moment_rate = placement * Axis::turned(next.axis, cosines[i + 1], sines[i + 1],
+                                               moment_rate + qd[i + 1] * Axis::cross(next.axis, moment));
       }
-      moment = placement * turnedAboutAxis(next.axis, cosines[i + 1], sines[i + 1], moment) +
+      moment = placement * Axis::turned(next.axis, cosines[i + 1], sines[i + 1], moment) +
                distal_mass * next.placement.translation();
     }
     moment += joint.body.mass * joint.body.com;
     distal_mass += joint.body.mass;
     const Eigen::Vector3d& g_i = gravity[static_cast<std::size_t>(i)];
-    tau[i] = -joint.axis.dot(moment.cross(g_i));
+    tau[i] = -Axis::dot(joint.axis, moment.cross(g_i));
     if constexpr (WithRate) {
-      (*rate)[i] = -joint.axis.dot(moment_rate.cross(g_i) + moment.cross(gravity_rate[static_cast<std::size_t>(i)]));
+      (*rate)[i] =
+          -Axis::dot(joint.axis, moment_rate.cross(g_i) + moment.cross(gravity_rate[static_cast<std::size_t>(i)]));
     }
   }
 }
 }  // namespace
 
 void gravityTorquesInJointFrames(const Robot& robot, const double* cosines, const double* sines, JointVector& tau) {
-  gravityInJointFrames<false>(robot, cosines, sines, nullptr, tau, nullptr);
+  requireInertials(robot);
+  tau.resize(robot.dof());
+  if (everyAxisIsZ(robot)) {
+    gravityInJointFrames<false, true>(robot, cosines, sines, nullptr, tau, nullptr);
+  } else {
+    gravityInJointFrames<false, false>(robot, cosines, sines, nullptr, tau, nullptr);
+  }
 }
 
 void gravityTorquesAndRateInJointFrames(const Robot& robot, const double* cosines, const double* sines,
                                         const JointVector& qd, JointVector& tau, JointVector& rate) {
+  requireInertials(robot);
   checkJointVector(robot, qd, "qd");
-  gravityInJointFrames<true>(robot, cosines, sines, qd.data(), tau, &rate);
+  tau.resize(robot.dof());
+  rate.resize(robot.dof());
+  if (everyAxisIsZ(robot)) {
+    gravityInJointFrames<true, true>(robot, cosines, sines, qd.data(), tau, &rate);
+  } else {
+    gravityInJointFrames<true, false>(robot, cosines, sines, qd.data(), tau, &rate);
+  }
 }
 
 namespace {
