@@ -50,16 +50,51 @@ JointVector gravityAt(const Robot& robot, const JointVector& q) {
   return tau;
 }
 
+// The RX170 with every joint axis tilted, every placement turned, and gravity off the vertical: the
+// joint-frame recursion's general-axis path, against the world-frame sum and the potential's gradient.
+Robot tiltedRx170() {
+  Robot robot = testing_support::rx170();
+  std::mt19937 rng(205u);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  for (Joint& joint : robot.joints) {
+    joint.axis = Eigen::Vector3d(normal(rng), normal(rng), normal(rng)).normalized();
+    joint.placement.linear() =
+        (Eigen::AngleAxisd(0.7 * normal(rng), Eigen::Vector3d(normal(rng), normal(rng), normal(rng)).normalized()) *
+         joint.placement.linear())
+            .eval();
+  }
+  robot.gravity = Eigen::Vector3d(1.2, -0.8, -9.7);
+  return robot;
+}
+
+// The RX170 and the UR10 (every axis z) and the tilted RX170 (the general axes' way).
+std::vector<const Robot*> robotsWithTiltedAxes() {
+  static const Robot tilted = tiltedRx170();
+  std::vector<const Robot*> robots = bothRobots();
+  robots.push_back(&tilted);
+  return robots;
+}
+
+// Both ways of gravity (the world-frame sum over forward kinematics, and the joint-frame recursion from the
+// sines) against the potential's gradient, and against each other to rounding.
 TEST(Dynamics, GravityTorquesAreTheGradientOfThePotentialEnergy) {
-  for (const Robot* robot : bothRobots()) {
+  for (const Robot* robot : robotsWithTiltedAxes()) {
     RobotWorkspace ws(*robot);
     std::mt19937 rng(201u);
     const double h = 1e-5;
     for (int sample = 0; sample < 100; ++sample) {
       const JointVector q = testing_support::randomConfiguration(*robot, rng);
-      JointVector tau;
+      JointVector tau, in_joint_frames;
       gravityTorques(*robot, ws, q, tau);
       ASSERT_EQ(tau.size(), robot->dof());
+      double cosines[kMaxJoints], sines[kMaxJoints];
+      for (int i = 0; i < robot->dof(); ++i) {
+        cosines[i] = std::cos(q[i]);
+        sines[i] = std::sin(q[i]);
+      }
+      gravityTorquesInJointFrames(*robot, cosines, sines, in_joint_frames);
+      ASSERT_EQ(in_joint_frames.size(), robot->dof());
+      const double scale = 1.0 + tau.cwiseAbs().maxCoeff();
       for (int i = 0; i < robot->dof(); ++i) {
         JointVector plus = q;
         JointVector minus = q;
@@ -67,6 +102,8 @@ TEST(Dynamics, GravityTorquesAreTheGradientOfThePotentialEnergy) {
         minus[i] -= h;
         const double gradient = (potentialEnergy(*robot, ws, plus) - potentialEnergy(*robot, ws, minus)) / (2.0 * h);
         EXPECT_NEAR(tau[i], gradient, 1e-5) << robot->name << " joint " << i + 1;
+        EXPECT_NEAR(in_joint_frames[i], gradient, 1e-5) << robot->name << " joint " << i + 1;
+        EXPECT_NEAR(in_joint_frames[i], tau[i], 1e-12 * scale) << robot->name << " joint " << i + 1;
       }
     }
   }
@@ -97,54 +134,6 @@ TEST(Dynamics, GravityAtCurrentPoseEqualsGravityTorques) {
     JointVector at_current;
     gravityTorquesAtCurrentPose(*robot, ws, at_current);
     EXPECT_LT((at_current - gravityAt(*robot, q)).cwiseAbs().maxCoeff(), 1e-12);
-  }
-}
-
-// The RX170 with every joint axis tilted, every placement turned, and gravity off the vertical: the
-// joint-frame recursion's general-axis path, against the world-frame sum and the potential's gradient.
-Robot tiltedRx170() {
-  Robot robot = testing_support::rx170();
-  std::mt19937 rng(205u);
-  std::normal_distribution<double> normal(0.0, 1.0);
-  for (Joint& joint : robot.joints) {
-    joint.axis = Eigen::Vector3d(normal(rng), normal(rng), normal(rng)).normalized();
-    joint.placement.linear() =
-        (Eigen::AngleAxisd(0.7 * normal(rng), Eigen::Vector3d(normal(rng), normal(rng), normal(rng)).normalized()) *
-         joint.placement.linear())
-            .eval();
-  }
-  robot.gravity = Eigen::Vector3d(1.2, -0.8, -9.7);
-  return robot;
-}
-
-TEST(Dynamics, GravityInJointFramesIsTheWorldSumAndTheGradientOfThePotentialEnergy) {
-  const Robot tilted = tiltedRx170();
-  std::vector<const Robot*> robots = bothRobots();
-  robots.push_back(&tilted);
-  for (const Robot* robot : robots) {
-    RobotWorkspace ws(*robot);
-    std::mt19937 rng(204u);
-    const double h = 1e-5;
-    for (int sample = 0; sample < 50; ++sample) {
-      const JointVector q = testing_support::randomConfiguration(*robot, rng);
-      double cosines[kMaxJoints], sines[kMaxJoints];
-      for (int i = 0; i < robot->dof(); ++i) {
-        cosines[i] = std::cos(q[i]);
-        sines[i] = std::sin(q[i]);
-      }
-      JointVector tau;
-      gravityTorquesInJointFrames(*robot, cosines, sines, tau);
-      ASSERT_EQ(tau.size(), robot->dof());
-      const JointVector world = gravityAt(*robot, q);
-      for (int i = 0; i < robot->dof(); ++i) {
-        EXPECT_NEAR(tau[i], world[i], 1e-12 * (1.0 + world.cwiseAbs().maxCoeff())) << robot->name << " joint " << i + 1;
-        JointVector plus = q, minus = q;
-        plus[i] += h;
-        minus[i] -= h;
-        const double gradient = (potentialEnergy(*robot, ws, plus) - potentialEnergy(*robot, ws, minus)) / (2.0 * h);
-        EXPECT_NEAR(tau[i], gradient, 1e-5) << robot->name << " joint " << i + 1;
-      }
-    }
   }
 }
 
@@ -512,10 +501,7 @@ TEST(Dynamics, StaticTorqueRatesAreTheDerivativesAlongTheMotion) {
 
 // The joint-frame recursion's rate: a central difference of gravity along qd, and the world-frame rate.
 TEST(Dynamics, GravityRateInJointFramesIsTheDerivativeAlongTheMotion) {
-  const Robot tilted = tiltedRx170();
-  std::vector<const Robot*> robots = bothRobots();
-  robots.push_back(&tilted);
-  for (const Robot* robot : robots) {
+  for (const Robot* robot : robotsWithTiltedAxes()) {
     RobotWorkspace ws(*robot);
     std::mt19937 rng(1728u);
     const double h = 1e-6;
