@@ -2,6 +2,7 @@
 // coordinates, which keeps the recursions short and lets the mass matrix use composite bodies directly.
 #include "model/robot/dynamics.hpp"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 
@@ -135,10 +136,7 @@ struct AxisProducts {
 };
 
 bool everyAxisIsZ(const Robot& robot) {
-  for (const Joint& joint : robot.joints) {
-    if (!(joint.axis.x() == 0.0 && joint.axis.y() == 0.0 && joint.axis.z() == 1.0)) return false;
-  }
-  return true;
+  return std::all_of(robot.joints.begin(), robot.joints.end(), [](const Joint& joint) { return isZAxis(joint.axis); });
 }
 
 // tau_i = -axis_i . (h_i x g_i) in body i's frame, with g_i = Rot_i^T P_i^T g_(i-1) (gravity carried down

@@ -16,8 +16,6 @@ void rotateAboutGeneralAxis(Eigen::Matrix3d& rotation, const Eigen::Vector3d& ax
   rotation = rotation * joint_rotation;
 }
 
-bool isZAxis(const Eigen::Vector3d& axis) { return axis.x() == 0.0 && axis.y() == 0.0 && axis.z() == 1.0; }
-
 // parent * Rot(axis, angle) from the angle's cosine c and sine s, with a fast path for the usual z axis:
 // only two columns change (inline: a call costs as much as that path).
 inline void rotateAboutAxis(Eigen::Matrix3d& rotation, const Eigen::Vector3d& axis, double c, double s) {

@@ -11,6 +11,10 @@ namespace jointcomp {
 // Throws InvalidArgument for a q of the wrong size or with non-finite values. Allocates nothing.
 void forwardKinematics(const Robot& robot, RobotWorkspace& ws, const JointVector& q);
 
+// The usual joint axis, exactly (0, 0, 1): rotations about it turn two coordinates, which the kinematics and
+// the dynamics take as a fast path.
+inline bool isZAxis(const Eigen::Vector3d& axis) { return axis.x() == 0.0 && axis.y() == 0.0 && axis.z() == 1.0; }
+
 // Each joint angle with its sine and cosine, for forwardKinematicsNear (caller-owned, one per path).
 using JointAngleAnchors = std::array<SinCosAnchor, kMaxJoints>;
 // forwardKinematics with each joint's sine and cosine by sinCosNear: with reuse_anchors, a joint within
