@@ -79,6 +79,15 @@ unsigned typeBit(table::Type type) {
   return 0;
 }
 
+enum SettableReal : unsigned char { kSettableBeforeSteps = 1, kSettableInSteps = 2, kSettableInDemoSteps = 4 };
+
+// A value of any FMI type as the table holds it for the variable at `index`: a Boolean's as 0 or 1
+// (fmi2Boolean is an int), the others exactly.
+template <typename T>
+double tableValue(int index, T value) {
+  return kVariables[index].type == table::Type::Boolean ? (value != T(0) ? 1.0 : 0.0) : static_cast<double>(value);
+}
+
 // What every get and set asks of a variable, by index, looked up once instead of recomputed per value:
 // its output group (0 for non-outputs), its type's bit, and whether it is a desired input (q_desired,
 // qd_desired or qdd_desired: the inputs the robot follows unless it follows the demo move).
@@ -86,6 +95,10 @@ struct VariableFlags {
   unsigned group[table::kCount] = {};
   unsigned type_bit[table::kCount] = {};
   bool desired_input[table::kCount] = {};
+  // For reals only, which of set's common cases allow setting it (SettableReal bits): an input or
+  // parameter before the steps; an input or tunable parameter in them, and while the robot follows the
+  // demo move, not a desired input.
+  unsigned char settable_real[table::kCount] = {};
   VariableFlags() {
     for (int i = 0; i < table::kCount; ++i) type_bit[i] = typeBit(kVariables[i].type);
     for (int j = 0; j < table::kDof; ++j) {
@@ -98,6 +111,16 @@ struct VariableFlags {
       for (int index : {role::q_desired[j], role::qd_desired[j], role::qdd_desired[j]}) desired_input[index] = true;
     }
     for (int index : role::tool_position) group[index] = 2u;  // kToolOutputs
+    for (int i = 0; i < table::kCount; ++i) {
+      const table::Variable& v = kVariables[i];
+      if (v.type != table::Type::Real) continue;
+      const bool input = v.causality == table::Causality::Input;
+      const bool parameter = v.causality == table::Causality::Parameter;
+      const bool tunable = parameter && v.variability == table::Variability::Tunable;
+      if (input || parameter) settable_real[i] |= kSettableBeforeSteps;
+      if (input || tunable) settable_real[i] |= kSettableInSteps;
+      if ((input && !desired_input[i]) || tunable) settable_real[i] |= kSettableInDemoSteps;
+    }
   }
 };
 const VariableFlags kFlags;
@@ -112,12 +135,6 @@ bool isDesiredInput(int index) { return kFlags.desired_input[index]; }
 bool isFixedParameter(int index) {
   return kVariables[index].causality == table::Causality::Parameter &&
          kVariables[index].variability == table::Variability::Fixed;
-}
-
-JointVector gather(const std::vector<double>& values, const int (&indices)[table::kDof]) {
-  JointVector v(table::kDof);
-  for (int j = 0; j < table::kDof; ++j) v[j] = values[indices[j]];
-  return v;
 }
 
 Vector6 wrenchOf(const std::vector<double>& values) {
@@ -296,9 +313,12 @@ void Instance::ensureCompensator() {
 Status Instance::ensureReference(const char* function) {
   if (reference_valid_) return Status::OK;
   Models& m = *models_;
-  JointVector q = gather(state_.values, role::q_desired);
-  JointVector velocity = JointVector::Zero(table::kDof);
-  JointVector acceleration = JointVector::Zero(table::kDof);
+  JointVector& q = planned_;
+  JointVector& velocity = estimate_velocity_;
+  JointVector& acceleration = estimate_acceleration_;
+  for (int j = 0; j < table::kDof; ++j) q[j] = state_.values[role::q_desired[j]];
+  velocity.setZero();
+  acceleration.setZero();
   const bool estimated = state_.has_last_step && state_.time > state_.last_step_time;
   if (state_.demo) {
     demoMove(*m.robot, state_.time - state_.start_time, q, velocity);
@@ -310,9 +330,13 @@ Status Instance::ensureReference(const char* function) {
     demoMove(*m.robot, state_.time - state_.start_time + kHalfSpan, q_unused, after);
     acceleration = (after - before) / (2 * kHalfSpan);
   } else if (state_.values[role::use_velocity_inputs] != 0.0) {
-    velocity = gather(state_.values, role::qd_desired);
-    acceleration = gather(state_.values, role::qdd_desired);
+    for (int j = 0; j < table::kDof; ++j) {
+      velocity[j] = state_.values[role::qd_desired[j]];
+      acceleration[j] = state_.values[role::qdd_desired[j]];
+    }
   } else if (estimated) {
+    // Joint by joint in scalars: the same arithmetic as the vector expressions it replaces, without their
+    // temporaries.
     const double last = state_.time - state_.last_step_time;
     if (state_.has_earlier_step && state_.last_step_time > state_.earlier_step_time) {
       // The slope now of the parabola through the last three communication points: the extrapolation
@@ -322,16 +346,19 @@ Status Instance::ensureReference(const char* function) {
       // acceleration the dynamic mode needs.
       const double earlier = state_.last_step_time - state_.earlier_step_time;
       const double both = last + earlier;
-      velocity = q * ((2.0 * last + earlier) / (last * both)) - state_.last_q_desired * (both / (last * earlier)) +
-                 state_.earlier_q_desired * (last / (earlier * both));
-      acceleration =
-          ((q - state_.last_q_desired) / last - (state_.last_q_desired - state_.earlier_q_desired) / earlier) *
-          (2.0 / both);
+      const double now_weight = (2.0 * last + earlier) / (last * both);
+      const double last_weight = both / (last * earlier);
+      const double earlier_weight = last / (earlier * both);
+      const double curvature = 2.0 / both;
+      for (int j = 0; j < table::kDof; ++j) {
+        const double now_q = q[j], last_q = state_.last_q_desired[j], earlier_q = state_.earlier_q_desired[j];
+        velocity[j] = now_q * now_weight - last_q * last_weight + earlier_q * earlier_weight;
+        acceleration[j] = ((now_q - last_q) / last - (last_q - earlier_q) / earlier) * curvature;
+      }
     } else {
-      velocity = (q - state_.last_q_desired) / last;
+      for (int j = 0; j < table::kDof; ++j) velocity[j] = (q[j] - state_.last_q_desired[j]) / last;
     }
   }
-  planned_ = q;
   const auto refused = [&](const char* what) {
     char text[400];
     std::snprintf(text, sizeof text, "at t = %.9g s: %s", state_.time, what);
@@ -408,11 +435,10 @@ Status Instance::updateOutputs(const char* function, unsigned groups) {
   }
   const FlexibleJointPlant& plant = *m.plant;
   if (missing & (kStateOutputs | kToolOutputs | kPredictedOutputs)) {
-    const JointVector q = plant.linkPositions();
-    const JointVector p = plant.motorPositions();
+    constexpr int n = table::kDof;
+    const double* y = plant.stateNow();
+    const Eigen::Map<const Eigen::VectorXd> q(y, n), qd(y + n, n), p(y + 2 * n, n), pd(y + 3 * n, n);
     if (missing & kStateOutputs) {
-      const JointVector qd = plant.linkVelocities();
-      const JointVector pd = plant.motorVelocities();
       for (int j = 0; j < table::kDof; ++j) {
         state_.values[role::q_link[j]] = q[j];
         state_.values[role::qd_link[j]] = qd[j];
@@ -430,7 +456,7 @@ Status Instance::updateOutputs(const char* function, unsigned groups) {
       // The nominal model's link-minus-command error at the plant's link and motor positions.
       JointContext& ctx = m.prediction_ctx;
       ctx.q = q;
-      ctx.velocity = plant.linkVelocities();
+      ctx.velocity = qd;
       ctx.time = state_.time;
       ctx.tool_wrench = state_.applied_wrench;
       const EffectMask all = m.nominal->allEffects();
@@ -560,7 +586,7 @@ Status Instance::doStep(const char* function, double current_time, double step, 
   state_.earlier_q_desired = state_.last_q_desired;
   state_.earlier_step_time = state_.last_step_time;
   state_.has_last_step = true;
-  state_.last_q_desired = gather(state_.values, role::q_desired);
+  for (int j = 0; j < table::kDof; ++j) state_.last_q_desired[j] = state_.values[role::q_desired[j]];
   if (m.compensator_mode == kCompensationDynamic) state_.dynamic = dynamic_after_;  // this step's sample is done
   state_.last_step_time = state_.time;
   state_.time = end;
@@ -684,6 +710,40 @@ Status Instance::get(const char* function, unsigned types, const std::uint32_t v
   return Status::OK;
 }
 
+Status Instance::checkSettable(const char* function, unsigned types, std::uint32_t vr, int index, double value,
+                               bool before_step) {
+  if (index < 0) return fail(Status::Error, function, "vr " + std::to_string(vr) + " is not a variable of this FMU");
+  const table::Variable& v = kVariables[index];
+  if (!(kFlags.type_bit[index] & types)) {
+    return fail(Status::Error, function,
+                describeVariable(index) + " is of type " + typeName(v.type) + "; use its own function");
+  }
+  switch (v.causality) {
+    case table::Causality::Output:
+      return fail(Status::Error, function, describeVariable(index) + " is an output; it cannot be set");
+    case table::Causality::Independent:
+      return fail(Status::Error, function, describeVariable(index) + " is the independent variable; it cannot be set");
+    case table::Causality::Parameter:
+      if (!before_step && v.variability != table::Variability::Tunable) {
+        return fail(Status::Error, function,
+                    describeVariable(index) + " is a fixed parameter; it can be set only before exitInitializationMode");
+      }
+      break;
+    case table::Causality::Input:
+      if (!before_step && state_.demo && isDesiredInput(index)) {
+        return fail(Status::Error, function,
+                    describeVariable(index) + ": the robot follows the built-in demo move (reference = " +
+                        (state_.values[role::reference] == kReferenceDemo
+                             ? std::string("demo")
+                             : std::string("auto, and no q_desired or qd_desired input was set before the end "
+                                           "of initialisation")) +
+                        "); set reference = inputs, or the inputs during initialisation");
+      }
+      break;
+  }
+  return checkValue(function, index, value);
+}
+
 template <typename T>
 Status Instance::set(const char* function, unsigned types, const std::uint32_t vrs[], std::size_t count,
                      const T values[]) {
@@ -691,51 +751,25 @@ Status Instance::set(const char* function, unsigned types, const std::uint32_t v
   if (!vrs) return nullArgument(function, "vr[]");
   if (!values) return nullArgument(function, "value[]");
   const bool before_step = state_.phase == kInstantiated || state_.phase == kInitializationMode;
-  // Everything is checked before anything is set: a refused call changes nothing.
+  // Everything is checked before anything is set: a refused call changes nothing. The common case (a
+  // real that may be set now, finite and within its range) passes on one lookup and three compares;
+  // anything else goes through the full checks, which name what is wrong.
+  const unsigned char settable_now =
+      !(types & kReal) ? 0 : before_step ? kSettableBeforeSteps : state_.demo ? kSettableInDemoSteps : kSettableInSteps;
   for (std::size_t i = 0; i < count; ++i) {
     const int index = indexOf(vrs[i]);
-    if (index < 0)
-      return fail(Status::Error, function, "vr " + std::to_string(vrs[i]) + " is not a variable of this FMU");
-    const table::Variable& v = kVariables[index];
-    if (!(kFlags.type_bit[index] & types)) {
-      return fail(Status::Error, function,
-                  describeVariable(index) + " is of type " + typeName(v.type) + "; use its own function");
+    if (index < 0) return checkSettable(function, types, vrs[i], index, 0.0, before_step);
+    const double x = tableValue(index, values[i]);
+    if ((kFlags.settable_real[index] & settable_now) && std::isfinite(x) && x >= kVariables[index].min &&
+        x <= kVariables[index].max) {
+      continue;
     }
-    switch (v.causality) {
-      case table::Causality::Output:
-        return fail(Status::Error, function, describeVariable(index) + " is an output; it cannot be set");
-      case table::Causality::Independent:
-        return fail(Status::Error, function,
-                    describeVariable(index) + " is the independent variable; it cannot be set");
-      case table::Causality::Parameter:
-        if (!before_step && v.variability != table::Variability::Tunable) {
-          return fail(
-              Status::Error, function,
-              describeVariable(index) + " is a fixed parameter; it can be set only before exitInitializationMode");
-        }
-        break;
-      case table::Causality::Input:
-        if (!before_step && state_.demo && isDesiredInput(index)) {
-          return fail(Status::Error, function,
-                      describeVariable(index) + ": the robot follows the built-in demo move (reference = " +
-                          (state_.values[role::reference] == kReferenceDemo
-                               ? std::string("demo")
-                               : std::string("auto, and no q_desired or qd_desired input was set before the end "
-                                             "of initialisation")) +
-                          "); set reference = inputs, or the inputs during initialisation");
-        }
-        break;
-    }
-    const double x = v.type == table::Type::Boolean ? (values[i] != T(0) ? 1.0 : 0.0) : static_cast<double>(values[i]);
-    // A finite real within its range, the inputs' every value, passes without the full check's call.
-    if (v.type == table::Type::Real && std::isfinite(x) && x >= v.min && x <= v.max) continue;
-    const Status status = checkValue(function, index, x);
+    const Status status = checkSettable(function, types, vrs[i], index, x, before_step);
     if (status != Status::OK) return status;
   }
   for (std::size_t i = 0; i < count; ++i) {
     const int index = kIndexByValueReference[vrs[i]];  // checked by the first pass
-    const table::Variable& v = kVariables[index];
-    const double x = v.type == table::Type::Boolean ? (values[i] != T(0) ? 1.0 : 0.0) : static_cast<double>(values[i]);
+    const double x = tableValue(index, values[i]);
     if (!state_.desired_inputs_set && isDesiredInput(index)) {
       // Setting a desired input, even to its start value, makes reference = auto follow the inputs.
       state_.desired_inputs_set = true;

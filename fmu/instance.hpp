@@ -140,6 +140,9 @@ private:
   Status updateOutputs(const char* function, unsigned groups);
   Status fail(Status status, const char* function, const std::string& what);
   Status checkValue(const char* function, int index, double value);
+  // Every check of set for one value (`index`: of `vr`, -1 if unknown): OK, or the refusal naming it.
+  Status checkSettable(const char* function, unsigned types, std::uint32_t vr, int index, double value,
+                       bool before_step);
   bool fixedParametersDiffer(const std::vector<double>& values) const;
 
   std::string name_;
@@ -152,9 +155,13 @@ private:
   // Derived from state_, cached:
   bool reference_valid_ = false;
   unsigned outputs_valid_ = 0;        // OutputGroup bits
-  JointVector reference_;             // Q_ref for the current inputs
-  JointVector reference_velocity_;    // v for the current inputs
-  JointVector planned_;               // Q_theo: the q_desired inputs, or the demo move
+  JointVector reference_{JointVector::Zero(table::kDof)};           // Q_ref for the current inputs
+  JointVector reference_velocity_{JointVector::Zero(table::kDof)};  // v for the current inputs
+  JointVector planned_{JointVector::Zero(table::kDof)};             // Q_theo: the q_desired inputs, or the demo move
+  // The planned velocity and acceleration (from the inputs, the demo or the last communication points):
+  // members so that each step writes them in place.
+  JointVector estimate_velocity_{JointVector::Zero(table::kDof)};
+  JointVector estimate_acceleration_{JointVector::Zero(table::kDof)};
   OnlineDynamicState dynamic_after_;  // compensation = dynamic: the filter with the current sample
 
   std::vector<std::unique_ptr<Snapshot>> states_;

@@ -1546,6 +1546,9 @@ TEST_P(FmuTest, TheReferenceFollowsTheInputsOnceOneIsSetOrTheDemoWhenAsked) {
       EXPECT_NE(planned[0], 0.2);  // the demo at t = 2 s
       EXPECT_EQ(m->setReals({m->vr("q_desired_2")}, {0.25}), kError);
       EXPECT_TRUE(m->logged("reference = demo")) << m->log();
+      EXPECT_EQ(m->setReals({m->vr("qd_desired_6")}, {0.1}), kError);
+      // The inputs that are not desired ones still take values while the robot follows the demo.
+      EXPECT_EQ(m->setReals({m->vr("tool_wrench.force_z")}, {-10.0}), kOK) << m->log();
     }
     EXPECT_EQ(m->terminate(), kOK);
   }
