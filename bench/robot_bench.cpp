@@ -333,8 +333,8 @@ void crossCheck(const std::string& label, Fixture& f) {
   KdlModel& kdl = f.kdl;
   const int n = robot.dof();
   RobotWorkspace ws(robot);
-  double worst_pose = 0, worst_jacobian = 0, worst_gravity = 0, worst_gravity_dp = 0, worst_gravity_frames = 0,
-         worst_rnea = 0, worst_mass = 0, worst_fd = 0;
+  double worst_pose = 0, worst_position = 0, worst_jacobian = 0, worst_gravity = 0, worst_gravity_dp = 0,
+         worst_gravity_frames = 0, worst_rnea = 0, worst_mass = 0, worst_fd = 0;
   const int checks[] = {0, 1, 2, 3, 17, 42, 63};
   for (int k : checks) {
     const Sample& s = f.samples[k];
@@ -349,6 +349,8 @@ void crossCheck(const std::string& label, Fixture& f) {
       kdl_pose(r, 3) = frame.p(r);
     }
     expectClose("tool pose (forward kinematics)", k, ours_pose, kdl_pose, worst_pose);
+    const Eigen::Vector3d tool_position = jointcomp::toolPosition(robot, s.q);
+    expectClose("tool position (toolPosition)", k, tool_position, Eigen::Vector3d(kdl_pose.col(3)), worst_position);
 
     Jacobian jacobian;
     jointcomp::toolJacobian(robot, ws, jacobian);
@@ -392,10 +394,11 @@ void crossCheck(const std::string& label, Fixture& f) {
   std::fprintf(
       stderr,
       "robot_bench: cross-check against KDL passed for %s at %zu configurations (largest relative differences: "
-      "pose %.1e, Jacobian %.1e, gravity %.1e (RNE) %.1e (DynParam) %.1e (ours in joint frames), RNEA %.1e, mass "
+      "pose %.1e, tool position alone %.1e, Jacobian %.1e, gravity %.1e (RNE) %.1e (DynParam) %.1e (ours in joint "
+      "frames), RNEA %.1e, mass "
       "matrix %.1e, forward dynamics %.1e; tolerance 1e-9)\n",
-      label.c_str(), sizeof(checks) / sizeof(checks[0]), worst_pose, worst_jacobian, worst_gravity, worst_gravity_dp,
-      worst_gravity_frames, worst_rnea, worst_mass, worst_fd);
+      label.c_str(), sizeof(checks) / sizeof(checks[0]), worst_pose, worst_position, worst_jacobian, worst_gravity,
+      worst_gravity_dp, worst_gravity_frames, worst_rnea, worst_mass, worst_fd);
 }
 
 // ---------------------------------------------------------------------------------------------------
@@ -426,6 +429,13 @@ void BM_Ours_ForwardKinematics(benchmark::State& state) {
     jointcomp::forwardKinematics(robot, ws, NEXT_SAMPLE.q);
     benchmark::DoNotOptimize(ws.tool_pose);
   }
+  allocations.report(state);
+}
+// The tool's position alone (the FMU's tool output); KDL's way to it is its forward kinematics.
+void BM_Ours_ToolPosition(benchmark::State& state) {
+  BENCH_PROLOGUE;
+  const AllocationCounter allocations;
+  for (auto _ : state) benchmark::DoNotOptimize(jointcomp::toolPosition(robot, NEXT_SAMPLE.q));
   allocations.report(state);
 }
 void BM_Kdl_ForwardKinematics(benchmark::State& state) {
@@ -683,6 +693,7 @@ void BM_Kdl_ForwardDynamics(benchmark::State& state) {
 }
 
 BENCHMARK(BM_Ours_ForwardKinematics);
+BENCHMARK(BM_Ours_ToolPosition);
 BENCHMARK(BM_Kdl_ForwardKinematics);
 BENCHMARK(BM_Ours_JointSinCos);
 BENCHMARK(BM_Libm_JointSinCos);

@@ -46,6 +46,7 @@ for b in report["benchmarks"]:
 
 calls = [
     ("ForwardKinematics", "forward kinematics"),
+    ("ToolPosition", "tool position alone (no other pose)"),
     ("Jacobian", "Jacobian (with its FK)"),
     ("Gravity", "gravity torques"),
     ("GravityInJointFrames", "gravity torques in joint frames (no FK)"),
@@ -56,7 +57,7 @@ calls = [
 ]
 targets = {"FkJacobianGravity": 0.5, "ForwardDynamics": 0.5}
 
-peer = {"GravityInJointFrames": "Gravity"}  # ours done another way, against KDL's same call
+peer = {"GravityInJointFrames": "Gravity", "ToolPosition": "ForwardKinematics"}  # ours done another way, against KDL's same call
 
 def kdl_fastest(call):
     """KDL's fastest way to do the call: BM_Kdl_<call> or one of its variants BM_Kdl_<call>_<variant>."""

@@ -448,8 +448,7 @@ Status Instance::updateOutputs(const char* function, unsigned groups) {
       }
     }
     if (missing & kToolOutputs) {
-      forwardKinematics(*m.robot, m.prediction_ws.robot, q);
-      const Eigen::Vector3d tool = m.prediction_ws.robot.tool_pose.translation();
+      const Eigen::Vector3d tool = toolPosition(*m.robot, q);
       for (int k = 0; k < 3; ++k) state_.values[role::tool_position[k]] = tool[k];
     }
     if (missing & kPredictedOutputs) {
@@ -725,8 +724,9 @@ Status Instance::checkSettable(const char* function, unsigned types, std::uint32
       return fail(Status::Error, function, describeVariable(index) + " is the independent variable; it cannot be set");
     case table::Causality::Parameter:
       if (!before_step && v.variability != table::Variability::Tunable) {
-        return fail(Status::Error, function,
-                    describeVariable(index) + " is a fixed parameter; it can be set only before exitInitializationMode");
+        return fail(
+            Status::Error, function,
+            describeVariable(index) + " is a fixed parameter; it can be set only before exitInitializationMode");
       }
       break;
     case table::Causality::Input:
@@ -754,8 +754,10 @@ Status Instance::set(const char* function, unsigned types, const std::uint32_t v
   // Everything is checked before anything is set: a refused call changes nothing. The common case (a
   // real that may be set now, finite and within its range) passes on one lookup and three compares;
   // anything else goes through the full checks, which name what is wrong.
-  const unsigned char settable_now =
-      !(types & kReal) ? 0 : before_step ? kSettableBeforeSteps : state_.demo ? kSettableInDemoSteps : kSettableInSteps;
+  const unsigned char settable_now = !(types & kReal) ? 0
+                                     : before_step    ? kSettableBeforeSteps
+                                     : state_.demo    ? kSettableInDemoSteps
+                                                      : kSettableInSteps;
   for (std::size_t i = 0; i < count; ++i) {
     const int index = indexOf(vrs[i]);
     if (index < 0) return checkSettable(function, types, vrs[i], index, 0.0, before_step);

@@ -154,7 +154,7 @@ private:
   std::unique_ptr<Models> models_;  // the loaded robot and parameter set, and what is built from them
   // Derived from state_, cached:
   bool reference_valid_ = false;
-  unsigned outputs_valid_ = 0;        // OutputGroup bits
+  unsigned outputs_valid_ = 0;                                      // OutputGroup bits
   JointVector reference_{JointVector::Zero(table::kDof)};           // Q_ref for the current inputs
   JointVector reference_velocity_{JointVector::Zero(table::kDof)};  // v for the current inputs
   JointVector planned_{JointVector::Zero(table::kDof)};             // Q_theo: the q_desired inputs, or the demo move

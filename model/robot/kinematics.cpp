@@ -70,6 +70,28 @@ void forwardKinematics(const Robot& robot, RobotWorkspace& ws, const JointVector
   });
 }
 
+Eigen::Vector3d toolPosition(const Robot& robot, const JointVector& q) {
+  checkJointVector(robot, q, "q");
+  double sines[kMaxJoints], cosines[kMaxJoints];
+  sinCosBatch(q.data(), robot.dof(), sines, cosines);
+  // base p = P_1 R_1 P_2 R_2 ... P_n R_n tool p, from the right.
+  Eigen::Vector3d p = robot.tool.translation();
+  for (int i = robot.dof() - 1; i >= 0; --i) {
+    const Joint& joint = robot.joints[static_cast<std::size_t>(i)];
+    const double c = cosines[i], s = sines[i];
+    if (isZAxis(joint.axis)) {
+      const double x = p.x();
+      p.x() = c * x - s * p.y();
+      p.y() = s * x + c * p.y();
+    } else {  // Rodrigues: p cos + (k x p) sin + k (k . p)(1 - cos)
+      const Eigen::Vector3d& k = joint.axis;
+      p = c * p + s * k.cross(p) + ((1.0 - c) * k.dot(p)) * k;
+    }
+    p = joint.placement.linear() * p + joint.placement.translation();
+  }
+  return p;
+}
+
 void forwardKinematicsNear(const Robot& robot, RobotWorkspace& ws, const JointVector& q, JointAngleAnchors& anchors,
                            bool reuse_anchors) {
   checkJointVector(robot, q, "q");

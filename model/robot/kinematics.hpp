@@ -11,6 +11,12 @@ namespace jointcomp {
 // Throws InvalidArgument for a q of the wrong size or with non-finite values. Allocates nothing.
 void forwardKinematics(const Robot& robot, RobotWorkspace& ws, const JointVector& q);
 
+// The tool's position in the base frame at q, and nothing else: the tool point carried back through each
+// joint's rotation and placement, about a third of forwardKinematics' instructions (the FMU's tool output at
+// every step). Equal to forwardKinematics' tool translation to rounding, not bit for bit (another order of
+// the products). Same checks as forwardKinematics; allocates nothing.
+Eigen::Vector3d toolPosition(const Robot& robot, const JointVector& q);
+
 // The usual joint axis, exactly (0, 0, 1): rotations about it turn two coordinates, which the kinematics and
 // the dynamics take as a fast path.
 inline bool isZAxis(const Eigen::Vector3d& axis) { return axis.x() == 0.0 && axis.y() == 0.0 && axis.z() == 1.0; }

@@ -81,5 +81,22 @@ inline double maxWrappedDifference(const JointVector& a, const JointVector& b) {
   return largest;
 }
 
+// The RX170 with every joint axis tilted, every placement turned, and gravity off the vertical: for the
+// general-axis paths of the kinematics and the dynamics (the shipped robots' axes are all z).
+inline Robot tiltedRx170() {
+  Robot robot = rx170();
+  std::mt19937 rng(205u);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  for (Joint& joint : robot.joints) {
+    joint.axis = Eigen::Vector3d(normal(rng), normal(rng), normal(rng)).normalized();
+    joint.placement.linear() =
+        (Eigen::AngleAxisd(0.7 * normal(rng), Eigen::Vector3d(normal(rng), normal(rng), normal(rng)).normalized()) *
+         joint.placement.linear())
+            .eval();
+  }
+  robot.gravity = Eigen::Vector3d(1.2, -0.8, -9.7);
+  return robot;
+}
+
 }  // namespace testing_support
 }  // namespace jointcomp

@@ -50,26 +50,9 @@ JointVector gravityAt(const Robot& robot, const JointVector& q) {
   return tau;
 }
 
-// The RX170 with every joint axis tilted, every placement turned, and gravity off the vertical: the
-// joint-frame recursion's general-axis path, against the world-frame sum and the potential's gradient.
-Robot tiltedRx170() {
-  Robot robot = testing_support::rx170();
-  std::mt19937 rng(205u);
-  std::normal_distribution<double> normal(0.0, 1.0);
-  for (Joint& joint : robot.joints) {
-    joint.axis = Eigen::Vector3d(normal(rng), normal(rng), normal(rng)).normalized();
-    joint.placement.linear() =
-        (Eigen::AngleAxisd(0.7 * normal(rng), Eigen::Vector3d(normal(rng), normal(rng), normal(rng)).normalized()) *
-         joint.placement.linear())
-            .eval();
-  }
-  robot.gravity = Eigen::Vector3d(1.2, -0.8, -9.7);
-  return robot;
-}
-
 // The RX170 and the UR10 (every axis z) and the tilted RX170 (the general axes' way).
 std::vector<const Robot*> robotsWithTiltedAxes() {
-  static const Robot tilted = tiltedRx170();
+  static const Robot tilted = testing_support::tiltedRx170();
   std::vector<const Robot*> robots = bothRobots();
   robots.push_back(&tilted);
   return robots;

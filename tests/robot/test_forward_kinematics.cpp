@@ -100,8 +100,10 @@ void expectToolMatchesDh(const Robot& robot, const DhTable& table, unsigned seed
   for (int sample = 0; sample < 1000; ++sample) {
     const JointVector q = testing_support::randomConfiguration(robot, rng);
     forwardKinematics(robot, ws, q);
-    const Comparison c = compare(ws.tool_pose, dhFlange(table, q));
+    const Eigen::Matrix4d flange = dhFlange(table, q);
+    const Comparison c = compare(ws.tool_pose, flange);
     worst_position = std::max(worst_position, c.position);
+    worst_position = std::max(worst_position, (toolPosition(robot, q) - flange.block<3, 1>(0, 3)).norm());
     worst_rotation = std::max(worst_rotation, c.rotation);
     // The rotation part must stay orthonormal.
     ASSERT_LT(
@@ -317,6 +319,46 @@ TEST(ForwardKinematics, NearAnchorsGivesTheSamePosesWithoutLibm) {
     }
     EXPECT_LT(largest, 1e-15) << robot->name;
     EXPECT_GT(largest, 0.0) << robot->name << ": the Taylor path was not taken";
+  }
+}
+
+// The tool's position alone against the chain's product written out here with Eigen's angle-axis rotations
+// (placement_i Rot(axis_i, q_i), then the tool), on both robots and on an RX170 with tilted axes and a tool
+// offset (the general-axis way); the same checks as forwardKinematics.
+TEST(ToolPosition, IsTheChainProductsTranslationOnAnyAxes) {
+  Robot tilted = testing_support::tiltedRx170();
+  tilted.tool.translation() = Eigen::Vector3d(0.05, -0.02, 0.13);
+  std::mt19937 rng(71u);
+  for (const Robot* robot : {&testing_support::rx170(), &testing_support::ur10(), static_cast<const Robot*>(&tilted)}) {
+    RobotWorkspace ws(*robot);
+    double worst = 0.0, worst_fk = 0.0;
+    for (int sample = 0; sample < 500; ++sample) {
+      const JointVector q = testing_support::randomConfiguration(*robot, rng);
+      Eigen::Matrix4d chain = Eigen::Matrix4d::Identity();
+      for (int i = 0; i < robot->dof(); ++i) {
+        const Joint& joint = robot->joints[static_cast<std::size_t>(i)];
+        Eigen::Matrix4d rotation = Eigen::Matrix4d::Identity();
+        rotation.block<3, 3>(0, 0) = Eigen::AngleAxisd(q[i], joint.axis).toRotationMatrix();
+        chain = chain * joint.placement.matrix() * rotation;
+      }
+      chain = chain * robot->tool.matrix();
+      const Eigen::Vector3d position = toolPosition(*robot, q);
+      worst = std::max(worst, (position - chain.block<3, 1>(0, 3)).norm());
+      forwardKinematics(*robot, ws, q);
+      worst_fk = std::max(worst_fk, (position - ws.tool_pose.translation()).norm());
+    }
+    EXPECT_LT(worst, 1e-12) << robot->name;
+    EXPECT_LT(worst_fk, 1e-13) << robot->name;
+  }
+  const Robot& robot = testing_support::ur10();
+  EXPECT_THROW(toolPosition(robot, JointVector::Zero(5)), InvalidArgument);
+  JointVector q = JointVector::Zero(6);
+  q[4] = std::numeric_limits<double>::quiet_NaN();
+  try {
+    toolPosition(robot, q);
+    FAIL() << "no exception for NaN";
+  } catch (const InvalidArgument& error) {
+    EXPECT_THAT(error.what(), HasSubstr("joint_5"));
   }
 }
 
