@@ -1125,6 +1125,31 @@ int FlexibleJointPlant::prepareNewtonSystem(double t, const double* y, bool jaco
   return 0;
 }
 
+PlantStatistics FlexibleJointPlant::statistics() const {
+  const Solver& s = *solver_;
+  long steps = 0, rhs = 0, jacobians = 0, error_failures = 0, convergence_failures = 0, rhs_for_jacobians = 0;
+  long newton_iterations = 0, setups = 0;
+  CVodeGetNumNonlinSolvIters(s.cvode, &newton_iterations);
+  CVodeGetNumLinSolvSetups(s.cvode, &setups);
+  CVodeGetNumSteps(s.cvode, &steps);
+  CVodeGetNumRhsEvals(s.cvode, &rhs);
+  CVodeGetNumJacEvals(s.cvode, &jacobians);
+  CVodeGetNumLinRhsEvals(s.cvode, &rhs_for_jacobians);
+  CVodeGetNumErrTestFails(s.cvode, &error_failures);
+  CVodeGetNumNonlinSolvConvFails(s.cvode, &convergence_failures);
+  PlantStatistics counts = statistics_;
+  counts.steps = s.before_restart.steps + steps;
+  counts.rhs_evaluations = s.before_restart.rhs_evaluations + rhs + rhs_for_jacobians;
+  counts.jacobian_rhs_evaluations = s.before_restart.jacobian_rhs_evaluations + rhs_for_jacobians;
+  counts.jacobian_evaluations =
+      s.structured ? s.jacobian_evaluations : s.before_restart.jacobian_evaluations + jacobians;
+  counts.nonlinear_iterations = s.before_restart.nonlinear_iterations + newton_iterations;
+  counts.linear_solver_setups = s.before_restart.linear_solver_setups + setups;
+  counts.error_test_failures = s.before_restart.error_test_failures + error_failures;
+  counts.nonlinear_convergence_failures = s.before_restart.nonlinear_convergence_failures + convergence_failures;
+  return counts;
+}
+
 void FlexibleJointPlant::advance(double end_time) {
   if (!std::isfinite(end_time) || !(end_time > time_)) {
     throw InvalidArgument("plant: advance to t = " + std::to_string(end_time) +
@@ -1135,7 +1160,7 @@ void FlexibleJointPlant::advance(double end_time) {
   }
   Solver& s = *solver_;
   if (restart_) {
-    s.before_restart = statistics_;
+    s.before_restart = statistics();          // CVodeReInit zeroes CVODE's counts
     if (ahead_) N_VScale(1.0, s.y_now, s.y);  // from the state at time_, not from CVODE's last step ahead of it
     ahead_ = false;
     check(CVodeReInit(s.cvode, time_, s.y), "CVodeReInit");
@@ -1167,25 +1192,6 @@ void FlexibleJointPlant::advance(double end_time) {
     check(CVodeSetMaxNumSteps(s.cvode, static_cast<long>(budget)), "CVodeSetMaxNumSteps");
     flag = CVode(s.cvode, end_time, s.y, &reached, CV_NORMAL);
   }
-  long steps = 0, rhs = 0, jacobians = 0, error_failures = 0, convergence_failures = 0, rhs_for_jacobians = 0;
-  long newton_iterations = 0, setups = 0;
-  CVodeGetNumNonlinSolvIters(s.cvode, &newton_iterations);
-  CVodeGetNumLinSolvSetups(s.cvode, &setups);
-  CVodeGetNumSteps(s.cvode, &steps);
-  CVodeGetNumRhsEvals(s.cvode, &rhs);
-  CVodeGetNumJacEvals(s.cvode, &jacobians);
-  CVodeGetNumLinRhsEvals(s.cvode, &rhs_for_jacobians);
-  CVodeGetNumErrTestFails(s.cvode, &error_failures);
-  CVodeGetNumNonlinSolvConvFails(s.cvode, &convergence_failures);
-  statistics_.steps = s.before_restart.steps + steps;
-  statistics_.rhs_evaluations = s.before_restart.rhs_evaluations + rhs + rhs_for_jacobians;
-  statistics_.jacobian_rhs_evaluations = s.before_restart.jacobian_rhs_evaluations + rhs_for_jacobians;
-  statistics_.jacobian_evaluations =
-      s.structured ? s.jacobian_evaluations : s.before_restart.jacobian_evaluations + jacobians;
-  statistics_.nonlinear_iterations = s.before_restart.nonlinear_iterations + newton_iterations;
-  statistics_.linear_solver_setups = s.before_restart.linear_solver_setups + setups;
-  statistics_.error_test_failures = s.before_restart.error_test_failures + error_failures;
-  statistics_.nonlinear_convergence_failures = s.before_restart.nonlinear_convergence_failures + convergence_failures;
   if (flag < 0) {
     // Keep the last good state: CVODE leaves y at the last successful step.
     time_ = reached;
@@ -1279,6 +1285,22 @@ void FlexibleJointPlant::setWatchdog(double tracking_envelope_rad, double joint_
 void FlexibleJointPlant::checkWatchdog() {
   const Robot& robot = truth_.robot();
   const double* y = now();
+  // Every limit first, without a branch per joint; the messages below only when one is crossed (a NaN
+  // crosses none here, as there).
+  if (tripped_.empty()) {
+    const double margin = options_.joint_limit_margin_rad;
+    bool beyond = false;
+    for (int j = 0; j < n_; ++j) {
+      const Joint& joint = robot.joints[static_cast<std::size_t>(j)];
+      beyond |= (y[j] > joint.upper + margin) | (y[j] < joint.lower - margin);
+    }
+    if (options_.control) {
+      for (int j = 0; j < n_; ++j) {
+        beyond |= std::abs(referenceAt(j, time_) - y[2 * n_ + j]) > options_.tracking_envelope_rad;
+      }
+    }
+    if (!beyond) return;
+  }
   char text[400];
   for (int j = 0; j < n_ && tripped_.empty(); ++j) {
     const Joint& joint = robot.joints[j];

@@ -191,7 +191,9 @@ public:
   const double* state() const;
   PlantState saveState();
   void restoreState(const PlantState& state);
-  PlantStatistics statistics() const { return statistics_; }
+  // CVODE's counts are asked for here, not after every advance (eight calls cost about 190 instructions,
+  // 1 % of a 1 ms FMU step).
+  PlantStatistics statistics() const;
 
   // The right-hand side dy/dt at (t, y), both of stateSize(); exposed for linearisation and tests.
   void derivative(double t, const double* y, double* ydot);
@@ -284,7 +286,7 @@ private:
   double blend_duration_ = 0.0;
   JointContext ctx_;
   JointErrorWorkspace ws_;
-  PlantStatistics statistics_;
+  PlantStatistics statistics_;  // the counts the plant keeps itself (updates stepped past, restarted)
   // The Jacobian's scratch, here so that jacobian() allocates nothing.
   struct JacobianScratch {
     JointMatrix inverse_mass, spring_by_motor, reaction_by_motor, reaction_by_motor_rate, link_by_q, link_by_qd,

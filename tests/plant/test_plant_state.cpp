@@ -113,6 +113,38 @@ TEST(PlantState, RestoredStateContinuesBitForBit) {
   expectIdentical(continuation, runPeriods(*fresh, kHalf, 2 * kHalf), "fresh plant, restored");
 }
 
+// The counts of the integrator's work go on across its restarts (a step in the load, a restored state), which
+// zero CVODE's own: a run's counts are those of a plant that did the same work in pieces.
+TEST(PlantState, WorkCountsAddUpAcrossRestarts) {
+  auto plant = makePlant();
+  runPeriods(*plant, 0, kHalf);
+  const PlantStatistics first = plant->statistics();
+  const PlantState saved = plant->saveState();
+  plant->setToolWrench((Vector6() << 0.0, 0.0, -20.0, 0.0, 0.0, 0.0).finished());  // a restart
+  runPeriods(*plant, kHalf, 2 * kHalf);
+  const PlantStatistics second = plant->statistics();
+  plant->restoreState(saved);  // another
+  runPeriods(*plant, kHalf, kHalf + 10);
+  const PlantStatistics third = plant->statistics();
+
+  // A fresh plant counting the second half alone, from the saved state with the same load.
+  auto alone = makePlant();
+  alone->restoreState(saved);
+  alone->setToolWrench((Vector6() << 0.0, 0.0, -20.0, 0.0, 0.0, 0.0).finished());
+  const PlantStatistics alone_before = alone->statistics();
+  runPeriods(*alone, kHalf, 2 * kHalf);
+  const PlantStatistics alone_after = alone->statistics();
+
+  EXPECT_GT(first.steps, 0);
+  EXPECT_GT(first.rhs_evaluations, first.steps);
+  EXPECT_EQ(second.steps - first.steps, alone_after.steps - alone_before.steps);
+  EXPECT_EQ(second.rhs_evaluations - first.rhs_evaluations, alone_after.rhs_evaluations - alone_before.rhs_evaluations);
+  EXPECT_EQ(second.nonlinear_iterations - first.nonlinear_iterations,
+            alone_after.nonlinear_iterations - alone_before.nonlinear_iterations);
+  EXPECT_GT(third.steps, second.steps);
+  EXPECT_GT(third.rhs_evaluations, second.rhs_evaluations);
+}
+
 TEST(PlantState, SavedStateIsTheState) {
   auto plant = makePlant();
   runPeriods(*plant, 0, 10);
