@@ -99,8 +99,13 @@ struct VariableFlags {
   // parameter before the steps; an input or tunable parameter in them, and while the robot follows the
   // demo move, not a desired input.
   unsigned char settable_real[table::kCount] = {};
+  bool computed[table::kCount] = {};  // an output or the independent variable: computed by the FMU
   VariableFlags() {
-    for (int i = 0; i < table::kCount; ++i) type_bit[i] = typeBit(kVariables[i].type);
+    for (int i = 0; i < table::kCount; ++i) {
+      type_bit[i] = typeBit(kVariables[i].type);
+      computed[i] = kVariables[i].causality == table::Causality::Output ||
+                    kVariables[i].causality == table::Causality::Independent;
+    }
     for (int j = 0; j < table::kDof; ++j) {
       for (int index : {role::q_motor[j], role::qd_motor[j], role::q_link[j], role::qd_link[j], role::dq_actual[j]}) {
         group[index] = 1u;  // kStateOutputs
@@ -674,12 +679,12 @@ Status Instance::get(const char* function, unsigned types, const std::uint32_t v
     const int index = indexOf(vrs[i]);
     if (index < 0)
       return fail(Status::Error, function, "vr " + std::to_string(vrs[i]) + " is not a variable of this FMU");
-    const table::Variable& v = kVariables[index];
     if (!(kFlags.type_bit[index] & types)) {
-      return fail(Status::Error, function,
-                  describeVariable(index) + " is of type " + typeName(v.type) + "; use its own function");
+      return fail(
+          Status::Error, function,
+          describeVariable(index) + " is of type " + typeName(kVariables[index].type) + "; use its own function");
     }
-    if (v.causality == table::Causality::Output || v.causality == table::Causality::Independent) {
+    if (kFlags.computed[index]) {
       if (state_.phase == kInstantiated) {
         return fail(Status::Error, function, describeVariable(index) + " is computed from initialization mode on");
       }
@@ -701,10 +706,15 @@ Status Instance::get(const char* function, unsigned types, const std::uint32_t v
     }
     state_.values[role::time] = state_.time;
   }
-  for (std::size_t i = 0; i < count; ++i) {
-    const int index = kIndexByValueReference[vrs[i]];  // checked by the first pass
-    const double x = state_.values[index];
-    values[i] = kVariables[index].type == table::Type::Boolean ? static_cast<T>(x != 0.0) : static_cast<T>(x);
+  // Every variable is of one of `types` (the first pass): without Boolean among them, no value needs its test.
+  if (types & kBoolean) {
+    for (std::size_t i = 0; i < count; ++i) {
+      const int index = kIndexByValueReference[vrs[i]];  // checked by the first pass
+      const double x = state_.values[index];
+      values[i] = kVariables[index].type == table::Type::Boolean ? static_cast<T>(x != 0.0) : static_cast<T>(x);
+    }
+  } else {
+    for (std::size_t i = 0; i < count; ++i) values[i] = static_cast<T>(state_.values[kIndexByValueReference[vrs[i]]]);
   }
   return Status::OK;
 }
@@ -769,6 +779,7 @@ Status Instance::set(const char* function, unsigned types, const std::uint32_t v
     const Status status = checkSettable(function, types, vrs[i], index, x, before_step);
     if (status != Status::OK) return status;
   }
+  bool changed = false;
   for (std::size_t i = 0; i < count; ++i) {
     const int index = kIndexByValueReference[vrs[i]];  // checked by the first pass
     const double x = tableValue(index, values[i]);
@@ -779,12 +790,17 @@ Status Instance::set(const char* function, unsigned types, const std::uint32_t v
     }
     if (sameBits(state_.values[index], x)) continue;
     state_.values[index] = x;
+    changed = true;
+    if (index == role::compensation) {
+      // Another compensation mode: the dynamic mode's drive filter starts afresh from the next sample.
+      state_.dynamic.started = false;
+      if (models_->built && !before_step) ensureCompensator();
+    }
+  }
+  if (changed) {
     if (state_.phase == kInitializationMode) state_.initialized = false;
     reference_valid_ = false;
     outputs_valid_ &= ~kReferenceOutputs;
-    // Another compensation mode: the dynamic mode's drive filter starts afresh from the next sample.
-    if (index == role::compensation) state_.dynamic.started = false;
-    if (index == role::compensation && models_->built && !before_step) ensureCompensator();
   }
   return Status::OK;
 }

@@ -131,6 +131,7 @@ public:
   virtual int setEnumeration(std::uint32_t vr, long value) = 0;
   virtual int getEnumeration(std::uint32_t vr, long& value) = 0;
   virtual int setBoolean(std::uint32_t vr, bool value) = 0;
+  virtual int getBoolean(std::uint32_t vr, bool& value) = 0;
   virtual int doStep(double t, double h) = 0;
   virtual double lastSuccessfulTime() = 0;
   virtual int getState(void** state) = 0;
@@ -444,6 +445,13 @@ public:
     const int v = value;
     return api.fmi2SetBoolean(c, &vr, 1, &v);
   }
+  int getBoolean(std::uint32_t vr, bool& value) override {
+    int v = -1;
+    const int status = api.fmi2GetBoolean(c, &vr, 1, &v);
+    EXPECT_TRUE(status != kOK || v == 0 || v == 1) << "fmi2Boolean " << v;
+    value = v != 0;
+    return status;
+  }
   int doStep(double t, double h) override { return api.fmi2DoStep(c, t, h, 1); }
   double lastSuccessfulTime() override {
     double t = std::nan("");
@@ -514,6 +522,7 @@ public:
     return status;
   }
   int setBoolean(std::uint32_t vr, bool value) override { return api.fmi3SetBoolean(c, &vr, 1, &value, 1); }
+  int getBoolean(std::uint32_t vr, bool& value) override { return api.fmi3GetBoolean(c, &vr, 1, &value, 1); }
   int doStep(double t, double h) override {
     bool event = true, terminate_now = true, early = true;
     const int status = api.fmi3DoStep(c, t, h, true, &event, &terminate_now, &early, &last_successful_time);
@@ -1234,6 +1243,34 @@ TEST_P(FmuTest, StopTimeIsEnforced) {
   EXPECT_EQ(m->doStep(0.0, 0.002), kOK);
   EXPECT_EQ(m->doStep(0.002, 0.001), kError);
   EXPECT_TRUE(m->logged("beyond the stop time")) << m->log();
+}
+
+// Booleans go in and out as booleans (an fmi2Boolean that is neither 0 nor 1 is true), and only through the
+// Boolean functions: a real's function refuses them, and a Boolean's refuses a real.
+TEST_P(FmuTest, BooleansRoundTripThroughTheirOwnFunctions) {
+  auto m = makeMaster(GetParam());
+  ASSERT_TRUE(m->instantiate());
+  ASSERT_EQ(m->enterInitialization(), kOK);  // FMI 2 reads values from here on
+  const std::uint32_t flag = m->vr("use_velocity_inputs");
+  bool value = true;
+  ASSERT_EQ(m->getBoolean(flag, value), kOK);
+  EXPECT_FALSE(value);  // its start value
+  if (GetParam() == 2) {
+    const fmi2ValueReference vr = flag;
+    const fmi2Boolean seven = 7;
+    ASSERT_EQ(fmi2().fmi2SetBoolean(m->handle(), &vr, 1, &seven), kOK);
+  } else {
+    ASSERT_EQ(m->setBoolean(flag, true), kOK);
+  }
+  ASSERT_EQ(m->getBoolean(flag, value), kOK);
+  EXPECT_TRUE(value);
+  std::vector<double> real;
+  EXPECT_EQ(m->getReals({flag}, real), kError);
+  EXPECT_EQ(m->setReals({flag}, {0.0}), kError);
+  EXPECT_EQ(m->getBoolean(m->vr("q_desired_1"), value), kError);
+  ASSERT_EQ(m->setBoolean(flag, false), kOK);
+  ASSERT_EQ(m->getBoolean(flag, value), kOK);
+  EXPECT_FALSE(value);
 }
 
 TEST_P(FmuTest, BadValuesAreRefusedAndChangeNothing) {
