@@ -319,11 +319,9 @@ Status Instance::ensureReference(const char* function) {
   if (reference_valid_) return Status::OK;
   Models& m = *models_;
   JointVector& q = planned_;
-  JointVector& velocity = estimate_velocity_;
-  JointVector& acceleration = estimate_acceleration_;
+  JointVector velocity = JointVector::Zero(table::kDof);
+  JointVector acceleration = JointVector::Zero(table::kDof);
   for (int j = 0; j < table::kDof; ++j) q[j] = state_.values[role::q_desired[j]];
-  velocity.setZero();
-  acceleration.setZero();
   const bool estimated = state_.has_last_step && state_.time > state_.last_step_time;
   if (state_.demo) {
     demoMove(*m.robot, state_.time - state_.start_time, q, velocity);
@@ -441,7 +439,7 @@ Status Instance::updateOutputs(const char* function, unsigned groups) {
   const FlexibleJointPlant& plant = *m.plant;
   if (missing & (kStateOutputs | kToolOutputs | kPredictedOutputs)) {
     constexpr int n = table::kDof;
-    const double* y = plant.stateNow();
+    const double* y = plant.state();
     const Eigen::Map<const Eigen::VectorXd> q(y, n), qd(y + n, n), p(y + 2 * n, n), pd(y + 3 * n, n);
     if (missing & kStateOutputs) {
       for (int j = 0; j < table::kDof; ++j) {
@@ -706,16 +704,9 @@ Status Instance::get(const char* function, unsigned types, const std::uint32_t v
     }
     state_.values[role::time] = state_.time;
   }
-  // Every variable is of one of `types` (the first pass): without Boolean among them, no value needs its test.
-  if (types & kBoolean) {
-    for (std::size_t i = 0; i < count; ++i) {
-      const int index = kIndexByValueReference[vrs[i]];  // checked by the first pass
-      const double x = state_.values[index];
-      values[i] = kVariables[index].type == table::Type::Boolean ? static_cast<T>(x != 0.0) : static_cast<T>(x);
-    }
-  } else {
-    for (std::size_t i = 0; i < count; ++i) values[i] = static_cast<T>(state_.values[kIndexByValueReference[vrs[i]]]);
-  }
+  // The table holds a Boolean as 0 or 1 (its start values, set's tableValue, a deserialised state's check), so
+  // every value converts as it is.
+  for (std::size_t i = 0; i < count; ++i) values[i] = static_cast<T>(state_.values[kIndexByValueReference[vrs[i]]]);
   return Status::OK;
 }
 

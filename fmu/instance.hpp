@@ -154,15 +154,11 @@ private:
   std::unique_ptr<Models> models_;  // the loaded robot and parameter set, and what is built from them
   // Derived from state_, cached:
   bool reference_valid_ = false;
-  unsigned outputs_valid_ = 0;                                      // OutputGroup bits
-  JointVector reference_{JointVector::Zero(table::kDof)};           // Q_ref for the current inputs
-  JointVector reference_velocity_{JointVector::Zero(table::kDof)};  // v for the current inputs
-  JointVector planned_{JointVector::Zero(table::kDof)};             // Q_theo: the q_desired inputs, or the demo move
-  // The planned velocity and acceleration (from the inputs, the demo or the last communication points):
-  // members so that each step writes them in place.
-  JointVector estimate_velocity_{JointVector::Zero(table::kDof)};
-  JointVector estimate_acceleration_{JointVector::Zero(table::kDof)};
-  OnlineDynamicState dynamic_after_;  // compensation = dynamic: the filter with the current sample
+  unsigned outputs_valid_ = 0;                           // OutputGroup bits
+  JointVector reference_;                                // Q_ref for the current inputs
+  JointVector reference_velocity_;                       // v for the current inputs
+  JointVector planned_{JointVector::Zero(table::kDof)};  // Q_theo: the q_desired inputs, or the demo move
+  OnlineDynamicState dynamic_after_;                     // compensation = dynamic: the filter with the current sample
 
   std::vector<std::unique_ptr<Snapshot>> states_;
 };

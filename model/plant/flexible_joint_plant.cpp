@@ -1285,45 +1285,39 @@ void FlexibleJointPlant::setWatchdog(double tracking_envelope_rad, double joint_
 void FlexibleJointPlant::checkWatchdog() {
   const Robot& robot = truth_.robot();
   const double* y = now();
-  // Every limit first, without a branch per joint; the messages below only when one is crossed (a NaN
-  // crosses none here, as there).
+  const double margin = options_.joint_limit_margin_rad;
+  // The two limits, each written once for the test below and for the messages.
+  const auto beyond_limits = [&](int j) {  // continuous joints: +-inf
+    const Joint& joint = robot.joints[static_cast<std::size_t>(j)];
+    return (y[j] > joint.upper + margin) | (y[j] < joint.lower - margin);
+  };
+  const auto following_error = [&](int j) { return referenceAt(j, time_) - y[2 * n_ + j]; };
+  const auto beyond_envelope = [&](int j) { return std::abs(following_error(j)) > options_.tracking_envelope_rad; };
+  // Every joint first, without a branch per joint; a message only when one is crossed (a NaN crosses none).
   if (tripped_.empty()) {
-    const double margin = options_.joint_limit_margin_rad;
     bool beyond = false;
-    for (int j = 0; j < n_; ++j) {
-      const Joint& joint = robot.joints[static_cast<std::size_t>(j)];
-      beyond |= (y[j] > joint.upper + margin) | (y[j] < joint.lower - margin);
-    }
-    if (options_.control) {
-      for (int j = 0; j < n_; ++j) {
-        beyond |= std::abs(referenceAt(j, time_) - y[2 * n_ + j]) > options_.tracking_envelope_rad;
-      }
-    }
+    for (int j = 0; j < n_; ++j) beyond |= beyond_limits(j);
+    for (int j = 0; j < n_ && options_.control; ++j) beyond |= beyond_envelope(j);
     if (!beyond) return;
   }
   char text[400];
   for (int j = 0; j < n_ && tripped_.empty(); ++j) {
-    const Joint& joint = robot.joints[j];
-    const double q = y[j];
-    const double margin = options_.joint_limit_margin_rad;
-    if (q > joint.upper + margin || q < joint.lower - margin) {  // continuous joints: +-inf
-      std::snprintf(text, sizeof text,
-                    "plant: at t = %.9g s link %s is at %.6g rad, beyond its joint limits [%.6g, %.6g] rad by more "
-                    "than the %.3g rad margin",
-                    time_, joint.name.c_str(), q, joint.lower, joint.upper, margin);
-      tripped_ = text;
-    }
+    if (!beyond_limits(j)) continue;
+    const Joint& joint = robot.joints[static_cast<std::size_t>(j)];
+    std::snprintf(text, sizeof text,
+                  "plant: at t = %.9g s link %s is at %.6g rad, beyond its joint limits [%.6g, %.6g] rad by more "
+                  "than the %.3g rad margin",
+                  time_, joint.name.c_str(), y[j], joint.lower, joint.upper, margin);
+    tripped_ = text;
   }
   for (int j = 0; j < n_ && tripped_.empty() && options_.control; ++j) {
-    const double following_error = referenceAt(j, time_) - y[2 * n_ + j];
-    if (std::abs(following_error) > options_.tracking_envelope_rad) {
-      std::snprintf(text, sizeof text,
-                    "plant: at t = %.9g s the drive of %s has a following error of %.6g rad (reference %.6g, motor "
-                    "%.6g), beyond its tracking envelope of %.3g rad: the drive cannot follow its reference",
-                    time_, robot.joints[j].name.c_str(), following_error, referenceAt(j, time_), y[2 * n_ + j],
-                    options_.tracking_envelope_rad);
-      tripped_ = text;
-    }
+    if (!beyond_envelope(j)) continue;
+    std::snprintf(text, sizeof text,
+                  "plant: at t = %.9g s the drive of %s has a following error of %.6g rad (reference %.6g, motor "
+                  "%.6g), beyond its tracking envelope of %.3g rad: the drive cannot follow its reference",
+                  time_, robot.joints[static_cast<std::size_t>(j)].name.c_str(), following_error(j),
+                  referenceAt(j, time_), y[2 * n_ + j], options_.tracking_envelope_rad);
+    tripped_ = text;
   }
   if (!tripped_.empty()) throw PlantLimitError(tripped_);
 }

@@ -177,10 +177,6 @@ public:
   JointVector linkVelocities() const;
   JointVector motorPositions() const;
   JointVector motorVelocities() const;
-  // The four above without copies, for readers on a hot path (the FMU's outputs at each step): the link
-  // positions, link velocities, motor positions and motor velocities, dof() values each, in that order.
-  // Valid until the plant next moves.
-  const double* stateNow() const { return now(); }
   // Motor torques (joint units) the controller applies now.
   JointVector motorTorques();
   // Total mechanical energy (kinetic, gravity, spring balancer, payload, joint springs), for tests.

@@ -116,7 +116,7 @@ struct AxisProducts {
     if constexpr (ZAxes) {
       return {c * v.x() - s * v.y(), s * v.x() + c * v.y(), v.z()};
     } else {
-      return c * v + s * axis.cross(v) + ((1.0 - c) * axis.dot(v)) * axis;
+      return rotatedAboutAxis(axis, c, s, v);
     }
   }
   static Eigen::Vector3d cross(const Eigen::Vector3d& axis, const Eigen::Vector3d& v) {

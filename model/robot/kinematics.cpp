@@ -83,9 +83,8 @@ Eigen::Vector3d toolPosition(const Robot& robot, const JointVector& q) {
       const double x = p.x();
       p.x() = c * x - s * p.y();
       p.y() = s * x + c * p.y();
-    } else {  // Rodrigues: p cos + (k x p) sin + k (k . p)(1 - cos)
-      const Eigen::Vector3d& k = joint.axis;
-      p = c * p + s * k.cross(p) + ((1.0 - c) * k.dot(p)) * k;
+    } else {
+      p = rotatedAboutAxis(joint.axis, c, s, p);
     }
     p = joint.placement.linear() * p + joint.placement.translation();
   }

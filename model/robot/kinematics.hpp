@@ -12,7 +12,7 @@ namespace jointcomp {
 void forwardKinematics(const Robot& robot, RobotWorkspace& ws, const JointVector& q);
 
 // The tool's position in the base frame at q, and nothing else: the tool point carried back through each
-// joint's rotation and placement, about a third of forwardKinematics' instructions (the FMU's tool output at
+// joint's rotation and placement, about half of forwardKinematics' instructions (the FMU's tool output at
 // every step). Equal to forwardKinematics' tool translation to rounding, not bit for bit (another order of
 // the products). Same checks as forwardKinematics; allocates nothing.
 Eigen::Vector3d toolPosition(const Robot& robot, const JointVector& q);
@@ -20,6 +20,12 @@ Eigen::Vector3d toolPosition(const Robot& robot, const JointVector& q);
 // The usual joint axis, exactly (0, 0, 1): rotations about it turn two coordinates, which the kinematics and
 // the dynamics take as a fast path.
 inline bool isZAxis(const Eigen::Vector3d& axis) { return axis.x() == 0.0 && axis.y() == 0.0 && axis.z() == 1.0; }
+
+// Rot(axis, angle) v about a unit axis from the angle's cosine c and sine s (Rodrigues): v c + (axis x v) s +
+// axis (axis . v)(1 - c). The general-axis way of toolPosition and of the joint-frame gravity.
+inline Eigen::Vector3d rotatedAboutAxis(const Eigen::Vector3d& axis, double c, double s, const Eigen::Vector3d& v) {
+  return c * v + s * axis.cross(v) + ((1.0 - c) * axis.dot(v)) * axis;
+}
 
 // Each joint angle with its sine and cosine, for forwardKinematicsNear (caller-owned, one per path).
 using JointAngleAnchors = std::array<SinCosAnchor, kMaxJoints>;
