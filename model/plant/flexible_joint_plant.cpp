@@ -1219,24 +1219,27 @@ void FlexibleJointPlant::advance(double end_time) {
   checkWatchdog();
 }
 
-// PlantOptions::step_past_updates_s: CVODE's own steps, one per call, until one ends at or beyond end_time; the
-// stop time only bounds how far past it they may go. Steps already beyond end_time (an earlier advance's) are
-// not taken again. The count of calls keeps the advance's work budget.
+// PlantOptions::step_past_updates_s: CVODE's own steps until one ends at or beyond end_time, in one CV_NORMAL
+// call; the stop time only bounds how far past end_time they may go. Steps already beyond end_time (an
+// earlier advance's) are not taken again. The next advance steps past its end again only if CVODE's report
+// of the step it plans (CVodeGetCurrentStep) is longer than the advance. After a CV_ONE_STEP call CVODE
+// reports, and takes, its next step cut to what is left before the stop time (SUNDIALS 6, cvode.c): here at
+// most step_past_updates_s past this advance's end and often much less, so the plant fell back to stopping
+// at updates that CVODE could have stepped over. After a CV_NORMAL call it reports the step it plans.
+// fmu_bench (BM_DirectSpiral, step_past_updates 10 ms): 0.21 -> 0.11 CVODE steps per update at 1 ms
+// updates, 3.84 -> 3.25 at 10 ms. The work budget is CVODE's count of steps in the call.
 int FlexibleJointPlant::integratePast(double end_time, long budget, double& reached) {
   Solver& s = *solver_;
   realtype at = time_;
   if (CVodeGetCurrentTime(s.cvode, &at) != CV_SUCCESS) at = time_;
   reached = at;
   if (at >= end_time) return CV_SUCCESS;
-  const double limit = end_time + options_.step_past_updates_s;
-  check(CVodeSetStopTime(s.cvode, limit), "CVodeSetStopTime");
-  for (long step = 0; step < budget; ++step) {
-    const int flag = CVode(s.cvode, limit, s.y, &at, CV_ONE_STEP);
-    reached = at;
-    if (flag < 0) return flag;
-    if (at >= end_time) return CV_SUCCESS;
-  }
-  return CV_TOO_MUCH_WORK;
+  check(CVodeSetStopTime(s.cvode, end_time + options_.step_past_updates_s), "CVodeSetStopTime");
+  check(CVodeSetMaxNumSteps(s.cvode, budget), "CVodeSetMaxNumSteps");
+  realtype output_time = end_time;
+  const int flag = CVode(s.cvode, end_time, s.y, &output_time, CV_NORMAL);
+  if (CVodeGetCurrentTime(s.cvode, &at) == CV_SUCCESS) reached = at;
+  return flag;
 }
 
 const double* FlexibleJointPlant::now() const { return N_VGetArrayPointer(ahead_ ? solver_->y_now : solver_->y); }

@@ -82,7 +82,9 @@ TEST(PlantStepPast, ShortUpdatesCostFewerStepsAndFollowTheStoppingRunWithinMicro
   const auto [a, b] = swingStoppingAndPast(0.001, 1000);
   EXPECT_TRUE(b.on_time);
   EXPECT_GE(a.statistics.steps, 1000);  // one step per update at least, when it stops at each
-  EXPECT_LT(b.statistics.steps, 0.6 * a.statistics.steps)
+  // 173 against 1038: CVODE's steps average about 6 updates. Reading CVODE's report of its next step after
+  // one cut to the stop time past the update (CV_ONE_STEP) sent the plant back to stopping at updates: 248.
+  EXPECT_LT(b.statistics.steps, 0.2 * a.statistics.steps)
       << b.statistics.steps << " steps against " << a.statistics.steps;
   const double largest = largestDifference(a, b);
   EXPECT_LT(largest, 5e-6);
