@@ -87,7 +87,8 @@ struct PlantOptions {
   // shorter than CVODE's planned step (a 1 ms co-simulation) then does not stop CVODE: it takes its own steps
   // through several updates, the state at each update's end is interpolated from its last step, and an
   // update's new reference takes over from CVODE's next step on, so it lands up to one CVODE step late, the
-  // old reference extrapolated until then. A longer advance still ends on its time (even_steps applies).
+  // old reference extrapolated until then. A longer advance, or one of half this time or more, still ends on
+  // its time (even_steps applies).
   double step_past_updates_s = 0.0;
   // With step_past_updates_s: how far, in rad, an update's reference may depart from the old one that CVODE
   // has already integrated past the update (the old reference extrapolated), at the update, halfway to

@@ -146,12 +146,26 @@ TEST(PlantStepPast, AnInputThatJumpsTakesEffectAtItsTime) {
   EXPECT_GT(delayed, 10.0 * on_time) << "delayed " << delayed << " rad, on time " << on_time << " rad";
 }
 
-// Updates longer than CVODE's steps end on their time, as without the option (CVODE steps past one only when
-// its own step is longer than the update, as near rest): no more steps, and the same motion within microradians.
-TEST(PlantStepPast, UpdatesLongerThanCvodesStepsCostNoMoreSteps) {
-  const auto [a, b] = swingStoppingAndPast(0.01, 200);
+// Updates of half the horizon (kPast) or more end on their time, as without the option: at 10 ms updates
+// CVODE's step would span at most about two, and stepping past them cost more steps than stopping. The
+// same run as the stopping plant's, bit for bit.
+TEST(PlantStepPast, UpdatesOfHalfTheHorizonOrMoreEndOnTheirTime) {
+  const auto [a, b] = swingStoppingAndPast(kPast, 200);
   EXPECT_TRUE(b.on_time);
-  EXPECT_LE(b.statistics.steps, a.statistics.steps) << b.statistics.steps << " steps against " << a.statistics.steps;
+  EXPECT_EQ(b.statistics.updates_stepped_past, 0);
+  EXPECT_EQ(b.statistics.steps, a.statistics.steps);
+  EXPECT_EQ(largestDifference(a, b), 0.0);
+}
+
+// Updates a binary fraction of a second apart (1/1024 s) are as long as the step CVODE reports after ending a
+// step on one, which it cut to (end - t)(1 - 4 eps): they are stepped past like those of 1 ms, whose rounded
+// lengths differ from update to update.
+TEST(PlantStepPast, UpdatesAnExactBinaryFractionApartAreSteppedPast) {
+  const auto [a, b] = swingStoppingAndPast(1.0 / 1024.0, 1000);
+  EXPECT_TRUE(b.on_time);
+  EXPECT_GT(b.statistics.updates_stepped_past, 500);
+  EXPECT_LT(b.statistics.steps, 0.25 * a.statistics.steps)  // 223 against 1048; none stepped past before
+      << b.statistics.steps << " steps against " << a.statistics.steps;
   EXPECT_LT(largestDifference(a, b), 5e-6);
 }
 
