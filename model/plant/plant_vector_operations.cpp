@@ -110,6 +110,25 @@ realtype weightedRmsNorm(N_Vector x, N_Vector w) {
   return mean <= 0.0 ? 0.0 : std::sqrt(mean);
 }
 
+// z = c0 X0 + c1 X1 + ..., summed in that order into z: what SUNDIALS' generic N_VLinearCombination does
+// without a fused operation (scale, then z += ci Xi by linearSum), whose special cases (a copy for c = 1,
+// z - x for c = -1) give the same values, in one call instead of nvec. CVODE interpolates with it
+// (CVodeGetDky, once per advance that steps past its end): 640 -> about 300 instructions per 1 ms update.
+int linearCombination(int nvec, realtype* c, N_Vector* X, N_Vector z) {
+  if (nvec < 1) return -1;
+  const sunindextype n = length(z);
+  double* zd = data(z);
+  const double* xd = data(X[0]);
+  const double c0 = c[0];
+  for (sunindextype i = 0; i < n; ++i) zd[i] = c0 * xd[i];
+  for (int k = 1; k < nvec; ++k) {  // X[k] may be z: it is read as summed so far, as in the generic one
+    xd = data(X[k]);
+    const double ck = c[k];
+    for (sunindextype i = 0; i < n; ++i) zd[i] += ck * xd[i];
+  }
+  return 0;
+}
+
 }  // namespace
 
 void useFastVectorOperations(N_Vector vector) {
@@ -120,6 +139,7 @@ void useFastVectorOperations(N_Vector vector) {
   vector->ops->nvinv = inverse;
   vector->ops->nvmin = minimum;
   vector->ops->nvwrmsnorm = weightedRmsNorm;
+  vector->ops->nvlinearcombination = linearCombination;
 }
 
 }  // namespace jointcomp

@@ -4,7 +4,8 @@
 // stack), and CVODE's vector operations were a quarter of the instructions of a plant spiral. These do
 // what SUNDIALS' serial vector documents for each operation, case by case with the same arithmetic, so
 // that the results are those of N_Vector_Serial bit for bit (tests/plant/test_plant_vector_operations.cpp
-// compares them); the fused operations stay unset, so CVODE's generic fallbacks call these.
+// compares them). Of the fused operations only the linear combination is set, with the arithmetic of
+// SUNDIALS' generic fallback; for the others CVODE's fallbacks call these.
 #pragma once
 
 #include <nvector/nvector_serial.h>
