@@ -113,7 +113,8 @@ realtype weightedRmsNorm(N_Vector x, N_Vector w) {
 // z = c0 X0 + c1 X1 + ..., summed in that order into z: what SUNDIALS' generic N_VLinearCombination does
 // without a fused operation (scale, then z += ci Xi by linearSum), whose special cases (a copy for c = 1,
 // z - x for c = -1) give the same values, in one call instead of nvec. CVODE interpolates with it
-// (CVodeGetDky, once per advance that steps past its end): 640 -> about 300 instructions per 1 ms update.
+// (CVodeGetDky, at every stop time and at every update it steps past): over the spiral plant benchmark
+// CVodeGetDky 70.5 M -> 62.7 M instructions (0.3 % of the run), per 1 ms FMU step 825 -> 764.
 int linearCombination(int nvec, realtype* c, N_Vector* X, N_Vector z) {
   if (nvec < 1) return -1;
   const sunindextype n = length(z);
