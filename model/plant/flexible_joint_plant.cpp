@@ -1169,17 +1169,25 @@ void FlexibleJointPlant::advance(double end_time) {
   // Stepping past the end pays only for advances shorter than CVODE's step, and not for those of half the
   // horizon or more (CVODE's step would span at most about two; at fmu_bench's 10 ms updates with a 10 ms
   // horizon stepping past took 3.98 CVODE steps per update against 2.84 stopping at each). Those end on
-  // their time (from where CVODE is, if it is ahead), as without the option. CVODE reports a step it cut to
-  // end on the last advance's end as (end - t)(1 - 4 eps) (SUNDIALS 6): an advance as long counts as shorter
-  // than the step, or updates at times a binary fraction apart (1/1024 s) would never be stepped past.
+  // their time (from where CVODE is, if it is ahead), as without the option: updates of exactly half the
+  // horizon too, however their times round (CVODE's own time roundoff, 100 eps (|t| + h), is allowed for).
+  // CVODE reports a step it cut to end on the last advance's end as (end - t)(1 - 4 eps) (SUNDIALS 6), so an
+  // advance as long counts as shorter than the step, or updates a binary fraction of a second apart
+  // (1/1024 s) would never be stepped past. Allowing the whole time roundoff there instead lets the plant
+  // step past where CVODE's step is just the update's length, as in a step response's transient, which then
+  // costs more steps than stopping (887 against 837 in PlantStepPast.AReferenceThatNeverChanges...): at
+  // decimal update times whether CVODE's first step past begins still depends on how the times round.
   bool past = false;
+  realtype cvode_time = time_;
   if (options_.step_past_updates_s > 0.0) {
-    realtype at = time_, planned = 0.0;  // planned: 0 before the first step after a (re)start
-    if (CVodeGetCurrentTime(s.cvode, &at) != CV_SUCCESS) at = time_;
+    realtype planned = 0.0;  // 0 before the first step after a (re)start
+    if (CVodeGetCurrentTime(s.cvode, &cvode_time) != CV_SUCCESS) cvode_time = time_;
     if (CVodeGetCurrentStep(s.cvode, &planned) != CV_SUCCESS) planned = 0.0;
     const double length = end_time - time_;
-    past = at >= end_time || (length < 0.5 * options_.step_past_updates_s &&
-                              length <= planned * (1.0 + 16.0 * std::numeric_limits<double>::epsilon()));
+    const double horizon = options_.step_past_updates_s;
+    const double roundoff = 100.0 * std::numeric_limits<double>::epsilon() * (std::fabs(end_time) + horizon);
+    past = cvode_time >= end_time || (length < 0.5 * horizon - roundoff &&
+                                      length <= planned * (1.0 + 16.0 * std::numeric_limits<double>::epsilon()));
   }
   if (!past) check(CVodeSetStopTime(s.cvode, end_time), "CVodeSetStopTime");
   // The work budget of this advance: a floor for the start-up transients plus a rate per simulated second
@@ -1191,7 +1199,7 @@ void FlexibleJointPlant::advance(double end_time) {
   realtype reached = time_;
   int flag = 0;
   if (past) {
-    flag = integratePast(end_time, static_cast<long>(budget), reached);
+    flag = integratePast(end_time, cvode_time, static_cast<long>(budget), reached);
   } else if (options_.even_steps) {
     flag = integrateEvenly(end_time, static_cast<long>(budget), reached);  // counts the budget itself
   } else {
@@ -1231,14 +1239,12 @@ void FlexibleJointPlant::advance(double end_time) {
 // most step_past_updates_s past this advance's end and often much less, so the plant fell back to stopping
 // at updates that CVODE could have stepped over. After a CV_NORMAL call it reports the step it plans.
 // fmu_bench (BM_DirectSpiral, step_past_updates 10 ms): 0.21 -> 0.11 CVODE steps per update at 1 ms
-// updates. The work budget is CVODE's count of steps in the call.
-int FlexibleJointPlant::integratePast(double end_time, long budget, double& reached) {
+// updates. cvode_time: CVODE's time, as advance read it. The work budget is CVODE's count of steps in the call.
+int FlexibleJointPlant::integratePast(double end_time, double cvode_time, long budget, double& reached) {
   Solver& s = *solver_;
-  realtype at = time_;
-  if (CVodeGetCurrentTime(s.cvode, &at) != CV_SUCCESS) at = time_;
-  reached = at;
+  reached = cvode_time;
   // CVODE's last step ends at or beyond end_time and began before it: its interpolant covers end_time.
-  if (at >= end_time) {
+  if (cvode_time >= end_time) {
     check(CVodeGetDky(s.cvode, end_time, 0, s.y_now), "CVodeGetDky");
     return CV_SUCCESS;
   }
@@ -1247,6 +1253,7 @@ int FlexibleJointPlant::integratePast(double end_time, long budget, double& reac
   realtype output_time = end_time;
   // The output at end_time is that interpolant's value there, written straight into y_now.
   const int flag = CVode(s.cvode, end_time, s.y_now, &output_time, CV_NORMAL);
+  realtype at = reached;
   if (CVodeGetCurrentTime(s.cvode, &at) == CV_SUCCESS) reached = at;
   if (flag < 0) N_VScale(1.0, s.y_now, s.y);  // CVODE's state at its last good step, where advance restarts
   return flag;

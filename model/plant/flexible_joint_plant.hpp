@@ -228,7 +228,7 @@ private:
   ReferencePoint referencePoint(int joint, double t) const;
   void checkWatchdog();
   int integrateEvenly(double end_time, long budget, double& reached);
-  int integratePast(double end_time, long budget, double& reached);
+  int integratePast(double end_time, double cvode_time, long budget, double& reached);
   void ensureFeedforward();
   // The state at time_: CVODE's own when it stopped there, the interpolated one when it is ahead.
   const double* now() const;
