@@ -531,8 +531,10 @@ void FlexibleJointPlant::setReference(const JointVector& position, const JointVe
   const bool check_departure =
       ahead_time - time_ > 100.0 * std::numeric_limits<double>::epsilon() * std::max(1.0, std::fabs(time_));
   const double departure_times[3] = {time_, 0.5 * (time_ + ahead_time), ahead_time};
-  JointVector old_reference[3];
-  for (int k = 0; k < 3 && check_departure; ++k) referencesAt(departure_times[k], old_reference[k]);
+  double old_reference[3][kMaxJoints];
+  for (int k = 0; k < 3 && check_departure; ++k) {
+    for (int j = 0; j < n_; ++j) old_reference[k][j] = referenceAt(j, departure_times[k]);
+  }
   // The reference as it runs now, before the update: the blend starts from it.
   JointVector before_value(n_), before_velocity(n_), before_acceleration(n_), before_feedforward(n_),
       before_feedforward_rate(n_);
@@ -556,6 +558,7 @@ void FlexibleJointPlant::setReference(const JointVector& position, const JointVe
   if (options_.smooth_reference) ensureFeedforward();
   // The new extrapolation takes over from the old one over the interval the last update took (the next
   // one is expected as long); a second update at the same time keeps the blend's duration.
+  const bool blended_before = blend_duration_ > 0.0;
   if (!options_.smooth_reference) {
     blend_duration_ = 0.0;
   } else if (since_last > 0.0) {
@@ -567,7 +570,7 @@ void FlexibleJointPlant::setReference(const JointVector& position, const JointVe
     blend_offset_acceleration_ = before_acceleration - reference_acceleration_;
     feedforward_offset_ = before_feedforward - feedforward_;
     feedforward_offset_rate_ = before_feedforward_rate - feedforward_rate_;
-  } else {
+  } else if (blended_before) {  // without a blend the offsets are zero already (reset, restoreState)
     blend_offset_.setZero(n_);
     blend_offset_velocity_.setZero(n_);
     blend_offset_acceleration_.setZero(n_);
@@ -577,10 +580,10 @@ void FlexibleJointPlant::setReference(const JointVector& position, const JointVe
   if (check_departure) {
     ++statistics_.updates_stepped_past;
     double departure = 0.0;
-    JointVector new_reference;
     for (int k = 0; k < 3; ++k) {
-      referencesAt(departure_times[k], new_reference);
-      for (int j = 0; j < n_; ++j) departure = std::max(departure, std::fabs(new_reference[j] - old_reference[k][j]));
+      for (int j = 0; j < n_; ++j) {
+        departure = std::max(departure, std::fabs(referenceAt(j, departure_times[k]) - old_reference[k][j]));
+      }
     }
     if (!(departure <= options_.step_past_tolerance_rad)) {
       ++statistics_.updates_restarted;
@@ -631,25 +634,6 @@ void FlexibleJointPlant::setPayload(double mass, const Eigen::Vector3d& com_in_t
   ctx_.payload_mass = mass;
   ctx_.payload_com = com_in_tool;
   restart_ = true;
-}
-
-// referenceAt(j, t) of every joint, with the blend's test once (the departure check's six calls per update).
-void FlexibleJointPlant::referencesAt(double t, JointVector& position) const {
-  position.resize(n_);
-  const double dt = t - reference_time_;
-  if (blend_duration_ > 0.0 && dt < blend_duration_) {
-    for (int j = 0; j < n_; ++j) position[j] = referencePoint(j, t).value;
-    return;
-  }
-  for (int j = 0; j < n_; ++j) {
-    position[j] = reference_[j] + reference_velocity_[j] * dt + 0.5 * reference_acceleration_[j] * dt * dt;
-  }
-}
-
-double FlexibleJointPlant::referenceAt(int joint, double t) const {
-  const double dt = t - reference_time_;
-  if (blend_duration_ > 0.0 && dt < blend_duration_) return referencePoint(joint, t).value;
-  return reference_[joint] + reference_velocity_[joint] * dt + 0.5 * reference_acceleration_[joint] * dt * dt;
 }
 
 void FlexibleJointPlant::referenceAt(double t, JointVector& position, JointVector& velocity,
@@ -1445,8 +1429,9 @@ void FlexibleJointPlant::restoreState(const PlantState& state) {
   reference_time_ = state.reference_time;
   JointVector* blend_targets[] = {&blend_offset_, &blend_offset_velocity_, &blend_offset_acceleration_,
                                   &feedforward_offset_, &feedforward_offset_rate_};
+  // Without a blend the offsets are never read, and are kept zero (setReference relies on it).
   for (int i = 0; i < 5; ++i) {
-    if (blend_parts[i]->size() == n_) {
+    if (!without_blend) {
       *blend_targets[i] = *blend_parts[i];
     } else {
       blend_targets[i]->setZero(n_);

@@ -217,8 +217,13 @@ private:
   // the unclamped one (zero unless the drive saturates), which the anti-windup feeds back.
   void computeMotorTorques(double t, const JointVector& p, const JointVector& pd, const JointVector& integral,
                            JointVector& torque, JointVector* clamped_excess = nullptr) const;
-  double referenceAt(int joint, double t) const;
-  void referencesAt(double t, JointVector& position) const;  // referenceAt of every joint
+  // Inline: setReference's departure check reads it at three times for every joint, and the watchdog for
+  // every joint, at every update.
+  double referenceAt(int joint, double t) const {
+    const double dt = t - reference_time_;
+    if (blend_duration_ > 0.0 && dt < blend_duration_) return referencePoint(joint, t).value;
+    return reference_[joint] + reference_velocity_[joint] * dt + 0.5 * reference_acceleration_[joint] * dt * dt;
+  }
   // The controller's reference of `joint` at t: value, rate and acceleration, and its static feed-forward
   // torque and that torque's rate (the rates feed the blend of the next update); feedforward_blend is the
   // blend's part of the feed-forward.

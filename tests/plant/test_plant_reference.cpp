@@ -170,6 +170,43 @@ TEST(PlantReference, ASavedStateCarriesTheBlend) {
   EXPECT_THROW(fresh->restoreState(damaged), InvalidArgument);
 }
 
+// Without a blend its offsets are never read, and setReference does not clear them at every update: they
+// must be zero already, after a restored state without a blend (even one that holds offsets) and after the
+// first update of a plant that does not blend taking over a state that does.
+TEST(PlantReference, WithoutABlendItsOffsetsAreZero) {
+  PlantOptions smooth;
+  smooth.smooth_reference = true;
+  auto blending = makePlant(smooth);
+  runUpdates(*blending, 20);
+  const PlantState saved = blending->saveState();
+  ASSERT_GT(saved.blend_duration, 0.0);
+  ASSERT_GT(saved.blend_offset.cwiseAbs().maxCoeff(), 0.0);
+  const auto offsetsOf = [](const PlantState& state) {
+    double largest = 0.0;
+    for (const JointVector* part : {&state.blend_offset, &state.blend_offset_velocity, &state.blend_offset_acceleration,
+                                    &state.feedforward_offset, &state.feedforward_offset_rate}) {
+      EXPECT_EQ(part->size(), 6);
+      largest = std::max(largest, part->cwiseAbs().maxCoeff());
+    }
+    return largest;
+  };
+
+  auto plain = makePlant();
+  PlantState ended = saved;
+  ended.blend_duration = 0.0;  // the offsets stay in the state
+  plain->restoreState(ended);
+  EXPECT_EQ(offsetsOf(plain->saveState()), 0.0);
+
+  plain->restoreState(saved);  // a blend under way: it runs on until the next update
+  EXPECT_GT(offsetsOf(plain->saveState()), 0.0);
+  JointVector position, velocity;
+  motionAt(plain->time(), position, velocity);
+  plain->setReference(position, velocity);
+  const PlantState after = plain->saveState();
+  EXPECT_EQ(after.blend_duration, 0.0);
+  EXPECT_EQ(offsetsOf(after), 0.0);
+}
+
 // The static feed-forward and its rate come from the joints' sines (gravity in joint frames) unless a load
 // needs the tool's pose. A payload effect of no mass adds nothing but reads the poses, so that plant takes
 // the forward kinematics' way. At tight tolerances (so that CVODE's step choices, which rounding can tip,
