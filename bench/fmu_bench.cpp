@@ -226,6 +226,19 @@ void reportRates(benchmark::State& state, std::size_t steps, double step) {
       benchmark::Counter(static_cast<double>(steps) * step, benchmark::Counter::kIsRate);  // simulated s per s
 }
 
+// One communication step as a master makes it: set the desired joint positions, doStep, read the outputs.
+// Not inlined: bench/count-instructions.sh counts the instructions of its calls (--toggle-collect).
+[[gnu::noinline]] void fmuStep(Fmu& fmu, const Spiral& s, std::size_t k, const std::vector<std::uint32_t>& outputs,
+                               bool all, double* read) {
+  fmu.setReals(kQDesired, kDof, s.q[k].data());
+  fmu.doStep(s.time[k], s.time[k + 1] - s.time[k]);
+  if (all) {
+    fmu.getReals(outputs.data(), outputs.size(), read);
+  } else {
+    fmu.getReals(kReadBack, kDof + 3, read);
+  }
+}
+
 // version 2 or 3; range(1): 1 reads all outputs; range(2): the communication step in ms; range(3): how far
 // past a communication point CVODE may step, in ms (integrator.step_past_updates, 10 by default; 0: it stops at
 // each).
@@ -249,32 +262,13 @@ void BM_FmuSpiral(benchmark::State& state) {
       k = 0;
       state.ResumeTiming();
     }
-    fmu->setReals(kQDesired, kDof, s.q[k].data());
-    fmu->doStep(s.time[k], s.time[k + 1] - s.time[k]);
-    if (all) {
-      fmu->getReals(outputs.data(), outputs.size(), read.data());
-    } else {
-      fmu->getReals(kReadBack, kDof + 3, read.data());
-    }
+    fmuStep(*fmu, s, k, outputs, all, read.data());
     benchmark::DoNotOptimize(read.data());
     ++k;
     ++steps;
   }
   reportRates(state, steps, step_ms * kStep);
 }
-BENCHMARK(BM_FmuSpiral)
-    ->ArgNames({"fmi", "all_outputs", "step_ms", "past_ms"})
-    ->Args({2, 0, 1, 0})
-    ->Args({3, 0, 1, 0})
-    ->Args({2, 1, 1, 0})
-    ->Args({2, 0, 10, 0})
-    ->Args({3, 0, 10, 0})
-    ->Args({2, 0, 1, 10})
-    ->Args({3, 0, 1, 10})
-    ->Args({2, 0, 10, 10})
-    ->Args({3, 0, 10, 10})
-    ->Unit(benchmark::kMicrosecond)
-    ->MinTime(2.0);
 
 // The FMI layer alone: a step's set of the inputs and get of the outputs, with nothing to compute (the
 // values are those already set, the outputs already up to date). What the layer adds to each step
@@ -294,6 +288,33 @@ void BM_FmuCallsOnly(benchmark::State& state) {
 }
 BENCHMARK(BM_FmuCallsOnly)->ArgName("fmi")->Arg(2)->Arg(3)->Unit(benchmark::kNanosecond);
 
+// fmuStep's work without the FMI layer, on the plant and the compensator: the FMU's velocity estimate
+// (fmu/instance.cpp: the slope now of the parabola through the last three inputs, the difference quotient
+// after the first step, zero at the first), compensation, the plant's update and advance, and the outputs.
+// Not inlined, for bench/count-instructions.sh.
+[[gnu::noinline]] void directStep(FlexibleJointPlant& plant, Compensator& compensator, JointContext& ctx,
+                                  JointVector& reference, const Spiral& s, std::size_t k, bool has_last, double* read) {
+  const double t = s.time[k];
+  JointVector v = JointVector::Zero(kDof);
+  if (k >= 2) {
+    const double last = t - s.time[k - 1], earlier = s.time[k - 1] - s.time[k - 2], both = last + earlier;
+    v = s.q[k] * ((2.0 * last + earlier) / (last * both)) - s.q[k - 1] * (both / (last * earlier)) +
+        s.q[k - 2] * (last / (earlier * both));
+  } else if (has_last) {
+    v = (s.q[k] - s.q[k - 1]) / (t - s.time[k - 1]);
+  }
+  ctx.q = s.q[k];
+  ctx.velocity = v;
+  ctx.time = t;
+  compensator.compensate(ctx, reference);
+  plant.setReference(reference, v);
+  plant.advance(t + (s.time[k + 1] - t));
+  const JointVector q = plant.linkPositions();
+  const Eigen::Vector3d tool = toolPosition(*s.robot, q);
+  for (int j = 0; j < kDof; ++j) read[j] = q[j];
+  for (int i = 0; i < 3; ++i) read[kDof + i] = tool[i];
+}
+
 // The same work without the FMI layer; range(0): 1 with PlantOptions::smooth_reference (not what the FMU
 // uses; to compare), range(1): the communication step in ms, range(2): PlantOptions::step_past_updates_s in ms.
 void BM_DirectSpiral(benchmark::State& state) {
@@ -310,8 +331,7 @@ void BM_DirectSpiral(benchmark::State& state) {
   std::unique_ptr<FlexibleJointPlant> plant;
   Compensator compensator(nominal, mask);
   JointContext ctx(kDof);
-  JointVector reference, last_q;
-  double last_t = 0.0;
+  JointVector reference;
   bool has_last = false;
   double read[kDof + 3];
   std::size_t k = s.time.size();
@@ -346,31 +366,9 @@ void BM_DirectSpiral(benchmark::State& state) {
       k = 0;
       state.ResumeTiming();
     }
-    const double t = s.time[k];
-    // The FMU's velocity estimate (fmu/instance.cpp): the slope now of the parabola through the last three
-    // inputs, the difference quotient after the first step, zero at the first.
-    JointVector v = JointVector::Zero(kDof);
-    if (k >= 2) {
-      const double last = t - s.time[k - 1], earlier = s.time[k - 1] - s.time[k - 2], both = last + earlier;
-      v = s.q[k] * ((2.0 * last + earlier) / (last * both)) - s.q[k - 1] * (both / (last * earlier)) +
-          s.q[k - 2] * (last / (earlier * both));
-    } else if (has_last) {
-      v = (s.q[k] - last_q) / (t - last_t);
-    }
-    ctx.q = s.q[k];
-    ctx.velocity = v;
-    ctx.time = t;
-    compensator.compensate(ctx, reference);
-    plant->setReference(reference, v);
-    plant->advance(t + (s.time[k + 1] - t));
-    const JointVector q = plant->linkPositions();
-    const Eigen::Vector3d tool = toolPosition(*s.robot, q);
-    for (int j = 0; j < kDof; ++j) read[j] = q[j];
-    for (int i = 0; i < 3; ++i) read[kDof + i] = tool[i];
+    directStep(*plant, compensator, ctx, reference, s, k, has_last, read);
     benchmark::DoNotOptimize(read);
     has_last = true;
-    last_q = s.q[k];
-    last_t = t;
     ++k;
     ++steps;
   }
@@ -392,16 +390,34 @@ void BM_DirectSpiral(benchmark::State& state) {
   state.counters["updates_restarted_fraction"] =
       static_cast<double>(statistics.updates_restarted) / communication_steps;
 }
-BENCHMARK(BM_DirectSpiral)
-    ->ArgNames({"smooth", "step_ms", "past_ms"})
-    ->Args({0, 1, 0})
-    ->Args({0, 10, 0})
-    ->Args({1, 1, 0})
-    ->Args({1, 10, 0})
-    ->Args({0, 1, 10})
-    ->Args({0, 10, 10})
-    ->Unit(benchmark::kMicrosecond)
-    ->MinTime(2.0);
+// The spirals' benchmarks, per communication step. Each runs for 2 s, or, with whole_spirals > 0, exactly
+// that many whole spirals: the same work in every run, for instruction counts (bench/count-instructions.sh).
+void registerSpirals(int whole_spirals) {
+  for (const int step_ms : {1, 10}) {
+    const auto span = [&](benchmark::internal::Benchmark* b) {
+      b->Unit(benchmark::kMicrosecond);
+      if (whole_spirals > 0) {
+        b->Iterations(static_cast<benchmark::IterationCount>(whole_spirals) *
+                      static_cast<benchmark::IterationCount>(spiral(step_ms).time.size() - 1));
+      } else {
+        b->MinTime(2.0);
+      }
+    };
+    benchmark::internal::Benchmark* fmu = benchmark::RegisterBenchmark("BM_FmuSpiral", BM_FmuSpiral);
+    fmu->ArgNames({"fmi", "all_outputs", "step_ms", "past_ms"});
+    for (const int past_ms : {0, 10}) {
+      fmu->Args({2, 0, step_ms, past_ms})->Args({3, 0, step_ms, past_ms});
+      if (step_ms == 1 && past_ms == 0) fmu->Args({2, 1, step_ms, past_ms});
+    }
+    span(fmu);
+    benchmark::internal::Benchmark* direct = benchmark::RegisterBenchmark("BM_DirectSpiral", BM_DirectSpiral);
+    direct->ArgNames({"smooth", "step_ms", "past_ms"})
+        ->Args({0, step_ms, 0})
+        ->Args({1, step_ms, 0})
+        ->Args({0, step_ms, 10});
+    span(direct);
+  }
+}
 
 // Remembers each benchmark's CPU time per step, to print the FMI layer's overhead at the end. CPU time,
 // not wall-clock time: on a shared machine it is what the step costs.
@@ -420,10 +436,31 @@ public:
 }  // namespace
 
 int main(int argc, char** argv) {
+  // --whole_spirals=N (ours, taken out before Google Benchmark reads the rest): see registerSpirals.
+  int whole_spirals = 0;
+  int kept = 1;
+  for (int i = 1; i < argc; ++i) {
+    const std::string argument = argv[i];
+    const std::string flag = "--whole_spirals=";
+    if (argument.rfind(flag, 0) != 0) {
+      argv[kept++] = argv[i];
+      continue;
+    }
+    const std::string count = argument.substr(flag.size());
+    if (count.empty() || count.size() > 3 || count.find_first_not_of("0123456789") != std::string::npos ||
+        std::stoi(count) < 1) {
+      std::fprintf(stderr, "fmu_bench: --whole_spirals takes a count from 1 to 999, not '%s'\n", count.c_str());
+      return 1;
+    }
+    whole_spirals = std::stoi(count);
+  }
+  argc = kept;
+  argv[argc] = nullptr;
   benchmark::Initialize(&argc, argv);
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
   spiral(1);  // planned before any timing
   spiral(10);
+  registerSpirals(whole_spirals);
   Reporter reporter;
   benchmark::RunSpecifiedBenchmarks(&reporter);
   // Per communication step: the direct run of that step, then the FMUs against it.
