@@ -6,6 +6,7 @@
 #include <cstdarg>
 #include <cstdio>
 #include <cstring>
+#include <type_traits>
 #include <vector>
 
 #include "fmu/demo_move.hpp"
@@ -85,6 +86,8 @@ enum SettableReal : unsigned char { kSettableBeforeSteps = 1, kSettableInSteps =
 // (fmi2Boolean is an int), the others exactly.
 template <typename T>
 double tableValue(int index, T value) {
+  // A real is a value of a Real variable, or of no variable set will take (no table look-up per value).
+  if constexpr (std::is_floating_point_v<T>) return static_cast<double>(value);
   return kVariables[index].type == table::Type::Boolean ? (value != T(0) ? 1.0 : 0.0) : static_cast<double>(value);
 }
 
@@ -100,6 +103,9 @@ struct VariableFlags {
   // demo move, not a desired input.
   unsigned char settable_real[table::kCount] = {};
   bool computed[table::kCount] = {};  // an output or the independent variable: computed by the FMU
+  // The same, packed in one word per variable for the loops of get and set, which read one word per value
+  // instead of one entry of each array (the Packed bits).
+  unsigned packed[table::kCount] = {};
   VariableFlags() {
     for (int i = 0; i < table::kCount; ++i) {
       type_bit[i] = typeBit(kVariables[i].type);
@@ -126,7 +132,14 @@ struct VariableFlags {
       if (input || tunable) settable_real[i] |= kSettableInSteps;
       if ((input && !desired_input[i]) || tunable) settable_real[i] |= kSettableInDemoSteps;
     }
+    for (int i = 0; i < table::kCount; ++i) {
+      packed[i] = type_bit[i] | (computed[i] ? kPackedComputed : 0u) | (desired_input[i] ? kPackedDesired : 0u) |
+                  group[i] << kPackedGroupShift | unsigned{settable_real[i]} << kPackedSettableShift;
+    }
   }
+  // The type bits (kReal ... kEnumeration) in bits 0-3, then these.
+  static constexpr unsigned kPackedComputed = 1u << 4, kPackedDesired = 1u << 5;
+  static constexpr unsigned kPackedGroupShift = 8, kPackedSettableShift = 16;
 };
 const VariableFlags kFlags;
 
@@ -671,26 +684,27 @@ Status Instance::get(const char* function, unsigned types, const std::uint32_t v
   if (count == 0) return Status::OK;
   if (!vrs) return nullArgument(function, "vr[]");
   if (!values) return nullArgument(function, "value[]");
-  unsigned groups = 0;
-  bool outputs = false;
+  // One packed word per value: the computed ones' bits (kPackedComputed and their groups) are or-ed.
+  unsigned computed = 0;
   for (std::size_t i = 0; i < count; ++i) {
     const int index = indexOf(vrs[i]);
     if (index < 0)
       return fail(Status::Error, function, "vr " + std::to_string(vrs[i]) + " is not a variable of this FMU");
-    if (!(kFlags.type_bit[index] & types)) {
+    const unsigned flags = kFlags.packed[index];
+    if (!(flags & types)) {
       return fail(
           Status::Error, function,
           describeVariable(index) + " is of type " + typeName(kVariables[index].type) + "; use its own function");
     }
-    if (kFlags.computed[index]) {
+    if (flags & VariableFlags::kPackedComputed) {
       if (state_.phase == kInstantiated) {
         return fail(Status::Error, function, describeVariable(index) + " is computed from initialization mode on");
       }
-      outputs = true;
-      groups |= kFlags.group[index];
+      computed |= flags;
     }
   }
-  if (outputs) {
+  if (computed & VariableFlags::kPackedComputed) {
+    const unsigned groups = (computed >> VariableFlags::kPackedGroupShift) & 0xFFu;
     if (state_.phase == kInitializationMode) {
       try {
         ensureInitialized();
@@ -759,18 +773,34 @@ Status Instance::set(const char* function, unsigned types, const std::uint32_t v
                                      : before_step    ? kSettableBeforeSteps
                                      : state_.demo    ? kSettableInDemoSteps
                                                       : kSettableInSteps;
+  const unsigned settable_bits = unsigned{settable_now} << VariableFlags::kPackedSettableShift;
+  bool common = true;  // every value passed the common case's test: all are reals, as given
   for (std::size_t i = 0; i < count; ++i) {
     const int index = indexOf(vrs[i]);
     if (index < 0) return checkSettable(function, types, vrs[i], index, 0.0, before_step);
     const double x = tableValue(index, values[i]);
-    if ((kFlags.settable_real[index] & settable_now) && std::isfinite(x) && x >= kVariables[index].min &&
+    if ((kFlags.packed[index] & settable_bits) && std::isfinite(x) && x >= kVariables[index].min &&
         x <= kVariables[index].max) {
       continue;
     }
+    common = false;
     const Status status = checkSettable(function, types, vrs[i], index, x, before_step);
     if (status != Status::OK) return status;
   }
   bool changed = false;
+  if (common && state_.desired_inputs_set) {
+    // Reals as given (no Boolean to convert), none of them the compensation mode (an enumeration), and
+    // the desired inputs already marked: only the values to compare and store.
+    double* table_values = state_.values.data();
+    for (std::size_t i = 0; i < count; ++i) {
+      double& value = table_values[kIndexByValueReference[vrs[i]]];  // checked by the first pass
+      const double x = static_cast<double>(values[i]);
+      if (sameBits(value, x)) continue;
+      value = x;
+      changed = true;
+    }
+    count = 0;  // done: the general loop below has nothing left
+  }
   for (std::size_t i = 0; i < count; ++i) {
     const int index = kIndexByValueReference[vrs[i]];  // checked by the first pass
     const double x = tableValue(index, values[i]);
