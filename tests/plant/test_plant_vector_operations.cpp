@@ -18,16 +18,24 @@ namespace {
 
 constexpr sunindextype kLength = 30;
 
+// count serial vectors (at least 3: x, y and z are the first three) and their context, freed on every way
+// out of a test, an ASSERT's early return included.
 struct Vectors {
-  Vectors() {
+  explicit Vectors(int count = 3) {
     SUNContext_Create(nullptr, &context);
-    for (N_Vector* v : {&x, &y, &z}) *v = N_VNew_Serial(kLength, context);
+    for (int k = 0; k < count; ++k) all.push_back(N_VNew_Serial(kLength, context));
+    x = all[0];
+    y = all[1];
+    z = all[2];
   }
   ~Vectors() {
-    for (N_Vector v : {x, y, z}) N_VDestroy(v);
+    for (N_Vector v : all) N_VDestroy(v);
     SUNContext_Free(&context);
   }
+  Vectors(const Vectors&) = delete;
+  Vectors& operator=(const Vectors&) = delete;
   SUNContext context = nullptr;
+  std::vector<N_Vector> all;
   N_Vector x = nullptr, y = nullptr, z = nullptr;
 };
 
@@ -100,8 +108,12 @@ TEST(PlantVectorOperations, EqualSundialsSerialBitForBit) {
 // fused operations: a scale and nvec - 1 linear sums), for 1 to 6 vectors, coefficients of 1, -1, 0 and
 // others, into a fourth vector and in place into the first or the third (read as summed so far).
 TEST(PlantVectorOperations, LinearCombinationEqualsSundialsGenericOneBitForBit) {
-  SUNContext context = nullptr;
-  ASSERT_EQ(SUNContext_Create(nullptr, &context), 0);
+  Vectors generic_vectors(7), fast_vectors(7);
+  std::vector<N_Vector>& generic = generic_vectors.all;
+  std::vector<N_Vector>& fast = fast_vectors.all;
+  for (N_Vector v : fast) useFastVectorOperations(v);
+  ASSERT_EQ(generic[0]->ops->nvlinearcombination, nullptr);  // Debian's serial vectors: the generic sum
+  ASSERT_NE(fast[0]->ops->nvlinearcombination, nullptr);
   std::mt19937_64 random(23);
   const double coefficients[] = {1.0, -1.0, 0.0, 0.37, -2.5, 2.5, 1e-3};
   std::uniform_int_distribution<int> pick(0, 6);
@@ -110,32 +122,21 @@ TEST(PlantVectorOperations, LinearCombinationEqualsSundialsGenericOneBitForBit) 
     for (int target = 0; target < 3; ++target) {  // into another vector, in place into X[0], into X[2]
       if (target == 2 && nvec < 3) continue;
       for (int draw = 0; draw < 20; ++draw) {
-        std::vector<N_Vector> generic, fast;
         std::vector<double> c;
         for (int k = 0; k < 7; ++k) {
-          generic.push_back(N_VNew_Serial(kLength, context));
-          fast.push_back(N_VNew_Serial(kLength, context));
-          useFastVectorOperations(fast.back());
-          fill(generic.back(), random);
-          N_VScale_Serial(1.0, generic.back(), fast.back());
+          fill(generic[k], random);
+          N_VScale_Serial(1.0, generic[k], fast[k]);
         }
-        ASSERT_EQ(generic[0]->ops->nvlinearcombination, nullptr);  // Debian's serial vectors: the generic sum
-        ASSERT_NE(fast[0]->ops->nvlinearcombination, nullptr);
         for (int k = 0; k < nvec; ++k) c.push_back(coefficients[pick(random)]);
         const int out = target == 0 ? 6 : target == 1 ? 0 : 2;
         ASSERT_EQ(N_VLinearCombination(nvec, c.data(), generic.data(), generic[out]), 0);
         ASSERT_EQ(N_VLinearCombination(nvec, c.data(), fast.data(), fast[out]), 0);
         EXPECT_TRUE(sameBits(generic[out], fast[out])) << nvec << " vectors, target " << target;
-        for (std::size_t k = 0; k < generic.size(); ++k) {
-          N_VDestroy(generic[k]);
-          N_VDestroy(fast[k]);
-        }
         ++cases;
       }
     }
   }
   EXPECT_EQ(cases, 320);
-  SUNContext_Free(&context);
 }
 
 }  // namespace
