@@ -28,6 +28,13 @@ Compensator::Compensator(const JointErrorModel& model, EffectMask mask, FixedPoi
     }
   }
   loads_read_kinematics_ = loadsReadKinematics(model, mask);
+  std::array<bool, kMaxJoints> active{};
+  for (const Transmission& transmission : transmission_errors_) {
+    for (const Harmonic& h : transmission.effect->harmonics()) active[static_cast<std::size_t>(h.joint)] = true;
+  }
+  for (int j = 0; j < model.robot().dof(); ++j) {
+    if (active[static_cast<std::size_t>(j)] || !other_command_effects_.empty()) active_joints_[active_count_++] = j;
+  }
   // G's nonzero entries row by row (the diagonal and the few couplings of a 6 x 6 matrix).
   const JointMatrix& g = model.gears().motorFromJoint();
   gear_row_start_[0] = 0;
@@ -118,9 +125,12 @@ FixedPointReport Compensator::compensateFrom(JointContext& ctx, const JointVecto
   checkJointVector(model_.robot(), correction_guess, "correction guess");
   const bool continue_anchors = anchors_set_;
   ctx.command.resize(ctx.q.size());
-  // Without command-dependent errors the answer is closed: the guess has nothing to add.
-  for (Eigen::Index j = 0; j < ctx.q.size(); ++j) {
-    ctx.command[j] = ctx.q[j] - (iterate_ ? correction_guess[j] : fixed_dq_[j]);
+  // Without command-dependent errors the answer is closed: the guess has nothing to add; nor has it for a
+  // joint that does not iterate.
+  for (Eigen::Index j = 0; j < ctx.q.size(); ++j) ctx.command[j] = ctx.q[j] - fixed_dq_[j];
+  for (int a = 0; a < active_count_; ++a) {
+    const int j = active_joints_[a];
+    ctx.command[j] = ctx.q[j] - correction_guess[j];
   }
   anchors_set_ = true;
   return iterate(ctx, reference, continue_anchors);
@@ -133,9 +143,21 @@ FixedPointReport Compensator::iterate(JointContext& ctx, JointVector& reference,
   slope_.resize(n);
   reference.resize(n);
   FixedPointReport report;
-  for (report.iterations = 1; report.iterations <= options_.max_iterations; ++report.iterations) {
+  // A joint that does not iterate is at its fixed point (its command is Q_theo less its fixed errors, the
+  // map's image of any command): the loops below visit the active joints only.
+  double fixed_check = 0.0;  // x * 0 is 0 for a finite x and not a number otherwise
+  for (Eigen::Index j = 0; j < n; ++j) {
+    reference[j] = ctx.q[j] - fixed_dq_[j];
+    fixed_check += reference[j] * 0.0;
+  }
+  const int* active = active_joints_.data();
+  // (A command-independent error that is not finite has no fixed point: no iteration, not converged.)
+  report.iterations = 1;
+  report.residual = fixed_check;
+  for (; fixed_check == 0.0 && report.iterations <= options_.max_iterations; ++report.iterations) {
     motorAngles(ctx.command, ctx.motor);
-    for (Eigen::Index j = 0; j < n; ++j) {
+    for (int a = 0; a < active_count_; ++a) {
+      const int j = active[a];
       dq_[j] = fixed_dq_[j];
       slope_[j] = 0.0;
     }
@@ -154,7 +176,8 @@ FixedPointReport Compensator::iterate(JointContext& ctx, JointVector& reference,
     // Their sum is finite when every change is (without a branch per joint); only when it is not are the
     // changes searched for the first that is not (a finite sum's overflow is no such change).
     double residual = 0.0, change_sum = 0.0;
-    for (Eigen::Index j = 0; j < n; ++j) {
+    for (int a = 0; a < active_count_; ++a) {
+      const int j = active[a];
       const double next = ctx.q[j] - dq_[j];
       const double change = std::abs(next - ctx.command[j]);
       residual = std::max(residual, change);
@@ -162,7 +185,8 @@ FixedPointReport Compensator::iterate(JointContext& ctx, JointVector& reference,
       reference[j] = next;
     }
     bool finite = true;
-    for (Eigen::Index j = 0; j < n && !std::isfinite(change_sum); ++j) {
+    for (int a = 0; a < active_count_ && !std::isfinite(change_sum); ++a) {
+      const int j = active[a];
       const double change = std::abs(reference[j] - ctx.command[j]);
       if (!std::isfinite(change)) {
         finite = false;
@@ -178,7 +202,8 @@ FixedPointReport Compensator::iterate(JointContext& ctx, JointVector& reference,
     if (!finite) break;
     // Newton on each joint: the error of joint j moves with its command by slope_j * G_jj (through its own
     // motor; a coupled motor's other terms are left to the iteration, which they slow only by their size).
-    for (Eigen::Index j = 0; j < n; ++j) {
+    for (int a = 0; a < active_count_; ++a) {
+      const int j = active[a];
       const double error_per_command = slopes_known ? slope_[j] * gear_diagonal_[j] : 0.0;
       const double step = reference[j] - ctx.command[j];
       // (not a number fails the test: the plain step)

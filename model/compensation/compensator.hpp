@@ -28,11 +28,11 @@ public:
   // converged reference leaves a joint's limits (a result that cannot be commanded is no result).
   FixedPointReport compensate(JointContext& ctx, JointVector& reference);
   // The same, starting from Q_theo - correction_guess (a guess of Q_theo - Q_ref) instead of from
-  // Q_theo less the command-independent errors. Along a dense path the previous point's correction is
-  // within a fraction of a microradian of this one's, and one Newton step then meets the tolerance: half
-  // the evaluations. The stopping test is the same, so the result is compensate()'s up to rounding. The
-  // harmonics' sines, and the joint angles' in the forward kinematics, continue from those of the previous
-  // call where it was near, so the result depends on earlier calls at the rounding level (1e-19 rad in the
+  // Q_theo less the command-independent errors (on the joints that iterate; the others need no guess). Along a dense
+  // path the previous point's correction is within a fraction of a microradian of this one's, and one Newton step then
+  // meets the tolerance: half the evaluations. The stopping test is the same, so the result is compensate()'s up to
+  // rounding. The harmonics' sines, and the joint angles' in the forward kinematics, continue from those of the
+  // previous call where it was near, so the result depends on earlier calls at the rounding level (1e-19 rad in the
   // error, 1e-19 in a sine of the pose), not beyond.
   FixedPointReport compensateFrom(JointContext& ctx, const JointVector& correction_guess, JointVector& reference);
 
@@ -81,6 +81,11 @@ private:
   // The rows with an entry off the diagonal (a coupled wrist): the others are their diagonal term alone.
   int coupled_row_count_ = 0;
   std::array<int, kMaxJoints> coupled_rows_{};
+  // The joints whose error depends on the command (a harmonic's joint; every joint when another effect does):
+  // only they iterate. Each other joint's reference is Q_theo less its command-independent errors from the
+  // first evaluation on, where the plain map leaves it (its change is exactly zero).
+  int active_count_ = 0;
+  std::array<int, kMaxJoints> active_joints_{};
 };
 
 struct TrajectoryCompensationReport {

@@ -503,6 +503,38 @@ TEST(Compensator, AnyFiniteGuessGivesTheSameReference) {
   EXPECT_THROW(compensator.compensateFrom(ctx, JointVector::Zero(5), from_guess), InvalidArgument);
 }
 
+// Only the joints with a command-dependent error iterate (the RX170's harmonics are on joints 1 to 3). The
+// others take Q_theo less their fixed errors at once: the compliance-only answer, bit for bit, whatever
+// the guess says for them; a guess exact on the iterating joints then needs one evaluation, however wrong
+// it is elsewhere. A fixed error that is not finite (a payload beyond any robot) is no fixed point.
+TEST(Compensator, OnlyJointsWithCommandErrorsIterate) {
+  const JointErrorModel model = rx170Model();
+  Compensator all(model, model.allEffects()), compliance_only(model, model.loadsAnd({"compliance"}));
+  const JointTrajectory& plan = plannedLine();
+  JointContext ctx(6);
+  JointVector reference, closed_form, from_guess;
+  for (std::size_t k = 0; k < plan.size(); k += 11) {
+    ctx.q = plan.q[k];
+    ctx.velocity = plan.qd[k];
+    ASSERT_TRUE(all.compensate(ctx, reference).converged);
+    ASSERT_TRUE(compliance_only.compensate(ctx, closed_form).converged);
+    for (int j = 3; j < 6; ++j) EXPECT_EQ(reference[j], closed_form[j]) << "point " << k << ", joint " << j + 1;
+    EXPECT_GT((reference - closed_form).head<3>().cwiseAbs().maxCoeff(), 1e-7);  // the harmonics do act there
+
+    JointVector guess = plan.q[k] - reference;
+    guess.tail<3>().array() += 0.3;  // rad: far off where it does not matter
+    const FixedPointReport report = all.compensateFrom(ctx, guess, from_guess);
+    ASSERT_TRUE(report.converged) << "point " << k;
+    EXPECT_EQ(report.iterations, 1) << "point " << k;
+    EXPECT_LT((from_guess - reference).cwiseAbs().maxCoeff(), 1e-13) << "point " << k;
+  }
+  ctx.q = plan.q[0];
+  ctx.payload_mass = 1e308;  // kg: its gravity torque overflows
+  const FixedPointReport overflowed = all.compensate(ctx, reference);
+  EXPECT_FALSE(overflowed.converged);
+  EXPECT_FALSE(std::isfinite(overflowed.residual));
+}
+
 // Command-dependent effects other than the harmonics go through the Effect interface: a periodic table
 // (with its slope: Newton steps) and an effect without a slope (plain steps) land on the plain fixed point.
 TEST(Compensator, OtherCommandEffectsLandOnThePlainFixedPoint) {
