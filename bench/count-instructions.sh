@@ -6,8 +6,9 @@
 # of run-benchmarks.sh and fmu_bench do (on a shared machine by up to half); an instruction is not a cycle,
 # so a count compares builds and code paths, and a timing says how fast.
 # Each FMU figure is the mean over one whole spiral (fmu_bench --whole_spirals=1), so that two builds count
-# the same work. About two minutes on one core.
-#   bench/count-instructions.sh [BUILD_DIR]   (default build/bench, built here in Release if needed)
+# the same work. About a minute on one core.
+#   bench/count-instructions.sh [BUILD_DIR]   (default build/bench; a folder without a CMake cache is
+#   configured here in Release, an existing one is only built, with its own settings)
 set -euo pipefail
 
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -21,7 +22,9 @@ for tool in valgrind callgrind_annotate; do
   fi
 done
 
-cmake -S . -B "$build_dir" -DCMAKE_BUILD_TYPE=Release -DJOINTCOMP_BUILD_TESTS=OFF >/dev/null
+if [ ! -f "$build_dir/CMakeCache.txt" ]; then
+  cmake -S . -B "$build_dir" -DCMAKE_BUILD_TYPE=Release -DJOINTCOMP_BUILD_TESTS=OFF >/dev/null
+fi
 cmake --build "$build_dir" --target fmu_bench compensation_bench plant_bench -j"$(nproc)" >/dev/null
 
 work="$(mktemp -d)"
