@@ -154,8 +154,18 @@ FixedPointReport Compensator::iterate(JointContext& ctx, JointVector& reference,
   // (A command-independent error that is not finite has no fixed point: no iteration, not converged.)
   report.iterations = 1;
   report.residual = fixed_check;
+  ctx.motor.resize(n);
   for (; fixed_check == 0.0 && report.iterations <= options_.max_iterations; ++report.iterations) {
-    motorAngles(ctx.command, ctx.motor);
+    // The motors the errors read, those of the active joints (all motors once the iteration ends): each row's
+    // nonzero terms summed from 0.0 as motorAngles sums them, so the same bits.
+    for (int a = 0; a < active_count_; ++a) {
+      const int i = active[a];
+      double sum = 0.0;
+      for (int e = gear_row_start_[i]; e < gear_row_start_[i + 1]; ++e) {
+        sum += gear_values_[e] * ctx.command[gear_columns_[e]];
+      }
+      ctx.motor[i] = sum;
+    }
     for (int a = 0; a < active_count_; ++a) {
       const int j = active[a];
       dq_[j] = fixed_dq_[j];
