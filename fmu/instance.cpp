@@ -155,6 +155,13 @@ bool isFixedParameter(int index) {
          kVariables[index].variability == table::Variability::Fixed;
 }
 
+// to = from, element by element: inline, where Eigen's assignment of a vector of run-time size is a call
+// (about 30 instructions for six values, four of them in every step).
+void copyJoints(const JointVector& from, JointVector& to) {
+  to.resize(from.size());
+  for (Eigen::Index j = 0; j < from.size(); ++j) to[j] = from[j];
+}
+
 Vector6 wrenchOf(const std::vector<double>& values) {
   Vector6 w;
   for (int k = 0; k < 6; ++k) w[k] = values[role::wrench[k]];
@@ -221,8 +228,7 @@ void Instance::log(Status status, const char* format, ...) {
   sink_(sink_context_, status, kCategoryNames[category], message.c_str());
 }
 
-bool Instance::allowed(const char* function, unsigned phases) {
-  if (state_.phase & phases) return true;
+bool Instance::refuse(const char* function, unsigned phases) {
   std::string list;
   for (unsigned bit = 1; bit < kAnyPhase; bit <<= 1) {
     if (phases & bit) list += std::string(list.empty() ? "" : ", ") + phaseName(bit);
@@ -395,8 +401,8 @@ Status Instance::ensureReference(const char* function) {
     }
   } else {
     JointContext& ctx = m.compensation_ctx;
-    ctx.q = q;
-    ctx.velocity = velocity;
+    copyJoints(q, ctx.q);
+    copyJoints(velocity, ctx.velocity);
     ctx.time = state_.time;
     ctx.tool_wrench = state_.values[role::compensate_wrench] != 0.0 ? wrenchOf(state_.values) : Vector6::Zero();
     try {
@@ -404,7 +410,7 @@ Status Instance::ensureReference(const char* function) {
     } catch (const UnreachableError& error) {
       return refused(error.what());
     }
-    reference_velocity_ = velocity;
+    copyJoints(velocity, reference_velocity_);
   }
   if (!report.converged) {
     char text[160];
@@ -598,7 +604,7 @@ Status Instance::doStep(const char* function, double current_time, double step, 
     return discard(error.what());
   }
   state_.has_earlier_step = state_.has_last_step;
-  state_.earlier_q_desired = state_.last_q_desired;
+  copyJoints(state_.last_q_desired, state_.earlier_q_desired);
   state_.earlier_step_time = state_.last_step_time;
   state_.has_last_step = true;
   for (int j = 0; j < table::kDof; ++j) state_.last_q_desired[j] = state_.values[role::q_desired[j]];

@@ -69,8 +69,11 @@ public:
   double time() const { return state_.time; }
 
   // State machine: true when the call is allowed in the current phase; otherwise logs why (naming the
-  // function, the phase and the phases it is allowed in) and returns false. Every FMI function starts here.
-  bool allowed(const char* function, unsigned phases);
+  // function, the phase and the phases it is allowed in) and returns false. Every FMI function starts here,
+  // so the test is inline and only the refusal is a call.
+  bool allowed(const char* function, unsigned phases) {
+    return (state_.phase & phases) != 0 || refuse(function, phases);
+  }
 
   // Logging, in the category of the status (logStatusError, logStatusDiscard, logStatusWarning; OK goes
   // to logCalls). Errors are always reported; the others when logging is on for their category.
@@ -123,6 +126,7 @@ public:
   double lastSuccessfulTime() const { return state_.time; }
 
 private:
+  bool refuse(const char* function, unsigned phases);  // allowed's refusal: logs why, returns false
   enum LogCategory { kLogWarning, kLogDiscard, kLogError, kLogCalls, kLogCategoryCount };
   // Groups of outputs computed together, lazily, as bits.
   enum OutputGroup : unsigned { kStateOutputs = 1u, kToolOutputs = 2u, kPredictedOutputs = 4u, kReferenceOutputs = 8u };
