@@ -63,7 +63,7 @@ import sys
 
 work = sys.argv[1]
 # A callee line of callgrind_annotate's calling tree: inclusive cost, ">", the function, its call count.
-callee = re.compile(r"^\s*([\d,]+)\s+(?:\([\d.]+%\)\s+)?>\s+(.*?)\s+\(([\d,]+)x\)")
+callee = re.compile(r"^\s*([\d,]+)\s+(?:\(\s*[\d.]+%\)\s+)?>\s+(.*?)\s+\(([\d,]+)x\)")
 
 def per_call(name, function):
     """Mean inclusive instructions per call of `function` (a substring of its name) in run `name`."""

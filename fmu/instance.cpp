@@ -6,6 +6,7 @@
 #include <cstdarg>
 #include <cstdio>
 #include <cstring>
+#include <limits>
 #include <type_traits>
 #include <vector>
 
@@ -113,9 +114,9 @@ struct VariableFlags {
                     kVariables[i].causality == table::Causality::Independent;
     }
     for (int j = 0; j < table::kDof; ++j) {
-      for (int index : {role::q_motor[j], role::qd_motor[j], role::q_link[j], role::qd_link[j], role::dq_actual[j]}) {
-        group[index] = 1u;  // kStateOutputs
-      }
+      group[role::q_link[j]] = 1u;  // kLinkOutputs
+      group[role::qd_link[j]] = 1u;
+      for (int index : {role::q_motor[j], role::qd_motor[j], role::dq_actual[j]}) group[index] = 16u;  // kMotorOutputs
       group[role::dq_predicted[j]] = 4u;  // kPredictedOutputs
       group[role::q_ref[j]] = 8u;         // kReferenceOutputs
       group[role::q_planned[j]] = 8u;
@@ -133,12 +134,12 @@ struct VariableFlags {
       if ((input && !desired_input[i]) || tunable) settable_real[i] |= kSettableInDemoSteps;
     }
     for (int i = 0; i < table::kCount; ++i) {
-      packed[i] = type_bit[i] | (computed[i] ? kPackedComputed : 0u) | (desired_input[i] ? kPackedDesired : 0u) |
-                  group[i] << kPackedGroupShift | unsigned{settable_real[i]} << kPackedSettableShift;
+      packed[i] = type_bit[i] | (computed[i] ? kPackedComputed : 0u) | group[i] << kPackedGroupShift |
+                  unsigned{settable_real[i]} << kPackedSettableShift;
     }
   }
   // The type bits (kReal ... kEnumeration) in bits 0-3, then these.
-  static constexpr unsigned kPackedComputed = 1u << 4, kPackedDesired = 1u << 5;
+  static constexpr unsigned kPackedComputed = 1u << 4;
   static constexpr unsigned kPackedGroupShift = 8, kPackedSettableShift = 16;
 };
 const VariableFlags kFlags;
@@ -375,7 +376,12 @@ Status Instance::ensureReference(const char* function) {
       for (int j = 0; j < table::kDof; ++j) {
         const double now_q = q[j], last_q = state_.last_q_desired[j], earlier_q = state_.earlier_q_desired[j];
         velocity[j] = now_q * now_weight - last_q * last_weight + earlier_q * earlier_weight;
-        acceleration[j] = ((now_q - last_q) / last - (last_q - earlier_q) / earlier) * curvature;
+      }
+      if (m.compensator_mode == kCompensationDynamic) {  // the only reader of the acceleration
+        for (int j = 0; j < table::kDof; ++j) {
+          const double now_q = q[j], last_q = state_.last_q_desired[j], earlier_q = state_.earlier_q_desired[j];
+          acceleration[j] = ((now_q - last_q) / last - (last_q - earlier_q) / earlier) * curvature;
+        }
       }
     } else {
       for (int j = 0; j < table::kDof; ++j) velocity[j] = (q[j] - state_.last_q_desired[j]) / last;
@@ -456,14 +462,18 @@ Status Instance::updateOutputs(const char* function, unsigned groups) {
     }
   }
   const FlexibleJointPlant& plant = *m.plant;
-  if (missing & (kStateOutputs | kToolOutputs | kPredictedOutputs)) {
+  if (missing & (kLinkOutputs | kMotorOutputs | kToolOutputs | kPredictedOutputs)) {
     constexpr int n = table::kDof;
     const double* y = plant.state();
     const Eigen::Map<const Eigen::VectorXd> q(y, n), qd(y + n, n), p(y + 2 * n, n), pd(y + 3 * n, n);
-    if (missing & kStateOutputs) {
+    if (missing & kLinkOutputs) {
       for (int j = 0; j < table::kDof; ++j) {
         state_.values[role::q_link[j]] = q[j];
         state_.values[role::qd_link[j]] = qd[j];
+      }
+    }
+    if (missing & kMotorOutputs) {
+      for (int j = 0; j < table::kDof; ++j) {
         state_.values[role::q_motor[j]] = p[j];
         state_.values[role::qd_motor[j]] = pd[j];
         state_.values[role::dq_actual[j]] = q[j] - p[j];
@@ -579,10 +589,11 @@ Status Instance::doStep(const char* function, double current_time, double step, 
     if (last_successful_time) *last_successful_time = state_.time;
     return reference;
   }
-  const Vector6 wrench = wrenchOf(state_.values);
-  if (wrench != state_.applied_wrench) {
-    plant.setToolWrench(wrench);
-    state_.applied_wrench = wrench;
+  bool wrench_changed = false;
+  for (int k = 0; k < 6; ++k) wrench_changed |= state_.values[role::wrench[k]] != state_.applied_wrench[k];
+  if (wrench_changed) {
+    state_.applied_wrench = wrenchOf(state_.values);
+    plant.setToolWrench(state_.applied_wrench);
   }
   plant.setReference(reference_, reference_velocity_);
   // CVODE failed (SolverError: the plant stays at its last good time), or the watchdog stopped a run that
@@ -690,23 +701,39 @@ Status Instance::get(const char* function, unsigned types, const std::uint32_t v
   if (count == 0) return Status::OK;
   if (!vrs) return nullArgument(function, "vr[]");
   if (!values) return nullArgument(function, "value[]");
+  // From the end of initialisation on, whether a list may be read depends only on the function's types.
+  const bool stepping = state_.phase != kInstantiated && state_.phase != kInitializationMode;
   // One packed word per value: the computed ones' bits (kPackedComputed and their groups) are or-ed.
   unsigned computed = 0;
-  for (std::size_t i = 0; i < count; ++i) {
-    const int index = indexOf(vrs[i]);
-    if (index < 0)
-      return fail(Status::Error, function, "vr " + std::to_string(vrs[i]) + " is not a variable of this FMU");
-    const unsigned flags = kFlags.packed[index];
-    if (!(flags & types)) {
-      return fail(
-          Status::Error, function,
-          describeVariable(index) + " is of type " + typeName(kVariables[index].type) + "; use its own function");
-    }
-    if (flags & VariableFlags::kPackedComputed) {
-      if (state_.phase == kInstantiated) {
-        return fail(Status::Error, function, describeVariable(index) + " is computed from initialization mode on");
+  const bool planned = stepping && get_plan_.matches(vrs, count, types);
+  if (planned) {
+    computed = get_plan_.computed;
+  } else {
+    for (std::size_t i = 0; i < count; ++i) {
+      const int index = indexOf(vrs[i]);
+      if (index < 0)
+        return fail(Status::Error, function, "vr " + std::to_string(vrs[i]) + " is not a variable of this FMU");
+      const unsigned flags = kFlags.packed[index];
+      if (!(flags & types)) {
+        return fail(
+            Status::Error, function,
+            describeVariable(index) + " is of type " + typeName(kVariables[index].type) + "; use its own function");
       }
-      computed |= flags;
+      if (flags & VariableFlags::kPackedComputed) {
+        if (state_.phase == kInstantiated) {
+          return fail(Status::Error, function, describeVariable(index) + " is computed from initialization mode on");
+        }
+        computed |= flags;
+      }
+    }
+    if (stepping && count <= ValuePlan::kCapacity) {
+      get_plan_.count = count;
+      get_plan_.key = types;
+      get_plan_.computed = computed;
+      for (std::size_t i = 0; i < count; ++i) {
+        get_plan_.vrs[i] = vrs[i];
+        get_plan_.index[i] = kIndexByValueReference[vrs[i]];  // checked above
+      }
     }
   }
   if (computed & VariableFlags::kPackedComputed) {
@@ -726,7 +753,12 @@ Status Instance::get(const char* function, unsigned types, const std::uint32_t v
   }
   // The table holds a Boolean as 0 or 1 (its start values, set's tableValue, a deserialised state's check), so
   // every value converts as it is.
-  for (std::size_t i = 0; i < count; ++i) values[i] = static_cast<T>(state_.values[kIndexByValueReference[vrs[i]]]);
+  const double* table_values = state_.values.data();
+  if (planned) {
+    for (std::size_t i = 0; i < count; ++i) values[i] = static_cast<T>(table_values[get_plan_.index[i]]);
+  } else {
+    for (std::size_t i = 0; i < count; ++i) values[i] = static_cast<T>(table_values[kIndexByValueReference[vrs[i]]]);
+  }
   return Status::OK;
 }
 
@@ -765,6 +797,21 @@ Status Instance::checkSettable(const char* function, unsigned types, std::uint32
   return checkValue(function, index, value);
 }
 
+void Instance::storeReals(const std::int16_t index[], const double values[], std::size_t count) {
+  double* table_values = state_.values.data();
+  bool changed = false;
+  for (std::size_t i = 0; i < count; ++i) {
+    double& value = table_values[index[i]];
+    changed |= !sameBits(value, values[i]);
+    value = values[i];
+  }
+  if (changed) {
+    if (state_.phase == kInitializationMode) state_.initialized = false;
+    reference_valid_ = false;
+    outputs_valid_ &= ~kReferenceOutputs;
+  }
+}
+
 template <typename T>
 Status Instance::set(const char* function, unsigned types, const std::uint32_t vrs[], std::size_t count,
                      const T values[]) {
@@ -772,15 +819,30 @@ Status Instance::set(const char* function, unsigned types, const std::uint32_t v
   if (!vrs) return nullArgument(function, "vr[]");
   if (!values) return nullArgument(function, "value[]");
   const bool before_step = state_.phase == kInstantiated || state_.phase == kInitializationMode;
-  // Everything is checked before anything is set: a refused call changes nothing. The common case (a
-  // real that may be set now, finite and within its range) passes on one lookup and three compares;
-  // anything else goes through the full checks, which name what is wrong.
+  // Everything is checked before anything is set: a refused call changes nothing. The common case is a list
+  // of reals that may all be set now, finite and within their ranges, with the desired inputs already marked
+  // (so that storing is all there is to do: no Boolean to convert, no enumeration such as the compensation
+  // mode). It passes on one lookup and three compares per value, and a list seen before on two compares per
+  // value; anything else goes through the full checks, which name what is wrong.
   const unsigned char settable_now = !(types & kReal) ? 0
                                      : before_step    ? kSettableBeforeSteps
                                      : state_.demo    ? kSettableInDemoSteps
                                                       : kSettableInSteps;
   const unsigned settable_bits = unsigned{settable_now} << VariableFlags::kPackedSettableShift;
-  bool common = true;  // every value passed the common case's test: all are reals, as given
+  if constexpr (std::is_same_v<T, double>) {
+    if (settable_bits != 0 && state_.desired_inputs_set && set_plan_.matches(vrs, count, settable_bits)) {
+      bool in_range = true;
+      for (std::size_t i = 0; i < count; ++i) {
+        in_range &= (values[i] >= set_plan_.lowest[i]) & (values[i] <= set_plan_.highest[i]);
+      }
+      if (in_range) {
+        storeReals(set_plan_.index, values, count);
+        return Status::OK;
+      }
+      // A value out of its range or not finite: the checks below name it.
+    }
+  }
+  bool common = true;  // every value passed the common case's test
   for (std::size_t i = 0; i < count; ++i) {
     const int index = indexOf(vrs[i]);
     if (index < 0) return checkSettable(function, types, vrs[i], index, 0.0, before_step);
@@ -793,20 +855,22 @@ Status Instance::set(const char* function, unsigned types, const std::uint32_t v
     const Status status = checkSettable(function, types, vrs[i], index, x, before_step);
     if (status != Status::OK) return status;
   }
-  bool changed = false;
-  if (common && state_.desired_inputs_set) {
-    // Reals as given (no Boolean to convert), none of them the compensation mode (an enumeration), and
-    // the desired inputs already marked: only the values to compare and store.
-    double* table_values = state_.values.data();
-    for (std::size_t i = 0; i < count; ++i) {
-      double& value = table_values[kIndexByValueReference[vrs[i]]];  // checked by the first pass
-      const double x = static_cast<double>(values[i]);
-      if (sameBits(value, x)) continue;
-      value = x;
-      changed = true;
+  if constexpr (std::is_same_v<T, double>) {
+    if (common && state_.desired_inputs_set && count <= ValuePlan::kCapacity) {
+      set_plan_.count = count;
+      set_plan_.key = settable_bits;
+      for (std::size_t i = 0; i < count; ++i) {
+        const int index = kIndexByValueReference[vrs[i]];  // checked above
+        set_plan_.vrs[i] = vrs[i];
+        set_plan_.index[i] = static_cast<std::int16_t>(index);
+        set_plan_.lowest[i] = std::max(kVariables[index].min, std::numeric_limits<double>::lowest());
+        set_plan_.highest[i] = std::min(kVariables[index].max, std::numeric_limits<double>::max());
+      }
+      storeReals(set_plan_.index, values, count);
+      return Status::OK;
     }
-    count = 0;  // done: the general loop below has nothing left
   }
+  bool changed = false;
   for (std::size_t i = 0; i < count; ++i) {
     const int index = kIndexByValueReference[vrs[i]];  // checked by the first pass
     const double x = tableValue(index, values[i]);

@@ -29,6 +29,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
 #include <memory>
 #include <string>
 #include <vector>
@@ -128,8 +129,14 @@ public:
 private:
   bool refuse(const char* function, unsigned phases);  // allowed's refusal: logs why, returns false
   enum LogCategory { kLogWarning, kLogDiscard, kLogError, kLogCalls, kLogCategoryCount };
-  // Groups of outputs computed together, lazily, as bits.
-  enum OutputGroup : unsigned { kStateOutputs = 1u, kToolOutputs = 2u, kPredictedOutputs = 4u, kReferenceOutputs = 8u };
+  // Groups of outputs computed together, lazily, as bits (a get computes only the groups it reads).
+  enum OutputGroup : unsigned {
+    kLinkOutputs = 1u,
+    kToolOutputs = 2u,
+    kPredictedOutputs = 4u,
+    kReferenceOutputs = 8u,
+    kMotorOutputs = 16u,
+  };
   struct Models;
 
   bool ownsState(const Snapshot* state) const;
@@ -148,6 +155,26 @@ private:
   Status checkSettable(const char* function, unsigned types, std::uint32_t vr, int index, double value,
                        bool before_step);
   bool fixedParametersDiffer(const std::vector<double>& values) const;
+  // Stores reals that passed set's checks, at their table indices, and drops what depended on them.
+  void storeReals(const std::int16_t index[], const double values[], std::size_t count);
+
+  // A list of value references resolved once. Importers pass the same list at every step (the inputs to
+  // set, the outputs to read), so get and set look its variables up and check what does not depend on the
+  // values (unknown references, types, causality, the phase) at the first call, and reuse that while the
+  // list, compared by content, and `key`, what those checks depended on, are the same.
+  struct ValuePlan {
+    static constexpr std::size_t kCapacity = 64;  // a longer list takes the general path every time
+    std::size_t count = 0;                        // 0: no plan
+    unsigned key = 0;
+    unsigned computed = 0;  // get: the packed flags of its computed variables, or-ed (which outputs to update)
+    std::uint32_t vrs[kCapacity];
+    std::int16_t index[kCapacity];  // into table::kVariables and the instance's values
+    // set: each variable's range as finite bounds, so that one pair of compares also refuses NaN and infinity.
+    double lowest[kCapacity], highest[kCapacity];
+    bool matches(const std::uint32_t list[], std::size_t n, unsigned k) const {
+      return n == count && k == key && std::memcmp(list, vrs, n * sizeof vrs[0]) == 0;
+    }
+  };
 
   std::string name_;
   LogSink sink_;
@@ -163,6 +190,7 @@ private:
   JointVector reference_velocity_;                       // v for the current inputs
   JointVector planned_{JointVector::Zero(table::kDof)};  // Q_theo: the q_desired inputs, or the demo move
   OnlineDynamicState dynamic_after_;                     // compensation = dynamic: the filter with the current sample
+  ValuePlan get_plan_, set_plan_;                        // the last lists of get and of set (of reals)
 
   std::vector<std::unique_ptr<Snapshot>> states_;
 };

@@ -200,6 +200,10 @@ struct FlexibleJointPlant::Solver {
   SUNContext context = nullptr;
   N_Vector y = nullptr;
   N_Vector y_now = nullptr;  // the state at the plant's time when CVODE is ahead of it (step_past_updates_s)
+  // Their data, which stays where it is for the vectors' lives: now() reads it on every output, and
+  // N_VGetArrayPointer is a call through the vector's operations table.
+  double* y_data = nullptr;
+  double* y_now_data = nullptr;
   N_Vector absolute_tolerances = nullptr;
   SUNMatrix jacobian = nullptr;
   SUNLinearSolver linear_solver = nullptr;
@@ -393,6 +397,8 @@ FlexibleJointPlant::FlexibleJointPlant(const JointErrorModel& truth, std::vector
   s.y_now = N_VNew_Serial(stateSize(), s.context);
   s.jacobian = SUNDenseMatrix(stateSize(), stateSize(), s.context);
   if (!s.y || !s.y_now || !s.jacobian) throw SolverError("plant: SUNDIALS could not allocate the state");
+  s.y_data = N_VGetArrayPointer(s.y);
+  s.y_now_data = N_VGetArrayPointer(s.y_now);
   useFastVectorOperations(s.y);  // before CVODE clones its own vectors from it
   // CVodeGetDky interpolates into y_now at every update that CVODE stepped past: without these, SUNDIALS'
   // unoptimised serial sums were a tenth of a 1 ms FMU step.
@@ -1243,7 +1249,7 @@ int FlexibleJointPlant::integratePast(double end_time, double cvode_time, long b
   return flag;
 }
 
-const double* FlexibleJointPlant::now() const { return N_VGetArrayPointer(ahead_ ? solver_->y_now : solver_->y); }
+const double* FlexibleJointPlant::now() const { return ahead_ ? solver_->y_now_data : solver_->y_data; }
 
 // PlantOptions::even_steps: one CVODE step per call. When what is left of the advance is more than CVODE's
 // planned step but less than two, the stop time is set at its middle, so that the advance ends in two equal
