@@ -44,8 +44,9 @@ private:
   // kinematics' sines from the joint angles' anchors (set by the previous call along the path, or here).
   void prepare(JointContext& ctx, bool along_path);
   // From the start in ctx.command to the fixed point; continue_anchors: the harmonics' anchors of the
-  // previous call are a valid start.
-  FixedPointReport iterate(JointContext& ctx, JointVector& reference, bool continue_anchors);
+  // previous call are a valid start; cold_start: the start is Q_theo less the command-independent errors (not a
+  // guess), a whole command-dependent error from the fixed point.
+  FixedPointReport iterate(JointContext& ctx, JointVector& reference, bool continue_anchors, bool cold_start);
   // motor = G * command.
   void motorAngles(const JointVector& command, JointVector& motor) const;
 
@@ -71,7 +72,7 @@ private:
   JointAngleAnchors joint_anchors_;  // the joint angles' sines and cosines, by compensateFrom
   bool joint_anchors_set_ = false;
   std::vector<int> other_command_effects_;
-  JointVector fixed_dq_, dq_, slope_;
+  JointVector fixed_dq_, dq_, slope_, second_, third_;  // slope_, second_, third_: dQ's derivatives by the motor angle
   // G's nonzero entries row by row, and its diagonal, in place: the iteration reads them without a pointer chase.
   int gear_entry_count_ = 0;
   std::array<int, kMaxJoints + 1> gear_row_start_{};

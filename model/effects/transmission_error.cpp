@@ -105,6 +105,23 @@ void TransmissionErrorEffect::addJointErrorAndMotorSlope(const JointContext& ctx
   }
 }
 
+void TransmissionErrorEffect::addJointErrorAndMotorDerivatives(const JointContext& ctx, Anchor* anchors,
+                                                               bool reuse_anchors, JointVector& dq, JointVector& slope,
+                                                               JointVector& second, JointVector& third) const {
+  for (std::size_t i = 0; i < harmonics_.size(); ++i) {
+    const Harmonic& h = harmonics_[i];
+    const double rate = phase_per_motor_[i];
+    const double phase = ctx.motor[h.joint] * rate + h.phase_rad;
+    double sine, cosine;
+    sinCosNear(phase, reuse_anchors, anchors[i], sine, cosine);
+    const double amplitude_sine = h.amplitude_rad * sine, amplitude_cosine = h.amplitude_rad * rate * cosine;
+    dq[h.joint] += amplitude_sine;
+    slope[h.joint] += amplitude_cosine;
+    second[h.joint] -= amplitude_sine * (rate * rate);
+    third[h.joint] -= amplitude_cosine * (rate * rate);
+  }
+}
+
 std::vector<std::string> TransmissionErrorEffect::parameterNames() const {
   std::vector<std::string> names;
   for (const Harmonic& h : harmonics_) {

@@ -43,6 +43,10 @@ public:
   static constexpr double kNearAnchor = kSinCosNearAnchor;  // rad of phase
   void addJointErrorAndMotorSlope(const JointContext& ctx, Anchor* anchors, bool reuse_anchors, JointVector& dq,
                                   JointVector& slope) const;
+  // The same, and the error's second and third derivatives with respect to the motor angle (a harmonic's are
+  // its sine and cosine again, times powers of its phase rate): the compensator's higher-order step.
+  void addJointErrorAndMotorDerivatives(const JointContext& ctx, Anchor* anchors, bool reuse_anchors, JointVector& dq,
+                                        JointVector& slope, JointVector& second, JointVector& third) const;
   // For the plant's right-hand side: addJointError and addMotorSlope in one pass with their own arithmetic
   // (the same bits as the two calls), each harmonic's phase once and its sine and cosine together.
   void addJointErrorAndMotorSlope(const JointContext& ctx, JointVector& dq, JointVector& slope) const;

@@ -373,7 +373,8 @@ TEST(Compensator, AReferenceBeyondTheJointLimitsIsAnError) {
 
 // The Newton iteration, cold (compensate) and from the previous point's correction (compensateFrom),
 // and compensateTrajectory land on the plain fixed point to rounding, along the line, along the paper's
-// spiral and at random poses; from the previous correction they need fewer evaluations.
+// spiral and at random poses. Cold, the higher-order first step meets the tolerance at the second evaluation
+// of the error (Newton alone took three); from the previous correction Newton does, and never needs more.
 TEST(Compensator, NewtonStepsLandOnThePlainFixedPoint) {
   const JointErrorModel model = rx170Model();
   const EffectMask mask = model.allEffects();
@@ -387,7 +388,7 @@ TEST(Compensator, NewtonStepsLandOnThePlainFixedPoint) {
     JointVector cold_reference, along_reference, correction;
     std::vector<JointVector> trajectory_references;
     compensateTrajectory(model, mask, plan->q, plan->qd, trajectory_references);
-    int cold_evaluations = 0, along_evaluations = 0, along_most = 0;
+    int cold_evaluations = 0, along_evaluations = 0, along_most = 0, cold_most = 0;
     for (std::size_t k = 0; k < plan->size(); ++k) {
       const JointVector plain = plainFixedPoint(model, mask, plan->q[k]);
       from_former =
@@ -402,6 +403,7 @@ TEST(Compensator, NewtonStepsLandOnThePlainFixedPoint) {
       cold_evaluations += cold_report.iterations;
       along_evaluations += along_report.iterations;
       if (k > 0) along_most = std::max(along_most, along_report.iterations);
+      cold_most = std::max(cold_most, cold_report.iterations);
       for (const JointVector* reference : {&cold_reference, &along_reference, &trajectory_references[k]}) {
         largest = std::max(largest, (*reference - plain).cwiseAbs().maxCoeff());
       }
@@ -411,7 +413,8 @@ TEST(Compensator, NewtonStepsLandOnThePlainFixedPoint) {
               << static_cast<double>(cold_evaluations) / plan->size() << " cold, "
               << static_cast<double>(along_evaluations) / plan->size() << " from the previous correction\n";
     EXPECT_LE(along_most, 2) << name;
-    EXPECT_LT(along_evaluations, cold_evaluations) << name;
+    EXPECT_LE(cold_most, 2) << name;
+    EXPECT_LE(along_evaluations, cold_evaluations) << name;
   }
   std::mt19937 rng(31u);
   Compensator compensator(model, mask);

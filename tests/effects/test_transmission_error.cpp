@@ -261,6 +261,51 @@ TEST(TransmissionError, AnchoredValueAndSlopeMatchTheDirectSums) {
   EXPECT_GT(reanchored, 0);  // the largest moves did leave the anchors
 }
 
+// The compensator's higher-order first step reads the error's second and third derivatives by the motor
+// angle: central differences of the slope and of the second derivative, at random motor angles; its value
+// and slope are addJointErrorAndMotorSlope's, bit for bit.
+TEST(TransmissionError, SecondAndThirdDerivativesAreDifferencesOfTheSlopeAndTheSecond) {
+  const JointErrorModel model = effects_test::rx170Model();
+  const Robot& robot = model.robot();
+  const auto& effect =
+      dynamic_cast<const TransmissionErrorEffect&>(model.effect(model.findEffect(TransmissionErrorEffect::kType)));
+  const int n = robot.dof();
+  std::vector<TransmissionErrorEffect::Anchor> anchors(effect.harmonics().size());
+  struct Derivatives {
+    JointVector dq, slope, second, third;
+  };
+  const auto derivatives = [&](const JointContext& ctx) {
+    Derivatives d{JointVector::Zero(n), JointVector::Zero(n), JointVector::Zero(n), JointVector::Zero(n)};
+    effect.addJointErrorAndMotorDerivatives(ctx, anchors.data(), false, d.dq, d.slope, d.second, d.third);
+    return d;
+  };
+  std::mt19937 rng(41u);
+  std::uniform_real_distribution<double> motor_angle(-300.0, 300.0);
+  int curved = 0;
+  for (int sample = 0; sample < 40; ++sample) {
+    JointContext ctx(n);
+    for (int j = 0; j < n; ++j) ctx.motor[j] = motor_angle(rng);
+    const Derivatives at = derivatives(ctx);
+    JointVector dq = JointVector::Zero(n), slope = JointVector::Zero(n);
+    effect.addJointErrorAndMotorSlope(ctx, anchors.data(), false, dq, slope);
+    EXPECT_EQ(at.dq, dq) << "sample " << sample;
+    EXPECT_EQ(at.slope, slope) << "sample " << sample;
+    for (int j = 0; j < n; ++j) {
+      constexpr double kStep = 1e-4;  // rad of motor angle
+      JointContext ahead = ctx, behind = ctx;
+      ahead.motor[j] += kStep;
+      behind.motor[j] -= kStep;
+      const Derivatives up = derivatives(ahead), down = derivatives(behind);
+      const double second = (up.slope[j] - down.slope[j]) / (2 * kStep);
+      const double third = (up.second[j] - down.second[j]) / (2 * kStep);
+      EXPECT_NEAR(at.second[j], second, 1e-6 * std::abs(second) + 1e-15) << "sample " << sample << ", joint " << j;
+      EXPECT_NEAR(at.third[j], third, 1e-6 * std::abs(third) + 1e-15) << "sample " << sample << ", joint " << j;
+      curved += at.second[j] != 0.0 && at.third[j] != 0.0;
+    }
+  }
+  EXPECT_GT(curved, 40);  // the harmonics' joints do curve (1-3 on the RX170)
+}
+
 // The plant's one-pass evaluation gives addJointError's and addMotorSlope's bits (the plant's stored
 // regressions rest on it), at random motor angles over many turns, added onto values already there.
 TEST(TransmissionError, OnePassValueAndSlopeAreTheTwoCallsBitForBit) {
