@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "fmu/demo_move.hpp"
+#include "fmu/value_blocks.hpp"
 #include "fmu/variable_binding.hpp"
 #include "model/common/bits.hpp"
 #include "model/common/errors.hpp"
@@ -114,8 +115,8 @@ struct VariableFlags {
                     kVariables[i].causality == table::Causality::Independent;
     }
     for (int j = 0; j < table::kDof; ++j) {
-      group[role::q_link[j]] = 1u;  // kLinkOutputs
-      group[role::qd_link[j]] = 1u;
+      group[role::q_link[j]] = 1u;    // kLinkOutputs
+      group[role::qd_link[j]] = 32u;  // kLinkVelocityOutputs
       for (int index : {role::q_motor[j], role::qd_motor[j], role::dq_actual[j]}) group[index] = 16u;  // kMotorOutputs
       group[role::dq_predicted[j]] = 4u;  // kPredictedOutputs
       group[role::q_ref[j]] = 8u;         // kReferenceOutputs
@@ -156,11 +157,24 @@ bool isFixedParameter(int index) {
          kVariables[index].variability == table::Variability::Fixed;
 }
 
-// to = from, element by element: inline, where Eigen's assignment of a vector of run-time size is a call
-// (about 30 instructions for six values, four of them in every step).
+// to = from, the FMU's kDof joints (every joint vector of the instance has them): a copy of known length,
+// unrolled, where Eigen's assignment of a vector of run-time size is a call to memcpy or a loop with checks
+// for aliasing (20 to 30 instructions for six values, three copies in every step).
+constexpr bool consecutive(const int (&indices)[table::kDof]) {
+  for (int j = 0; j < table::kDof; ++j) {
+    if (indices[j] != indices[0] + j) return false;
+  }
+  return true;
+}
+static_assert(consecutive(role::q_desired), "doStep copies q_desired as one block of the table");
+
+// The two never overlap (__restrict), so that the copy goes two values at a time.
+void copyJointValues(const double* __restrict from, double* __restrict to) {
+  for (int j = 0; j < table::kDof; ++j) to[j] = from[j];
+}
 void copyJoints(const JointVector& from, JointVector& to) {
-  to.resize(from.size());
-  for (Eigen::Index j = 0; j < from.size(); ++j) to[j] = from[j];
+  to.resize(table::kDof);
+  copyJointValues(from.data(), to.data());
 }
 
 Vector6 wrenchOf(const std::vector<double>& values) {
@@ -229,14 +243,13 @@ void Instance::log(Status status, const char* format, ...) {
   sink_(sink_context_, status, kCategoryNames[category], message.c_str());
 }
 
-bool Instance::refuse(const char* function, unsigned phases) {
+void Instance::refuse(const char* function, unsigned phases) {
   std::string list;
   for (unsigned bit = 1; bit < kAnyPhase; bit <<= 1) {
     if (phases & bit) list += std::string(list.empty() ? "" : ", ") + phaseName(bit);
   }
   log(Status::Error, "%s: not allowed in state %s (allowed in: %s)", function, phaseName(state_.phase),
       list.empty() ? "no state of this FMU" : list.c_str());
-  return false;
 }
 
 Status Instance::fail(Status status, const char* function, const std::string& what) {
@@ -395,8 +408,8 @@ Status Instance::ensureReference(const char* function) {
   FixedPointReport report;
   report.converged = true;
   if (m.compensator_mode == 0) {
-    reference_ = q;
-    reference_velocity_ = velocity;
+    copyJoints(q, reference_);
+    copyJoints(velocity, reference_velocity_);
   } else if (m.compensator_mode == kCompensationDynamic) {
     const Vector6 wrench = state_.values[role::compensate_wrench] != 0.0 ? wrenchOf(state_.values) : Vector6::Zero();
     try {
@@ -462,15 +475,15 @@ Status Instance::updateOutputs(const char* function, unsigned groups) {
     }
   }
   const FlexibleJointPlant& plant = *m.plant;
-  if (missing & (kLinkOutputs | kMotorOutputs | kToolOutputs | kPredictedOutputs)) {
+  if (missing & (kLinkOutputs | kLinkVelocityOutputs | kMotorOutputs | kToolOutputs | kPredictedOutputs)) {
     constexpr int n = table::kDof;
     const double* y = plant.state();
     const Eigen::Map<const Eigen::VectorXd> q(y, n), qd(y + n, n), p(y + 2 * n, n), pd(y + 3 * n, n);
     if (missing & kLinkOutputs) {
-      for (int j = 0; j < table::kDof; ++j) {
-        state_.values[role::q_link[j]] = q[j];
-        state_.values[role::qd_link[j]] = qd[j];
-      }
+      for (int j = 0; j < table::kDof; ++j) state_.values[role::q_link[j]] = q[j];
+    }
+    if (missing & kLinkVelocityOutputs) {
+      for (int j = 0; j < table::kDof; ++j) state_.values[role::qd_link[j]] = qd[j];
     }
     if (missing & kMotorOutputs) {
       for (int j = 0; j < table::kDof; ++j) {
@@ -549,7 +562,27 @@ Status Instance::exitInitializationMode(const char* function) {
   return Status::OK;
 }
 
-Status Instance::doStep(const char* function, double current_time, double step, double* last_successful_time) {
+Status Instance::internalErrorOfCurrentException(const char* function) noexcept {
+  try {
+    throw;
+  } catch (const std::exception& error) {
+    return internalError(function, error.what());
+  } catch (...) {
+    return internalError(function, "unknown exception");
+  }
+}
+
+Status Instance::doStep(const char* function, double current_time, double step, double* last_successful_time) noexcept {
+  try {
+    return doStepUnguarded(function, current_time, step, last_successful_time);
+  } catch (...) {
+    return internalErrorOfCurrentException(function);
+  }
+}
+
+// Inlined into doStep, which is then the only frame between the glue and the plant.
+[[gnu::always_inline]] inline Status Instance::doStepUnguarded(const char* function, double current_time, double step,
+                                                               double* last_successful_time) {
   if (!std::isfinite(current_time) || !std::isfinite(step) || !(step > 0.0)) {
     char text[160];
     std::snprintf(text, sizeof text,
@@ -589,36 +622,28 @@ Status Instance::doStep(const char* function, double current_time, double step, 
     if (last_successful_time) *last_successful_time = state_.time;
     return reference;
   }
-  bool wrench_changed = false;
-  for (int k = 0; k < 6; ++k) wrench_changed |= state_.values[role::wrench[k]] != state_.applied_wrench[k];
-  if (wrench_changed) {
+  // Compared by bits, or-ed without a branch per value (a wrench of -0 for 0 is applied again, harmlessly).
+  std::uint64_t wrench_bits_differ = 0;
+  for (int k = 0; k < 6; ++k)
+    wrench_bits_differ |= bitsOf(state_.values[role::wrench[k]]) ^ bitsOf(state_.applied_wrench[k]);
+  if (wrench_bits_differ != 0) {
     state_.applied_wrench = wrenchOf(state_.values);
     plant.setToolWrench(state_.applied_wrench);
   }
   plant.setReference(reference_, reference_velocity_);
-  // CVODE failed (SolverError: the plant stays at its last good time), or the watchdog stopped a run that
-  // left its joint limits or tracking envelope (PlantLimitError: the plant is at the end, and goes on
-  // only from a reset or an earlier FMU state). Either way the step is discarded with the reason.
-  const auto discard = [&](const char* why) {
-    state_.time = plant.time();
-    state_.phase = kStepDiscarded;
-    reference_valid_ = false;
-    outputs_valid_ = 0;
-    if (last_successful_time) *last_successful_time = state_.time;
-    return fail(Status::Discard, function, why);
-  };
   try {
     plant.advance(end);
   } catch (const SolverError& error) {
-    return discard(error.what());
+    return discardStep(function, error.what(), last_successful_time);
   } catch (const PlantLimitError& error) {
-    return discard(error.what());
+    return discardStep(function, error.what(), last_successful_time);
   }
   state_.has_earlier_step = state_.has_last_step;
-  copyJoints(state_.last_q_desired, state_.earlier_q_desired);
   state_.earlier_step_time = state_.last_step_time;
   state_.has_last_step = true;
-  for (int j = 0; j < table::kDof; ++j) state_.last_q_desired[j] = state_.values[role::q_desired[j]];
+  // Both vectors hold kDof values from the start (InstanceState::atStart, deserializeState).
+  copyJointValues(state_.last_q_desired.data(), state_.earlier_q_desired.data());
+  copyJointValues(&state_.values[role::q_desired[0]], state_.last_q_desired.data());
   if (m.compensator_mode == kCompensationDynamic) state_.dynamic = dynamic_after_;  // this step's sample is done
   state_.last_step_time = state_.time;
   state_.time = end;
@@ -626,6 +651,18 @@ Status Instance::doStep(const char* function, double current_time, double step, 
   outputs_valid_ = 0;
   if (last_successful_time) *last_successful_time = state_.time;
   return Status::OK;
+}
+
+// CVODE failed (SolverError: the plant stays at its last good time), or the watchdog stopped a run that left
+// its joint limits or tracking envelope (PlantLimitError: the plant is at the end, and goes on only from a
+// reset or an earlier FMU state). Either way the step is discarded with the reason.
+Status Instance::discardStep(const char* function, const char* why, double* last_successful_time) {
+  state_.time = models_->plant->time();
+  state_.phase = kStepDiscarded;
+  reference_valid_ = false;
+  outputs_valid_ = 0;
+  if (last_successful_time) *last_successful_time = state_.time;
+  return fail(Status::Discard, function, why);
 }
 
 Status Instance::terminate(const char*) {
@@ -697,7 +734,18 @@ Status Instance::checkValue(const char* function, int index, double value) {
 }
 
 template <typename T>
-Status Instance::get(const char* function, unsigned types, const std::uint32_t vrs[], std::size_t count, T values[]) {
+Status Instance::get(const char* function, unsigned types, const std::uint32_t vrs[], std::size_t count,
+                     T values[]) noexcept {
+  try {
+    return getUnguarded(function, types, vrs, count, values);
+  } catch (...) {
+    return internalErrorOfCurrentException(function);
+  }
+}
+
+template <typename T>
+[[gnu::always_inline]] inline Status Instance::getUnguarded(const char* function, unsigned types,
+                                                            const std::uint32_t vrs[], std::size_t count, T values[]) {
   if (count == 0) return Status::OK;
   if (!vrs) return nullArgument(function, "vr[]");
   if (!values) return nullArgument(function, "value[]");
@@ -797,13 +845,18 @@ Status Instance::checkSettable(const char* function, unsigned types, std::uint32
   return checkValue(function, index, value);
 }
 
-void Instance::storeReals(const std::int16_t index[], const double values[], std::size_t count) {
+// Inlined into set (the compiler chose a call once set grew: 12 more instructions for every planned set).
+[[gnu::always_inline]] inline void Instance::storeReals(const double values[], std::size_t count) {
   double* table_values = state_.values.data();
   bool changed = false;
-  for (std::size_t i = 0; i < count; ++i) {
-    double& value = table_values[index[i]];
-    changed |= !sameBits(value, values[i]);
-    value = values[i];
+  if (set_plan_.first >= 0) {
+    changed = copyChanged(table_values + set_plan_.first, values, count);
+  } else {
+    for (std::size_t i = 0; i < count; ++i) {
+      double& value = table_values[set_plan_.index[i]];
+      changed |= !sameBits(value, values[i]);
+      value = values[i];
+    }
   }
   if (changed) {
     if (state_.phase == kInitializationMode) state_.initialized = false;
@@ -814,7 +867,18 @@ void Instance::storeReals(const std::int16_t index[], const double values[], std
 
 template <typename T>
 Status Instance::set(const char* function, unsigned types, const std::uint32_t vrs[], std::size_t count,
-                     const T values[]) {
+                     const T values[]) noexcept {
+  try {
+    return setUnguarded(function, types, vrs, count, values);
+  } catch (...) {
+    return internalErrorOfCurrentException(function);
+  }
+}
+
+template <typename T>
+[[gnu::always_inline]] inline Status Instance::setUnguarded(const char* function, unsigned types,
+                                                            const std::uint32_t vrs[], std::size_t count,
+                                                            const T values[]) {
   if (count == 0) return Status::OK;
   if (!vrs) return nullArgument(function, "vr[]");
   if (!values) return nullArgument(function, "value[]");
@@ -831,12 +895,8 @@ Status Instance::set(const char* function, unsigned types, const std::uint32_t v
   const unsigned settable_bits = unsigned{settable_now} << VariableFlags::kPackedSettableShift;
   if constexpr (std::is_same_v<T, double>) {
     if (settable_bits != 0 && state_.desired_inputs_set && set_plan_.matches(vrs, count, settable_bits)) {
-      bool in_range = true;
-      for (std::size_t i = 0; i < count; ++i) {
-        in_range &= (values[i] >= set_plan_.lowest[i]) & (values[i] <= set_plan_.highest[i]);
-      }
-      if (in_range) {
-        storeReals(set_plan_.index, values, count);
+      if (allWithin(values, set_plan_.lowest, set_plan_.highest, count)) {
+        storeReals(values, count);
         return Status::OK;
       }
       // A value out of its range or not finite: the checks below name it.
@@ -859,14 +919,16 @@ Status Instance::set(const char* function, unsigned types, const std::uint32_t v
     if (common && state_.desired_inputs_set && count <= ValuePlan::kCapacity) {
       set_plan_.count = count;
       set_plan_.key = settable_bits;
+      set_plan_.first = kIndexByValueReference[vrs[0]];
       for (std::size_t i = 0; i < count; ++i) {
         const int index = kIndexByValueReference[vrs[i]];  // checked above
         set_plan_.vrs[i] = vrs[i];
         set_plan_.index[i] = static_cast<std::int16_t>(index);
         set_plan_.lowest[i] = std::max(kVariables[index].min, std::numeric_limits<double>::lowest());
         set_plan_.highest[i] = std::min(kVariables[index].max, std::numeric_limits<double>::max());
+        if (index != set_plan_.first + static_cast<int>(i)) set_plan_.first = -1;
       }
-      storeReals(set_plan_.index, values, count);
+      storeReals(values, count);
       return Status::OK;
     }
   }
@@ -896,14 +958,15 @@ Status Instance::set(const char* function, unsigned types, const std::uint32_t v
   return Status::OK;
 }
 
-template Status Instance::get<double>(const char*, unsigned, const std::uint32_t[], std::size_t, double[]);
-template Status Instance::get<int>(const char*, unsigned, const std::uint32_t[], std::size_t, int[]);
-template Status Instance::get<long>(const char*, unsigned, const std::uint32_t[], std::size_t, long[]);
-template Status Instance::get<bool>(const char*, unsigned, const std::uint32_t[], std::size_t, bool[]);
-template Status Instance::set<double>(const char*, unsigned, const std::uint32_t[], std::size_t, const double[]);
-template Status Instance::set<int>(const char*, unsigned, const std::uint32_t[], std::size_t, const int[]);
-template Status Instance::set<long>(const char*, unsigned, const std::uint32_t[], std::size_t, const long[]);
-template Status Instance::set<bool>(const char*, unsigned, const std::uint32_t[], std::size_t, const bool[]);
+template Status Instance::get<double>(const char*, unsigned, const std::uint32_t[], std::size_t, double[]) noexcept;
+template Status Instance::get<int>(const char*, unsigned, const std::uint32_t[], std::size_t, int[]) noexcept;
+template Status Instance::get<long>(const char*, unsigned, const std::uint32_t[], std::size_t, long[]) noexcept;
+template Status Instance::get<bool>(const char*, unsigned, const std::uint32_t[], std::size_t, bool[]) noexcept;
+template Status Instance::set<double>(const char*, unsigned, const std::uint32_t[], std::size_t,
+                                      const double[]) noexcept;
+template Status Instance::set<int>(const char*, unsigned, const std::uint32_t[], std::size_t, const int[]) noexcept;
+template Status Instance::set<long>(const char*, unsigned, const std::uint32_t[], std::size_t, const long[]) noexcept;
+template Status Instance::set<bool>(const char*, unsigned, const std::uint32_t[], std::size_t, const bool[]) noexcept;
 
 Status Instance::noVariablesOfType(const char* function, const char* type_name, const std::uint32_t vrs[],
                                    std::size_t count) {

@@ -73,7 +73,9 @@ public:
   // function, the phase and the phases it is allowed in) and returns false. Every FMI function starts here,
   // so the test is inline and only the refusal is a call.
   bool allowed(const char* function, unsigned phases) {
-    return (state_.phase & phases) != 0 || refuse(function, phases);
+    if ((state_.phase & phases) != 0) return true;
+    refuse(function, phases);  // known to be false here, so the glue keeps no registers for after it
+    return false;
   }
 
   // Logging, in the category of the status (logStatusError, logStatusDiscard, logStatusWarning; OK goes
@@ -100,7 +102,9 @@ public:
                          bool stop_time_defined, double stop_time);
   Status enterInitializationMode(const char* function);
   Status exitInitializationMode(const char* function);
-  Status doStep(const char* function, double current_time, double step, double* last_successful_time);
+  // doStep, get and set never throw: an exception inside becomes internalError's Error, as in the FMI glue's
+  // catch. Declared noexcept, so that the glue's call to them needs no exception region and is a jump.
+  Status doStep(const char* function, double current_time, double step, double* last_successful_time) noexcept;
   Status terminate(const char* function);
   Status reset(const char* function);
 
@@ -108,9 +112,10 @@ public:
   // (fmi2GetInteger: Integer and Enumeration; fmi3GetInt64: Enumeration; ...). Values are converted
   // exactly (all integers of the table fit a double).
   template <typename T>
-  Status get(const char* function, unsigned types, const std::uint32_t vrs[], std::size_t count, T values[]);
+  Status get(const char* function, unsigned types, const std::uint32_t vrs[], std::size_t count, T values[]) noexcept;
   template <typename T>
-  Status set(const char* function, unsigned types, const std::uint32_t vrs[], std::size_t count, const T values[]);
+  Status set(const char* function, unsigned types, const std::uint32_t vrs[], std::size_t count,
+             const T values[]) noexcept;
   // Index into table::kVariables of a value reference, -1 if unknown.
   static int indexOf(std::uint32_t vr);
 
@@ -127,7 +132,18 @@ public:
   double lastSuccessfulTime() const { return state_.time; }
 
 private:
-  bool refuse(const char* function, unsigned phases);  // allowed's refusal: logs why, returns false
+  [[gnu::cold]] void refuse(const char* function, unsigned phases);  // allowed's refusal: logs why
+  // The bodies of doStep, get and set, which may throw; the public functions catch.
+  Status doStepUnguarded(const char* function, double current_time, double step, double* last_successful_time);
+  template <typename T>
+  Status getUnguarded(const char* function, unsigned types, const std::uint32_t vrs[], std::size_t count, T values[]);
+  template <typename T>
+  Status setUnguarded(const char* function, unsigned types, const std::uint32_t vrs[], std::size_t count,
+                      const T values[]);
+  // A step the plant could not finish (solver failure, limits left): the state it stopped in, discarded.
+  Status discardStep(const char* function, const char* why, double* last_successful_time);
+  // internalError for the exception being handled (called in a catch (...) block).
+  Status internalErrorOfCurrentException(const char* function) noexcept;
   enum LogCategory { kLogWarning, kLogDiscard, kLogError, kLogCalls, kLogCategoryCount };
   // Groups of outputs computed together, lazily, as bits (a get computes only the groups it reads).
   enum OutputGroup : unsigned {
@@ -136,6 +152,7 @@ private:
     kPredictedOutputs = 4u,
     kReferenceOutputs = 8u,
     kMotorOutputs = 16u,
+    kLinkVelocityOutputs = 32u,
   };
   struct Models;
 
@@ -155,8 +172,6 @@ private:
   Status checkSettable(const char* function, unsigned types, std::uint32_t vr, int index, double value,
                        bool before_step);
   bool fixedParametersDiffer(const std::vector<double>& values) const;
-  // Stores reals that passed set's checks, at their table indices, and drops what depended on them.
-  void storeReals(const std::int16_t index[], const double values[], std::size_t count);
 
   // A list of value references resolved once. Importers pass the same list at every step (the inputs to
   // set, the outputs to read), so get and set look its variables up and check what does not depend on the
@@ -169,12 +184,16 @@ private:
     unsigned computed = 0;  // get: the packed flags of its computed variables, or-ed (which outputs to update)
     std::uint32_t vrs[kCapacity];
     std::int16_t index[kCapacity];  // into table::kVariables and the instance's values
+    int first = -1;                 // set: index[0] when the indices are consecutive (one block), else -1
     // set: each variable's range as finite bounds, so that one pair of compares also refuses NaN and infinity.
     double lowest[kCapacity], highest[kCapacity];
     bool matches(const std::uint32_t list[], std::size_t n, unsigned k) const {
       return n == count && k == key && std::memcmp(list, vrs, n * sizeof vrs[0]) == 0;
     }
   };
+
+  // Stores the reals of set_plan_'s list, which passed set's checks, and drops what depended on them.
+  void storeReals(const double values[], std::size_t count);
 
   std::string name_;
   LogSink sink_;

@@ -30,6 +30,7 @@ InstanceState InstanceState::atStart() {
   state.values.assign(table::kCount, 0.0);
   for (int i = 0; i < table::kCount; ++i) state.values[i] = kVariables[i].start;
   state.last_q_desired.setZero(table::kDof);
+  state.earlier_q_desired.setZero(table::kDof);
   OnlineDynamicState& d = state.dynamic;
   for (JointVector* v : {&d.correction, &d.demand_at_start, &d.demand, &d.delta, &d.integral}) v->setZero(table::kDof);
   return state;
