@@ -36,7 +36,8 @@ inline bool copyChangedScalar(double to[], const double from[], std::size_t coun
   return differ != 0;
 }
 
-[[gnu::always_inline]] inline bool allWithin(const double values[], const double lowest[], const double highest[], std::size_t count) {
+[[gnu::always_inline]] inline bool allWithin(const double values[], const double lowest[], const double highest[],
+                                             std::size_t count) {
 #if defined(__SSE2__)
   __m128d inside = _mm_castsi128_pd(_mm_set1_epi32(-1));
   std::size_t i = 0;

@@ -146,9 +146,11 @@ struct StructuredLinearSolver {
     return true;
   }
 
-  // solution = reduced^-1 rhs by the factors of the last setup; rhs is overwritten.
+  // solution = reduced^-1 rhs by the factors of the last setup; rhs is overwritten. kJoints: n when known
+  // at compile time, 0 otherwise (see solve).
+  template <int kJoints>
   void solveReduced() {
-    const int m = 2 * n;
+    const int m = 2 * (kJoints > 0 ? kJoints : n);
     const double* a = reduced.data();
     double* x = rhs.data();
     for (int k = 0; k < m; ++k) std::swap(x[k], x[pivot_row[k]]);
@@ -169,27 +171,36 @@ struct StructuredLinearSolver {
 
   // x and b may be the same vector: every value of b is read before x is written where it was.
   int solve(double* x, const double* b) {
-    for (int k = 0; k < n; ++k)
-      integral_offset[k] = (b[4 * n + k] - integral_by_p[k] * b[2 * n + k]) / integral_self[k];
+    // Six joints, the arms the project models, with the sizes known at compile time: the loops unrolled and
+    // paired, a third fewer instructions per Newton iteration; the same operations on each value in the same
+    // order, so the same bits as for any other n.
+    return n == 6 ? solveWith<6>(x, b) : solveWith<0>(x, b);
+  }
+
+  template <int kJoints>
+  int solveWith(double* x, const double* b) {
+    const int dof = kJoints > 0 ? kJoints : n;
+    for (int k = 0; k < dof; ++k)
+      integral_offset[k] = (b[4 * dof + k] - integral_by_p[k] * b[2 * dof + k]) / integral_self[k];
     // Column by column (contiguous, so the compiler vectorises it over the rows), each row's sum in the
     // order of k as before: the same bits as row by row.
-    for (int i = 0; i < 2 * n; ++i) rhs[i] = b[i < n ? n + i : 2 * n + i];
+    for (int i = 0; i < 2 * dof; ++i) rhs[i] = b[i < dof ? dof + i : 2 * dof + i];
     double* value = rhs.data();
-    for (int k = 0; k < n; ++k) {
-      const double b_q = b[k], b_p = b[2 * n + k], b_z = integral_offset[k];
-      const double* position = by_position.col(k).data();
-      const double* motor = by_motor.col(k).data();
-      const double* integral = by_integral.col(k).data();
-      for (int i = 0; i < 2 * n; ++i) value[i] -= position[i] * b_q + motor[i] * b_p + integral[i] * b_z;
+    for (int k = 0; k < dof; ++k) {
+      const double b_q = b[k], b_p = b[2 * dof + k], b_z = integral_offset[k];
+      const double* position = by_position.data() + static_cast<std::ptrdiff_t>(k) * 2 * dof;
+      const double* motor = by_motor.data() + static_cast<std::ptrdiff_t>(k) * 2 * dof;
+      const double* integral = by_integral.data() + static_cast<std::ptrdiff_t>(k) * 2 * dof;
+      for (int i = 0; i < 2 * dof; ++i) value[i] -= position[i] * b_q + motor[i] * b_p + integral[i] * b_z;
     }
-    solveReduced();
-    for (int k = 0; k < n; ++k) {
-      const double link_rate = solution[k], motor_rate = solution[n + k];
+    solveReduced<kJoints>();
+    for (int k = 0; k < dof; ++k) {
+      const double link_rate = solution[k], motor_rate = solution[dof + k];
       x[k] = b[k] + position_gain[k] * link_rate;
-      x[n + k] = link_rate;
-      x[2 * n + k] = b[2 * n + k] + motor_gain[k] * motor_rate;
-      x[3 * n + k] = motor_rate;
-      x[4 * n + k] = integral_offset[k] + integral_by_pd_reduced[k] * motor_rate;
+      x[dof + k] = link_rate;
+      x[2 * dof + k] = b[2 * dof + k] + motor_gain[k] * motor_rate;
+      x[3 * dof + k] = motor_rate;
+      x[4 * dof + k] = integral_offset[k] + integral_by_pd_reduced[k] * motor_rate;
     }
     return last_flag = SUNLS_SUCCESS;
   }
