@@ -354,7 +354,7 @@ Status Instance::ensureReference(const char* function) {
   JointVector& q = planned_;
   JointVector velocity = JointVector::Zero(table::kDof);
   JointVector acceleration = JointVector::Zero(table::kDof);
-  for (int j = 0; j < table::kDof; ++j) q[j] = state_.values[role::q_desired[j]];
+  copyJointValues(&state_.values[role::q_desired[0]], q.data());
   const bool estimated = state_.has_last_step && state_.time > state_.last_step_time;
   if (state_.demo) {
     demoMove(*m.robot, state_.time - state_.start_time, q, velocity);
@@ -423,7 +423,11 @@ Status Instance::ensureReference(const char* function) {
     copyJoints(q, ctx.q);
     copyJoints(velocity, ctx.velocity);
     ctx.time = state_.time;
-    ctx.tool_wrench = state_.values[role::compensate_wrench] != 0.0 ? wrenchOf(state_.values) : Vector6::Zero();
+    if (state_.values[role::compensate_wrench] != 0.0) {
+      ctx.tool_wrench = wrenchOf(state_.values);
+    } else {
+      ctx.tool_wrench.setZero();
+    }
     try {
       report = m.compensator->compensate(ctx, reference_);
     } catch (const UnreachableError& error) {
