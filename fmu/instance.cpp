@@ -807,6 +807,8 @@ template <typename T>
   // every value converts as it is.
   const double* table_values = state_.values.data();
   if (planned) {
+    // Unrolled: the loop's own add, compare and branch were half of its six instructions a value.
+#pragma GCC unroll 4
     for (std::size_t i = 0; i < count; ++i) values[i] = static_cast<T>(table_values[get_plan_.index[i]]);
   } else {
     for (std::size_t i = 0; i < count; ++i) values[i] = static_cast<T>(table_values[kIndexByValueReference[vrs[i]]]);
