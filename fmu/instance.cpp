@@ -157,18 +157,18 @@ bool isFixedParameter(int index) {
          kVariables[index].variability == table::Variability::Fixed;
 }
 
-// to = from, the FMU's kDof joints (every joint vector of the instance has them): a copy of known length,
-// unrolled, where Eigen's assignment of a vector of run-time size is a call to memcpy or a loop with checks
-// for aliasing (20 to 30 instructions for six values, three copies in every step).
 constexpr bool consecutive(const int (&indices)[table::kDof]) {
   for (int j = 0; j < table::kDof; ++j) {
     if (indices[j] != indices[0] + j) return false;
   }
   return true;
 }
-static_assert(consecutive(role::q_desired), "doStep copies q_desired as one block of the table");
+static_assert(consecutive(role::q_desired), "doStep and ensureReference copy q_desired as one block of the table");
 
-// The two never overlap (__restrict), so that the copy goes two values at a time.
+// to = from, the FMU's kDof joints (every joint vector of the instance has them): a copy of known length,
+// unrolled, where Eigen's assignment of a vector of run-time size is a call to memcpy or a loop with checks
+// for aliasing (20 to 30 instructions for six values, three copies in every step). The two never overlap
+// (__restrict), so that the copy goes two values at a time.
 void copyJointValues(const double* __restrict from, double* __restrict to) {
   for (int j = 0; j < table::kDof; ++j) to[j] = from[j];
 }

@@ -2,7 +2,7 @@
 // instruction with SSE2 (every x86-64 has it), one at a time elsewhere. A set of the 6 desired joint
 // positions, the importer's call at every communication step, spent 126 instructions in these two loops
 // one value at a time, and 46 two at a time. The scalar forms are always compiled: they define the result,
-// and tests/fmu/value_blocks_test.cpp checks the packed forms against them.
+// and tests/fmu/test_value_blocks.cpp checks the packed forms against them.
 #pragma once
 
 #include <cstddef>

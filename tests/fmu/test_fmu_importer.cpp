@@ -1420,6 +1420,47 @@ TEST_P(FmuTest, AListSeenBeforeIsCheckedAsAFreshOne) {
   for (int j = 0; j < kDof; ++j) EXPECT_EQ(dq_actual[j], link[j] - motor[j]) << "joint " << j + 1;
 }
 
+// The link velocities are a group of their own: read alone, or after the positions, at every step they are the
+// derivative of the link positions (a central difference over two 1 ms steps, independent of how the FMU
+// computes them), not the values of an earlier step.
+TEST_P(FmuTest, TheLinkVelocitiesAreTheDerivativeOfTheLinkPositionsHoweverTheyAreRead) {
+  auto m = makeMaster(GetParam());
+  ASSERT_TRUE(m->instantiate()) << m->log();
+  ASSERT_EQ(m->enterInitialization(spiral().time[0]), kOK) << m->log();
+  const std::vector<std::uint32_t> q_desired = m->vrs("q_desired_", kDof);
+  const std::vector<std::uint32_t> q_link = m->vrs("q_link_", kDof), qd_link = m->vrs("qd_link_", kDof);
+  ASSERT_EQ(m->setReals(q_desired, values(spiral().q[0])), kOK) << m->log();
+  ASSERT_EQ(m->exitInitialization(), kOK) << m->log();
+  constexpr int kSteps = 400;  // from rest into the spiral's cruise
+  std::vector<std::vector<double>> positions(kSteps), velocities(kSteps);
+  for (int k = 0; k < kSteps; ++k) {
+    if (k > 0) {
+      ASSERT_EQ(m->setReals(q_desired, values(spiral().q[k])), kOK) << m->log();
+      const double h = spiral().time[k] - spiral().time[k - 1];
+      ASSERT_EQ(m->doStep(spiral().time[k - 1], h), kOK) << m->log();
+    }
+    // Every other step the velocities are read first and alone, then after the positions.
+    if (k % 2 == 0) {
+      ASSERT_EQ(m->getReals(qd_link, velocities[k]), kOK);
+      ASSERT_EQ(m->getReals(q_link, positions[k]), kOK);
+    } else {
+      ASSERT_EQ(m->getReals(q_link, positions[k]), kOK);
+      ASSERT_EQ(m->getReals(qd_link, velocities[k]), kOK);
+    }
+  }
+  double largest_speed = 0.0, worst = 0.0;
+  for (int k = 1; k + 1 < kSteps; ++k) {
+    const double span = spiral().time[k + 1] - spiral().time[k - 1];
+    for (int j = 0; j < kDof; ++j) {
+      const double difference = (positions[k + 1][j] - positions[k - 1][j]) / span;
+      largest_speed = std::max(largest_speed, std::abs(velocities[k][j]));
+      worst = std::max(worst, std::abs(velocities[k][j] - difference));
+    }
+  }
+  EXPECT_GT(largest_speed, 0.01);  // rad/s: the arm moves, so a stale or unwritten velocity shows
+  EXPECT_LT(worst, 0.01 * largest_speed) << "the link velocities do not follow the link positions";
+}
+
 TEST_P(FmuTest, ParametersTheModelRejectsFailInitialisationWithTheReason) {
   auto m = makeMaster(GetParam());
   ASSERT_TRUE(m->instantiate());

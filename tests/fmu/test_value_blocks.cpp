@@ -83,9 +83,8 @@ TEST(ValueBlocks, CopyChangedCopiesExactlyTheValuesAndSaysWhetherAnyBitsChanged)
     std::vector<double> from(count), packed(count + 2, 9.5), scalar(count + 2, 9.5);
     for (std::size_t i = 0; i < count; ++i) {
       packed[i + 1] = scalar[i + 1] = std::uniform_real_distribution<double>(-1.0, 1.0)(random);
-      // The same value, the same value's other zero, or another value.
+      // The same value (half of them), another value, or 0 replaced by -0.
       switch (std::uniform_int_distribution<int>(0, 3)(random)) {
-        case 0: from[i] = packed[i + 1]; break;
         case 1: from[i] = std::uniform_real_distribution<double>(-1.0, 1.0)(random); break;
         case 2:
           packed[i + 1] = scalar[i + 1] = 0.0;
