@@ -37,12 +37,14 @@ import xml.etree.ElementTree as ElementTree
 
 import numpy as np
 
+from ._paths import plain_file_name, prepare_output_folder
 from .errors import JointcompError
 
 DEFAULT_SEED = 2019
 PERCENTILES = (5, 50, 95)
 METRIC_NAMES = ("ra", "rz", "rms", "max")  # of the five jc_spiral_experiment metrics, the ones reported
 RUN_KEYS = ("uncompensated", "stiffness", "compensated")  # the spiral's three runs (jointcomp.RUN_NAMES)
+MAX_SAMPLES = 10000  # each draw keeps its error along the path (about 100 kB); jointcomp montecarlo's cap too
 OUTLIER_RULE = "after-RMS above median + 3 x 1.4826 x MAD of the fleet's after-RMS"
 
 
@@ -681,8 +683,7 @@ class MonteCarloResult:
 
     def write(self, folder):
         """montecarlo.json, montecarlo.csv (one row per draw) and montecarlo_band.png into ``folder``."""
-        folder = pathlib.Path(folder)
-        folder.mkdir(parents=True, exist_ok=True)
+        folder = prepare_output_folder(folder, DistributedError)
         _write_text(folder / "montecarlo.json", json.dumps(self.to_json(), indent=2) + "\n")
         text = io.StringIO()
         writer = csv.writer(text)
@@ -723,8 +724,8 @@ def monte_carlo(urdf, parameters, *, samples=100, seed=DEFAULT_SEED, report=None
     processes, or ``serial=True`` for this process only (the same results). ``timeout``: seconds for all
     draws; ``retries``: reruns of a task whose worker died or raised.
     """
-    if not isinstance(samples, int) or isinstance(samples, bool) or samples < 1:
-        raise DistributedError("samples is %r, must be an integer of at least 1" % (samples,))
+    if not isinstance(samples, int) or isinstance(samples, bool) or not 1 <= samples <= MAX_SAMPLES:
+        raise DistributedError("samples is %r, must be an integer from 1 to %d" % (samples, MAX_SAMPLES))
     if not isinstance(seed, int) or seed < 0:
         raise DistributedError("seed is %r, must be an integer >= 0" % (seed,))
     urdf = _existing(urdf, "urdf")
@@ -878,16 +879,21 @@ class FleetResult:
             self.plot(folder / "fleet.png")
 
 
+_FLEET_FILES = ("fleet_summary.csv", "fleet_summary.json", "fleet_summary.txt", "fleet.png")
+
+
 def fleet(urdf, parameters, campaigns, out, *, method="calibrate", holdouts=None, options=None, client=None,
           scheduler=None, n_workers=None, serial=False, timeout=3600.0, start_timeout=60.0, retries=1):
     """Calibrates (``method="calibrate"``) or runs discovery (``"discover"``) on each campaign file, one robot
     each, starting from the nominal ``urdf`` and ``parameters`` (path or JSON text). ``holdouts``: {campaign:
     [held-out files]} (optional); ``options``: keyword options of jointcomp.calibrate / discover. Writes
     ``out/<robot>/`` (report.json, summary.txt, calibrated.urdf, calibrated.json; the robot is named after
-    its campaign file) and ``out/fleet_summary.{csv,json,txt}`` and ``out/fleet.png``; returns a
-    :class:`FleetResult`. A campaign that fails (malformed, not identifiable) is reported, not fatal."""
+    its campaign file, made a plain file name) and ``out/fleet_summary.{csv,json,txt}`` and ``out/fleet.png``;
+    returns a :class:`FleetResult`. ``out`` is checked before any work. A campaign that fails (malformed, not
+    identifiable) is reported, not fatal."""
     if method not in ("calibrate", "discover"):
         raise DistributedError("method is %r, must be \"calibrate\" or \"discover\"" % (method,))
+    prepare_output_folder(out, DistributedError, "out")
     if isinstance(campaigns, (str, os.PathLike)):
         campaigns = [campaigns]
     campaigns = [str(c) for c in campaigns]
@@ -910,9 +916,9 @@ def fleet(urdf, parameters, campaigns, out, *, method="calibrate", holdouts=None
     else:
         with cluster(client, scheduler, n_workers, start_timeout) as connected:
             details = _run_tasks(connected, _fleet_task, job, items, timeout, retries, "fleet")
-    names, robots = set(), []
+    names, robots = set(_FLEET_FILES), []  # a robot's folder never takes the name of a summary file
     for campaign, d in zip(campaigns, details):
-        name = base = pathlib.Path(campaign).stem
+        name = base = plain_file_name(pathlib.Path(campaign).stem)
         k = 1
         while name in names:
             k += 1
@@ -940,7 +946,7 @@ def _parser():
     law = mc.add_mutually_exclusive_group()
     law.add_argument("--report", help="report.json whose standard errors give the law")
     law.add_argument("--distribution", help="JSON file: a list of {parameter, law, scale, relative}")
-    mc.add_argument("--samples", type=int, default=100)
+    mc.add_argument("--samples", type=int, default=100, help="number of draws, 1 to %d" % MAX_SAMPLES)
     mc.add_argument("--seed", type=int, default=DEFAULT_SEED)
     mc.add_argument("--plant", action="store_true", help="simulate the flexible-joint plant (needs drives)")
     mc.add_argument("--out", default="out/montecarlo")
@@ -964,6 +970,7 @@ def main(argv=None):
     try:
         if arguments.workers is not None and arguments.workers < 1:
             raise DistributedError("--workers is %d, must be at least 1" % arguments.workers)
+        prepare_output_folder(arguments.out, DistributedError)
         if arguments.command == "montecarlo":
             result = monte_carlo(arguments.urdf, arguments.params, samples=arguments.samples, seed=arguments.seed,
                                  report=arguments.report, distribution=arguments.distribution,

@@ -123,8 +123,8 @@ def test_a_drawn_geometry_moves_the_urdf():
 def test_bad_inputs_are_named(tmp_path):
     with pytest.raises(jd.DistributedError, match="report: .*nothing.json does not exist"):
         jd.monte_carlo(RX170_URDF, RX170_PARAMETERS, report=tmp_path / "nothing.json", samples=2, serial=True)
-    for samples in (0, -1, 2.5):
-        with pytest.raises(jd.DistributedError, match="samples is .*, must be an integer of at least 1"):
+    for samples in (0, -1, 2.5, jd.MAX_SAMPLES + 1, 2**30):
+        with pytest.raises(jd.DistributedError, match="samples is .*, must be an integer from 1 to 10000"):
             jd.monte_carlo(RX170_URDF, RX170_PARAMETERS, samples=samples, serial=True)
     with pytest.raises(jd.DistributedError, match="parameters: .*missing.json does not exist"):
         jd.monte_carlo(RX170_URDF, tmp_path / "missing.json", samples=2, serial=True)
@@ -211,3 +211,42 @@ def test_a_calibration_report_carries_its_correlation(robot, tmp_path):
     law, _ = jd.report_distribution(data)
     blocks = [e["correlation"] for e in law if "correlation" in e]
     assert len(blocks) == 1 and all(name in {e.get("parameter") for e in law} for name in blocks[0]["parameters"])
+
+
+def test_output_names_from_user_data_are_plain_file_names():
+    from jointcomp._paths import plain_file_name
+    assert plain_file_name("..") == "robot" and plain_file_name("...") == "robot" and plain_file_name("") == "robot"
+    assert plain_file_name("../../victim") == "_.._victim"
+    assert plain_file_name("a/b\\c d\nе") == "a_b_c_d__"
+    assert plain_file_name(".hidden") == "hidden" and plain_file_name("r1-arm_2.v3") == "r1-arm_2.v3"
+    assert len(plain_file_name("x" * 10000)) == 64
+
+
+def test_fleet_writes_only_inside_out_whatever_the_campaigns_are_named(robot, tmp_path):
+    # A campaign named "...csv" has the stem "..": its folder was out/.., the user's own folder.
+    campaign = jointcomp.simulate_campaign(robot, tmp_path / "...csv", protocol="random", seed=1, count=30)
+    out = tmp_path / "deep" / "out"
+    result = jd.fleet(RX170_URDF, RX170_PARAMETERS, [campaign], out, serial=True)
+    assert [r["name"] for r in result.robots] == ["robot"] and not result.failed
+    assert (out / "robot" / "report.json").is_file()
+    assert sorted(p.name for p in (tmp_path / "deep").iterdir()) == ["out"]
+
+
+def test_out_is_checked_before_any_work(tmp_path, monkeypatch, capsys):
+    def no_work(*arguments, **keywords):
+        raise AssertionError("work started before --out was checked")
+    monkeypatch.setattr(jd, "_run_tasks", no_work)
+    monkeypatch.setattr(jd, "monte_carlo", no_work)
+    a_file = tmp_path / "a_file"
+    a_file.write_text("not a folder\n")
+    campaign = tmp_path / "c.csv"
+    campaign.write_text("# a campaign\n")
+    for out, message in ((a_file, "exists and is not a folder"), (a_file / "below", "cannot be created"),
+                         ("/proc/jointcomp-out", "cannot be created"), ("", "the path is empty")):
+        with pytest.raises(jd.DistributedError, match=message):
+            jd.fleet(RX170_URDF, RX170_PARAMETERS, [campaign], out, serial=True)
+        robot_files = ["--urdf", str(RX170_URDF), "--params", str(RX170_PARAMETERS)]
+        assert jd.main(["montecarlo"] + robot_files + ["--out", str(out)]) == 1
+        assert "--out: " in capsys.readouterr().err
+        assert jd.main(["fleet"] + robot_files + ["--campaign", str(campaign), "--out", str(out)]) == 1
+        assert message in capsys.readouterr().err
