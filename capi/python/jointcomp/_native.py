@@ -11,6 +11,7 @@ The library is looked for, in this order:
 
 import ctypes
 import glob
+import operator
 import os
 import pathlib
 
@@ -28,6 +29,23 @@ _i32 = ctypes.c_int32
 _f64 = ctypes.c_double
 _text = ctypes.c_char_p
 _handle = ctypes.c_void_p
+INT32_MAX = 2**31 - 1
+
+
+class _Int32Argument(ctypes.c_int32):
+    """An int32 argument of a C function (array sizes above all), checked: ctypes alone wraps a Python int
+    silently into 32 bits, so that 2^32 + 1 values became 1 and a metric of a huge array was that of its first
+    value. Refused with an OverflowError naming the number (ctypes reports it as "argument k: ...")."""
+
+    @classmethod
+    def from_param(cls, value):
+        value = operator.index(value)
+        if not -INT32_MAX - 1 <= value <= INT32_MAX:
+            raise OverflowError("%d is beyond the library's 32-bit sizes (at most %d values in one call)"
+                                % (value, INT32_MAX))
+        return ctypes.c_int32(value)
+
+
 # void (*jc_progress_callback)(const char* message, void* user_data)
 PROGRESS_CALLBACK = ctypes.CFUNCTYPE(None, ctypes.c_char_p, ctypes.c_void_p)
 
@@ -136,7 +154,7 @@ def _load():
         for name, (result, arguments) in PROTOTYPES.items():
             function = getattr(library, name)
             function.restype = result
-            function.argtypes = arguments
+            function.argtypes = [_Int32Argument if a is _i32 else a for a in arguments]
         if library.jc_abi_version() != ABI_VERSION:
             raise ImportError("%s has ABI version %d, these bindings need %d"
                               % (path, library.jc_abi_version(), ABI_VERSION))

@@ -1,5 +1,6 @@
 """Accuracy metrics: Ra, Rz, RMS, max and mean, and their errors."""
 
+import ctypes
 import math
 
 import numpy as np
@@ -32,3 +33,26 @@ def test_metric_errors():
         jointcomp.peak_to_peak_deviation([])
     with pytest.raises(jointcomp.InvalidArgumentError, match=r"z\[1\] is \+infinity"):
         jointcomp.average_absolute_deviation([0.0, np.inf])
+
+
+def test_sizes_beyond_32_bits_are_refused_not_wrapped(tmp_path):
+    # ctypes wrapped 2^32 + 1 into 1: Ra of 2^32 + 1 values was |z_0| (1.0 where the truth was 2.3e-10).
+    from jointcomp import _native
+    z = np.array([1.0, 0.0])
+    ra = ctypes.c_double()
+    with pytest.raises(ctypes.ArgumentError, match="4294967297 is beyond the library's 32-bit sizes"):
+        _native.lib.jc_average_absolute_deviation(_native.pointer(z), 2**32 + 1, ctypes.byref(ra))
+    with pytest.raises(ctypes.ArgumentError, match="-2147483649 is beyond"):
+        _native.lib.jc_peak_to_peak_deviation(_native.pointer(z), -2**31 - 1, ctypes.byref(ra))
+    _native.check(_native.lib.jc_average_absolute_deviation(_native.pointer(z), np.int64(2), ctypes.byref(ra)))
+    assert ra.value == 0.5
+    # The same through the public functions, on 2^32 + 1 values that take no memory (a sparse file): refused
+    # before a value is read.
+    try:
+        huge = np.memmap(tmp_path / "huge.bin", dtype=np.float64, mode="w+", shape=(2**32 + 1,))
+    except (OSError, ValueError) as error:
+        pytest.skip("no sparse file of 32 GiB here: %s" % error)
+    huge[0] = 1.0
+    for function in (jointcomp.average_absolute_deviation, jointcomp.peak_to_peak_deviation):
+        with pytest.raises(ctypes.ArgumentError, match="4294967297 is beyond"):
+            function(huge)
