@@ -41,6 +41,7 @@ struct DiscoveryData {
   double temperature0 = 20.0;            // degC, the rows' mean temperature (the reference of thermal drift)
   double velocity_scale = 1e-3;          // rad/s, smooth sign of lost motion
   int max_harmonic_order = 4;
+  std::vector<int> table_knots = {16, 32, 64, 128};  // knots per revolution of the periodic tables offered
   // The base fit's residual mapped to the joints (per joint, per row, rad), for families that scan it for
   // what their fixed candidates miss (harmonic orders beyond max_harmonic_order); empty when not known.
   std::vector<std::vector<double>> joint_residual;

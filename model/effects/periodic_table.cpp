@@ -232,7 +232,8 @@ void PeriodicTableDiscovery::offer(const DiscoveryData& data, int joint,
   const GearTrain& gears = *data.gears;
   for (const int s : gears.distinctParts(joint)) {
     const std::string part = gears.partName(joint, s);
-    for (const int knots : kKnotChoices) {
+    for (const int knots : data.table_knots) {
+      if (knots < PeriodicTableEffect::kMinKnots || knots > PeriodicTableEffect::kMaxKnots) continue;
       const std::vector<int> kept = fittedKnots(data, joint, s, knots);
       const int columns = static_cast<int>(kept.size());
       if (columns < 2 || data.rows() < 4 * columns) continue;

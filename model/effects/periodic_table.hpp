@@ -5,8 +5,9 @@
 // B the cubic B-spline (C2, so the plant can differentiate it; the B_i sum to one). Where the harmonics of
 // transmission_error need one pair of terms per order, a table takes a tooth-shaped, flat-topped or
 // stepped error with a few dozen coefficients, and its spectrum (spectrum()) tells which orders repeat.
-// Discovery offers tables of 12 and 24 knots; knots whose support the fitted rows never visited stay at
-// zero, and the candidate reports which angle ranges the table covers.
+// Discovery offers tables of the knot counts DiscoveryData::table_knots (16 to 128 by default); knots whose
+// support the fitted rows never visited stay at zero, and the candidate reports which angle ranges the
+// table covers.
 #pragma once
 
 #include <utility>
@@ -68,12 +69,12 @@ private:
   std::vector<PeriodicTable> tables_;
 };
 
-// Discovery: "periodic", per joint and distinct part, a table of 12 and one of 24 knots (one column per
-// knot the fitted rows visit). Cross-validation picks between them and against the harmonics; ties go to
-// the fewer coefficients.
+// Discovery: "periodic", per joint and distinct part, a table of each knot count of
+// DiscoveryData::table_knots (one column per knot the fitted rows visit), with a roughness prior (discovery
+// adds a ridge toward zero). Cross-validation picks the count and the priors' weights, and against the
+// harmonics.
 class PeriodicTableDiscovery : public DiscoveryFamily {
 public:
-  static constexpr int kKnotChoices[] = {12, 24};
   std::string name() const override { return "periodic"; }
   void offer(const DiscoveryData& data, int joint, std::vector<DiscoveryCandidate>& candidates) const override;
   std::unique_ptr<Effect> makeEffect(const DiscoveryData& data,

@@ -57,6 +57,21 @@ struct DiscoveryOptions {
   // The largest weight of a candidate's prior (a periodic table's roughness), relative to the data of one
   // column; cross-validation on the fitted data chooses among 0 and five decades up to it. 0: no prior.
   double max_prior_weight = 10.0;
+  // The same for the ridge toward zero that every candidate with a prior also gets (knots the data barely
+  // reach stay near zero); chosen together with the roughness weight.
+  double max_ridge_weight = 1.0;
+  // Knots per revolution of the periodic tables offered (each part of each joint, every count).
+  std::vector<int> table_knots = {16, 32, 64, 128};
+  // Pairs: the best candidate of one family on each of two joints, fitted together (effects that only help
+  // together are found).
+  bool pairs = true;
+  // The transfer check. A candidate is rejected when, predicted from the other groups, it makes a group of
+  // rows (a time block, a part of the joint space, a range of one of its joints' angles) worse by more than
+  // 1 % and by more than transfer_significance standard errors of that group's change (its sub-blocks'
+  // spread). Joint-space parts smaller than min_group_share of the rows join the nearest larger part.
+  double transfer_significance = 2.0;
+  double min_group_share = 0.05;
+  int angle_ranges = 5;  // ranges of a joint's angle, equally filled, for leave-one-range-out CV
   const EffectRegistry* registry = nullptr;  // whose discovery families compete; null: the built-in one
 };
 
@@ -86,8 +101,9 @@ struct DiscoveryState {
 
 struct DiscoveryStep {
   std::string type;
-  int joint = -1;                        // -1 for payload (the whole robot)
-  std::string joint_name;                // "" for payload
+  int joint = -1;                        // -1 for payload (the whole robot); of a pair, its first
+  std::vector<int> joints;               // every candidate's joint (two for a pair of candidates)
+  std::string joint_name;                // "" for payload; "a + b" for a pair
   int stage = 0;                         // harmonic: 1 = motor ... stageCount + 1 = output
   std::string part;                      // harmonic: "motor", "stage_k", "output"; thermal: "temperature" or "time"
   double cycles = 0.0;                   // harmonic order (cycles per revolution of the part)
