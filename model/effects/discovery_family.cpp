@@ -5,7 +5,7 @@
 namespace jointcomp {
 
 std::string DiscoveryCandidate::label() const {
-  if (through_compliance) return type + " (tool)";
+  if (joint < 0) return type + (detail.empty() ? std::string(" (robot)") : detail);
   return type + " joint " + std::to_string(joint + 1) + detail;
 }
 

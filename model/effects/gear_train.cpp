@@ -141,8 +141,13 @@ std::vector<int> GearTrain::distinctParts(int joint) const {
   std::vector<double> ratios;
   for (int stage = 1; stage <= stageCount(joint) + 1; ++stage) {
     const double ratio = stageInputAngle(joint, stage, motor);
+    // Of parts that turn alike the last is named: a directly driven joint's one part is its output.
     bool seen = false;
-    for (double r : ratios) seen = seen || std::abs(r - ratio) <= 1e-9 * std::max(1.0, std::abs(r));
+    for (std::size_t k = 0; k < ratios.size(); ++k) {
+      if (std::abs(ratios[k] - ratio) > 1e-9 * std::max(1.0, std::abs(ratios[k]))) continue;
+      stages[k] = stage;
+      seen = true;
+    }
     if (seen) continue;
     ratios.push_back(ratio);
     stages.push_back(stage);

@@ -45,7 +45,8 @@ public:
   // The stage of a part's name ("stage_1" is the motor too), 0 when the joint has no such part.
   int stageOfPart(int joint, const std::string& part) const;
   // The stages of a joint whose parts turn at different speeds (a stage of ratio 1 repeats the part
-  // before it): the parts a periodic error of the joint may be a function of, each once.
+  // before it; of parts that turn alike the last, so a directly driven joint's is its output): the parts a
+  // periodic error of the joint may be a function of, each once.
   std::vector<int> distinctParts(int joint) const;
 
 private:

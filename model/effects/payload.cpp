@@ -81,6 +81,7 @@ void PayloadDiscovery::offer(const DiscoveryData& data, int joint, std::vector<D
   const int rows = data.rows();
   DiscoveryCandidate candidate;
   candidate.type = name();
+  candidate.detail = " (tool)";
   candidate.through_compliance = true;
   candidate.columns.resize(rows, 4 * n);
   RobotWorkspace ws(robot);

@@ -99,6 +99,8 @@ Features offerCandidates(const DiscoveryData& data, int setups, const DiscoveryO
                                 std::to_string(candidate.columns.rows()) + " rows for " + std::to_string(data.rows()));
         }
         f.family.push_back(family);
+        const bool by_row = !candidate.through_compliance && !candidate.joint_error_blocks && candidate.columns.cols() > 0;
+        f.sparse.push_back(by_row ? sparseFeatures(candidate.columns) : SparseFeatures());
         f.releases.push_back(candidate.releases.empty() ? std::vector<int>{} : layoutIndices(candidate, layout));
       }
     }
@@ -176,6 +178,8 @@ std::vector<double> jointRms(const Linearised& lin) {
 }
 
 }  // namespace
+
+DiscoveryOptions::DiscoveryOptions() = default;
 
 bool isPathCampaign(const MeasurementCampaign& campaign) {
   const auto protocol = campaign.metadata.find("protocol");
@@ -476,9 +480,9 @@ private:
     for (std::size_t m = 0; m < chosen.candidates.size(); ++m) {
       const DiscoveryCandidate& c = features_.candidates[static_cast<std::size_t>(chosen.candidates[m])];
       const std::string name = c.joint >= 0 ? prior_.robot().joints[static_cast<std::size_t>(c.joint)].name : "";
-      record.joint_name += (m > 0 ? " + " : "") + name;
+      if (m == 0) record.joint_name = name;
       record.joints.push_back(c.joint);
-      if (m > 0) record.detail += " with" + std::string(name.empty() ? "" : " " + name) + c.detail;
+      if (m > 0) record.detail += " + " + (name.empty() ? c.type : name) + c.detail;
       if (c.prior.size() > 0) {
         const std::string suffix = chosen.candidates.size() > 1 ? "_" + std::to_string(m + 1) : "";
         record.report_fields["roughness_weight" + suffix] = chosen.roughness_weight[m];
@@ -499,7 +503,7 @@ private:
     lin_ = linearise(model_, fittedRows(model_), cal_, features_, active_, cuts_, true);
     result_.joint_residual_rms_final = jointRms(lin_);
     // Where what is left lies (reported when it is well above the noise floor).
-    const ResidualRows rows{lin_.joint_residual, lin_.joint_lever, data_.command, data_.motor,
+    const ResidualRows rows{lin_.joint_residual, lin_.joint_lever, lin_.joint_share, data_.command, data_.motor,
                             lin_.residual_norm,  lin_.time_block,  lin_.residual, data_.time};
     result_.unexplained = analyseUnexplained(prior_.robot(), rows, cal_.after.rms, result_.noise_floor);
     result_.final_state = state_;

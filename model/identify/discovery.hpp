@@ -40,6 +40,7 @@
 namespace jointcomp {
 
 struct DiscoveryOptions {
+  DiscoveryOptions();  // out of line: GCC 12 warns falsely of the inlined defaults of its std::function
   // fit_* flags are set by discovery; loss and solver are used, and progress hears the calibrations' phases
   // and iterations and discovery's own steps.
   GeometricCalibrationOptions calibration;
@@ -103,7 +104,7 @@ struct DiscoveryStep {
   std::string type;
   int joint = -1;                        // -1 for payload (the whole robot); of a pair, its first
   std::vector<int> joints;               // every candidate's joint (two for a pair of candidates)
-  std::string joint_name;                // "" for payload; "a + b" for a pair
+  std::string joint_name;                // "" for payload; of a pair, its first (detail names the second)
   int stage = 0;                         // harmonic: 1 = motor ... stageCount + 1 = output
   std::string part;                      // harmonic: "motor", "stage_k", "output"; thermal: "temperature" or "time"
   double cycles = 0.0;                   // harmonic order (cycles per revolution of the part)

@@ -33,9 +33,16 @@ void fillBase(Linearised& lin, const GeometricCalibrationResult& cal) {
 void mapToJoints(Linearised& lin, int i, const Eigen::MatrixXd& jq, const Eigen::Vector3d& error) {
   const int n = lin.problem.dof;
   const Eigen::VectorXd dq = jq.completeOrthogonalDecomposition().solve(-error);
+  double moved = 0.0;  // sum over the joints of |dm/dq_j dq_j|^2
   for (int j = 0; j < n; ++j) {
     lin.joint_residual[static_cast<std::size_t>(j)][static_cast<std::size_t>(i)] = dq[j];
     lin.joint_lever[static_cast<std::size_t>(j)][static_cast<std::size_t>(i)] = jq.col(j).norm();
+    moved += (jq.col(j) * dq[j]).squaredNorm();
+  }
+  for (int j = 0; j < n; ++j) {
+    const double part = (jq.col(j) * dq[j]).squaredNorm();
+    lin.joint_share[static_cast<std::size_t>(j)][static_cast<std::size_t>(i)] =
+        moved > 0.0 ? error.squaredNorm() * part / moved : 0.0;
   }
   lin.residual_norm[static_cast<std::size_t>(i)] = error.norm();
   lin.residual[static_cast<std::size_t>(i)] = -error;
@@ -57,6 +64,7 @@ Linearised linearise(const JointErrorModel& model, const CalibrationData& data, 
   if (map_joints) {
     lin.joint_residual.assign(static_cast<std::size_t>(n), std::vector<double>(static_cast<std::size_t>(rows)));
     lin.joint_lever = lin.joint_residual;
+    lin.joint_share = lin.joint_residual;
     lin.residual_norm.resize(static_cast<std::size_t>(rows));
     lin.residual.resize(static_cast<std::size_t>(rows));
   }
@@ -110,7 +118,7 @@ CandidatePiece candidatePiece(const Linearised& lin, const Features& features, i
   }
   for (int idx : releases) out.piece.dense.col(at++) = lin.layout_jacobian.col(idx);
   if (!blocks && own > 0) {
-    out.piece.features = &c.columns;
+    out.piece.features = &features.sparse[static_cast<std::size_t>(candidate)];
     out.piece.joint = c.joint;
     for (int k = 0; k < own; ++k) out.coefficients.push_back(dense + k);
   }

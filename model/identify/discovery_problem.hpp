@@ -27,6 +27,7 @@ struct Active {
 // (indices of GeometricParameterLayout).
 struct Features {
   std::vector<DiscoveryCandidate> candidates;
+  std::vector<SparseFeatures> sparse;  // per candidate, its feature columns by row (empty: none)
   std::vector<const DiscoveryFamily*> family;
   std::vector<std::vector<int>> releases;
 };
@@ -47,6 +48,7 @@ struct Linearised {
   std::vector<double> residual_norm;
   std::vector<Eigen::Vector3d> residual;
   std::vector<std::vector<double>> joint_lever;
+  std::vector<std::vector<double>> joint_share;  // per joint, per row: its share of |residual|^2 (m^2)
   std::vector<int> time_block;  // per row
 };
 

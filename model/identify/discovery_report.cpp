@@ -106,7 +106,7 @@ nlohmann::ordered_json unexplainedJson(const DiscoveryResult& result) {
 }  // namespace
 
 std::string discoveryStepLabel(const DiscoveryStep& step) {
-  if (step.joint < 0) return step.type + " (tool)";
+  if (step.joint < 0) return step.type + (step.detail.empty() ? std::string(" (robot)") : step.detail);
   return step.type + " " + step.joint_name + step.detail;
 }
 
@@ -125,8 +125,19 @@ nlohmann::ordered_json discoveryReportJson(const DiscoveryResult& result, const 
                          {"folds", options.folds},
                          {"min_cv_gain", options.min_cv_gain},
                          {"criterion", "dBIC = N ln(RSS_c/RSS_0) + dk ln N + 2 ln(candidates) < 0"},
-                         {"transfer", "no fold's CV error more than 1 % worse"},
-                         {"ties", "within one standard error of the fold-wise CV differences: fewest parameters"},
+                         {"transfer",
+                          "predicted from the other groups, no time block, joint-space part (at least "
+                          "min_group_share of the rows) or range of a candidate's joint angle more than 1 % and "
+                          "transfer_significance standard errors worse"},
+                         {"transfer_significance", options.transfer_significance},
+                         {"min_group_share", options.min_group_share},
+                         {"angle_ranges", options.angle_ranges},
+                         {"pairs", options.pairs},
+                         {"table_knots", options.table_knots},
+                         {"max_prior_weight", options.max_prior_weight},
+                         {"max_ridge_weight", options.max_ridge_weight},
+                         {"ties", "within one standard error of the fold-wise CV differences or a quarter of "
+                                  "min_cv_gain: the lowest BIC"},
                          {"base", baseName(options)},
                          {"max_steps", options.max_steps},
                          {"max_harmonic_order", options.max_harmonic_order},
@@ -146,6 +157,12 @@ nlohmann::ordered_json discoveryReportJson(const DiscoveryResult& result, const 
         {"type", s.type},
         {"joint", s.joint >= 0 ? nlohmann::ordered_json(s.joint_name) : nlohmann::ordered_json(nullptr)},
         {"joint_index", s.joint >= 0 ? nlohmann::ordered_json(s.joint + 1) : nlohmann::ordered_json(nullptr)}};
+    if (s.joints.size() > 1) {
+      nlohmann::ordered_json joints = nlohmann::ordered_json::array();
+      for (int j : s.joints) joints.push_back(j >= 0 ? nlohmann::ordered_json(result.model.robot().joints[static_cast<std::size_t>(j)].name) : nlohmann::ordered_json(nullptr));
+      entry["joints"] = joints;
+      entry["label"] = discoveryStepLabel(s);
+    }
     for (const auto& [key, value] : s.report_fields.items()) entry[key] = value;
     nlohmann::ordered_json parameters = nlohmann::ordered_json::array();
     for (const DiscoveredParameter& p : s.parameters)

@@ -132,8 +132,30 @@ RowGrouping angleRanges(const std::vector<JointVector>& command, int joint, int 
   return g;
 }
 
+SparseFeatures sparseFeatures(const Eigen::MatrixXd& features) {
+  SparseFeatures f;
+  f.columns = static_cast<int>(features.cols());
+  f.start.reserve(static_cast<std::size_t>(features.rows()) + 1);
+  const Eigen::MatrixXd by_row = features.transpose();  // one row's values contiguous
+  for (Eigen::Index i = 0; i < by_row.cols(); ++i) {
+    f.start.push_back(static_cast<int>(f.column.size()));
+    for (Eigen::Index k = 0; k < by_row.rows(); ++k) {
+      if (by_row(k, i) == 0.0) continue;
+      f.column.push_back(static_cast<int>(k));
+      f.value.push_back(by_row(k, i));
+    }
+  }
+  f.start.push_back(static_cast<int>(f.column.size()));
+  return f;
+}
+
 void accumulateBase(LinearisedProblem& problem) {
   const int m = static_cast<int>(problem.base.cols());
+  problem.base_joint.assign(static_cast<std::size_t>(problem.dof), Eigen::MatrixXd(m, problem.rows));
+  for (int i = 0; i < problem.rows; ++i) {
+    const Eigen::MatrixXd products = problem.base.middleRows(3 * i, 3).transpose() * problem.joint_column.middleRows(3 * i, 3);
+    for (int j = 0; j < problem.dof; ++j) problem.base_joint[static_cast<std::size_t>(j)].col(i) = products.col(j);
+  }
   problem.base_sums.clear();
   for (const RowGrouping& grouping : problem.groupings) {
     BlockSums sums;
@@ -161,20 +183,6 @@ void accumulateBase(LinearisedProblem& problem) {
 
 namespace {
 
-// The nonzero feature values of row i of a piece, with their columns.
-void nonzeroFeatures(const ColumnPiece& piece, int row, std::vector<int>& column, std::vector<double>& value) {
-  column.clear();
-  value.clear();
-  if (!piece.features) return;
-  const Eigen::MatrixXd& f = *piece.features;
-  for (Eigen::Index k = 0; k < f.cols(); ++k) {
-    const double v = f(row, k);
-    if (v == 0.0) continue;
-    column.push_back(static_cast<int>(k));
-    value.push_back(v);
-  }
-}
-
 BlockSums zeroSums(int blocks, int rows, int cols, bool with_residual) {
   BlockSums sums;
   sums.gram.assign(static_cast<std::size_t>(blocks), Eigen::MatrixXd::Zero(rows, cols));
@@ -192,17 +200,14 @@ BlockSums crossWithBase(const LinearisedProblem& problem, const ColumnPiece& pie
   const int m = static_cast<int>(problem.base.cols());
   const int kd = piece.denseColumns();
   BlockSums sums = zeroSums(g.blocks(), m, piece.columns(), false);
-  std::vector<int> column;
-  std::vector<double> value;
-  Eigen::VectorXd u(m);
+  const SparseFeatures* f = piece.features;
   for (int i = 0; i < problem.rows; ++i) {
     Eigen::MatrixXd& gram = sums.gram[static_cast<std::size_t>(g.block_of_row[static_cast<std::size_t>(i)])];
-    const auto x = problem.base.middleRows(3 * i, 3);
-    if (kd > 0) gram.leftCols(kd).noalias() += x.transpose() * piece.dense.middleRows(3 * i, 3);
-    nonzeroFeatures(piece, i, column, value);
-    if (column.empty()) continue;
-    u.noalias() = x.transpose() * problem.joint_column.block(3 * i, piece.joint, 3, 1);
-    for (std::size_t k = 0; k < column.size(); ++k) gram.col(kd + column[k]) += value[k] * u;
+    if (kd > 0) gram.leftCols(kd).noalias() += problem.base.middleRows(3 * i, 3).transpose() * piece.dense.middleRows(3 * i, 3);
+    if (!f) continue;
+    const auto u = problem.base_joint[static_cast<std::size_t>(piece.joint)].col(i);
+    for (int e = f->start[static_cast<std::size_t>(i)]; e < f->start[static_cast<std::size_t>(i) + 1]; ++e)
+      gram.col(kd + f->column[static_cast<std::size_t>(e)]) += f->value[static_cast<std::size_t>(e)] * u;
   }
   return sums;
 }
@@ -214,12 +219,21 @@ BlockSums crossPieces(const LinearisedProblem& problem, const ColumnPiece& a, co
   BlockSums sums = zeroSums(g.blocks(), a.columns(), b.columns(), with_residual);
   std::vector<int> ca, cb;
   std::vector<double> va, vb;
+  auto nonzero = [](const SparseFeatures* f, int i, std::vector<int>& column, std::vector<double>& value) {
+    column.clear();
+    value.clear();
+    if (!f) return;
+    for (int e = f->start[static_cast<std::size_t>(i)]; e < f->start[static_cast<std::size_t>(i) + 1]; ++e) {
+      column.push_back(f->column[static_cast<std::size_t>(e)]);
+      value.push_back(f->value[static_cast<std::size_t>(e)]);
+    }
+  };
   for (int i = 0; i < problem.rows; ++i) {
     const std::size_t block = static_cast<std::size_t>(g.block_of_row[static_cast<std::size_t>(i)]);
     Eigen::MatrixXd& gram = sums.gram[block];
     const auto r = problem.r.segment<3>(3 * i);
-    nonzeroFeatures(a, i, ca, va);
-    nonzeroFeatures(b, i, cb, vb);
+    nonzero(a.features, i, ca, va);
+    nonzero(b.features, i, cb, vb);
     const Eigen::Vector3d ja = a.features ? Eigen::Vector3d(problem.joint_column.block(3 * i, a.joint, 3, 1))
                                           : Eigen::Vector3d::Zero();
     const Eigen::Vector3d jb = b.features ? Eigen::Vector3d(problem.joint_column.block(3 * i, b.joint, 3, 1))

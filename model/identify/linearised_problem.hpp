@@ -50,13 +50,22 @@ struct BlockSums {
   std::vector<double> rr;             // per block, r . r
 };
 
+// Feature columns stored by row, nonzero values only (a table's row has four).
+struct SparseFeatures {
+  int columns = 0;
+  std::vector<int> start;  // row i's entries: [start[i], start[i + 1])
+  std::vector<int> column;
+  std::vector<double> value;
+};
+SparseFeatures sparseFeatures(const Eigen::MatrixXd& features);
+
 // Columns of a candidate: dense ones (3 per row) and feature columns of one joint (one value per row).
 struct ColumnPiece {
-  Eigen::MatrixXd dense;                        // 3 rows x dense columns, weighted
-  const Eigen::MatrixXd* features = nullptr;    // rows x feature columns (joint error per unit coefficient)
-  int joint = -1;                               // joint of the feature columns
+  Eigen::MatrixXd dense;                    // 3 rows x dense columns, weighted
+  const SparseFeatures* features = nullptr;  // joint error per unit coefficient
+  int joint = -1;                           // joint of the feature columns
   int denseColumns() const { return static_cast<int>(dense.cols()); }
-  int featureColumns() const { return features ? static_cast<int>(features->cols()) : 0; }
+  int featureColumns() const { return features ? features->columns : 0; }
   int columns() const { return denseColumns() + featureColumns(); }
 };
 
@@ -66,6 +75,7 @@ struct LinearisedProblem {
   Eigen::VectorXd r;             // 3 rows
   Eigen::MatrixXd base;          // 3 rows x base columns (calibration parameters, then accepted effects)
   Eigen::MatrixXd joint_column;  // 3 rows x dof: a_ij = w_i dm_i/dq_j
+  std::vector<Eigen::MatrixXd> base_joint;  // per joint, base columns x rows: column i = base_i^T a_ij
   // 0: time blocks, 1: joint-space parts, 2 + j: joint j's angle ranges, last: time blocks whole (refits)
   std::vector<RowGrouping> groupings;
   std::vector<BlockSums> base_sums;     // per grouping: base x base, base . r, r . r
@@ -74,7 +84,7 @@ struct LinearisedProblem {
   int refitGrouping() const { return static_cast<int>(groupings.size()) - 1; }
 };
 
-// Fills base_sums for every grouping (call once the base columns and groupings are set).
+// Fills base_sums for every grouping and base_joint (call once the base columns and groupings are set).
 void accumulateBase(LinearisedProblem& problem);
 // Per block of `grouping`, the base columns x the piece's columns (xr, rr left empty).
 BlockSums crossWithBase(const LinearisedProblem& problem, const ColumnPiece& piece, int grouping);

@@ -196,6 +196,13 @@ UnexplainedResidual analyseUnexplained(const Robot& robot, const ResidualRows& r
     const std::vector<double>& dq = rows.joint_residual[static_cast<std::size_t>(j)];
     u.joint_rms_rad.push_back(rms(dq));
     std::vector<double> at_target;
+    if (static_cast<int>(rows.joint_share.size()) > j) {
+      double sum = 0.0;
+      for (double share : rows.joint_share[static_cast<std::size_t>(j)]) sum += share;
+      const double count = static_cast<double>(rows.joint_share[static_cast<std::size_t>(j)].size());
+      u.joint_rms_m.push_back(count > 0 ? std::sqrt(sum / count) : 0.0);
+      continue;
+    }
     for (std::size_t i = 0; i < dq.size(); ++i) {
       const bool lever_known = static_cast<int>(rows.joint_lever.size()) > j && i < rows.joint_lever[j].size();
       at_target.push_back(dq[i] * (lever_known ? rows.joint_lever[static_cast<std::size_t>(j)][i] : 1.0));
@@ -212,8 +219,11 @@ UnexplainedResidual analyseUnexplained(const Robot& robot, const ResidualRows& r
       if (i < rows.motor_angle.size()) motor.push_back(rows.motor_angle[i][j]);
     }
     const std::vector<double>& residual = rows.joint_residual[static_cast<std::size_t>(j)];
+    bool motor_differs = false;  // a directly driven joint's motor is its output: scanned once, as the output
+    for (std::size_t i = 0; i < motor.size() && !motor_differs; ++i) motor_differs = std::abs(motor[i] - output[i]) > 1e-12;
     for (const auto& [name, angle, max_order] : {std::make_tuple("output", &output, kMaxScannedOutputOrder),
                                                  std::make_tuple("motor", &motor, kMaxScannedMotorOrder)}) {
+      if (angle == &motor && !motor_differs) continue;
       const OrderPeak peak = strongestOrder(residual, *angle, 1, max_order);
       if (peak.order == 0) continue;
       u.orders.push_back({j, name, peak.order, peak.amplitude, peak.stands_out});

@@ -70,7 +70,8 @@ struct UnexplainedResidual {
   double over_floor = 0.0;            // fitted RMS / noise floor (0 when the floor is not known)
   std::vector<int> joints;            // joints by their share of the residual in position, largest first
   std::vector<double> joint_rms_rad;  // per joint (index = joint)
-  std::vector<double> joint_rms_m;    // per joint: RMS of |dm/dq_j| dq_j, its share at the target
+  // per joint, its share of the residual at the target (m, RMS): the shares' squares add up to the residual's
+  std::vector<double> joint_rms_m;
   std::vector<ResidualOrder> orders;  // per joint and angle the strongest order, those standing out first
   std::vector<double> block_rms;      // m, 3-D RMS of each block of consecutive rows, in time order
   PosePredictability pose;            // how much of it is a function of the pose (computed when rows have times)
@@ -80,6 +81,9 @@ struct UnexplainedResidual {
 struct ResidualRows {
   std::vector<std::vector<double>> joint_residual;  // per joint, per row (rad)
   std::vector<std::vector<double>> joint_lever;     // per joint, per row, |dm/dq_j| (m/rad)
+  // per joint, per row, its share of |residual|^2 (m^2): |dm/dq_j dq_j|^2 scaled so a row's shares add up to
+  // its |residual|^2 (the mapped joint errors may cancel at the target); empty: |dm/dq_j| dq_j is used
+  std::vector<std::vector<double>> joint_share;
   std::vector<JointVector> output_angle;            // per row (rad)
   std::vector<JointVector> motor_angle;             // per row (rad)
   std::vector<double> residual_norm;                // per row, |measured - predicted| (m)
