@@ -5,6 +5,7 @@ proved writable before a long run starts, and a name taken from the user's data 
 robot's name) becomes one plain file name, so that ``...csv`` or ``../../victim`` cannot lead outside it.
 """
 
+import contextlib
 import os
 import pathlib
 import re
@@ -39,3 +40,43 @@ def prepare_output_folder(folder, error, option="--out"):
         raise error("%s: '%s' cannot be created or written (%s)" % (option, text, reason.strerror or reason)) \
             from None
     return path
+
+
+def write_atomically(path, write):
+    """Calls ``write(stream)`` to fill a binary stream that becomes ``path`` whole or not at all: an unnamed
+    file in its folder (O_TMPFILE), synced, then linked under a temporary name and renamed over ``path``, so
+    that a process killed while writing leaves neither half a file nor a temporary (file systems without
+    unnamed files get a named temporary, removed on any error)."""
+    path = pathlib.Path(path)
+    folder = str(path.parent)
+    try:
+        fd = os.open(folder, os.O_TMPFILE | os.O_WRONLY | os.O_CLOEXEC, 0o644)
+    except (AttributeError, OSError):
+        fd = None
+    temporary = path.with_name(".%s.%d.tmp" % (path.name, os.getpid()))
+    if fd is None:
+        fd = os.open(temporary, os.O_CREAT | os.O_EXCL | os.O_WRONLY | os.O_CLOEXEC, 0o644)
+        named = True
+    else:
+        named = False
+    try:
+        with os.fdopen(fd, "wb") as stream:
+            write(stream)
+            stream.flush()
+            os.fsync(stream.fileno())
+            os.fchmod(stream.fileno(), 0o644)
+            if not named:
+                # linkat(AT_SYMLINK_FOLLOW) needs a directory descriptor in Python (else plain link()).
+                folder_fd = os.open(folder, os.O_RDONLY | os.O_DIRECTORY | os.O_CLOEXEC)
+                try:
+                    os.link("/proc/self/fd/%d" % stream.fileno(), temporary.name, src_dir_fd=folder_fd,
+                            dst_dir_fd=folder_fd, follow_symlinks=True)
+                finally:
+                    os.close(folder_fd)
+                named = True
+        os.replace(temporary, path)
+    except BaseException:
+        if named:
+            with contextlib.suppress(OSError):
+                os.unlink(temporary)
+        raise

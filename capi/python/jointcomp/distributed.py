@@ -37,7 +37,7 @@ import xml.etree.ElementTree as ElementTree
 
 import numpy as np
 
-from ._paths import plain_file_name, prepare_output_folder
+from ._paths import plain_file_name, prepare_output_folder, write_atomically
 from .errors import JointcompError
 
 DEFAULT_SEED = 2019
@@ -696,18 +696,12 @@ class MonteCarloResult:
 
 
 def _write_text(path, text):
-    """Whole or not at all: a temporary beside the target, then renamed over it."""
-    path = pathlib.Path(path)
-    temporary = path.with_name("." + path.name + ".tmp%d" % os.getpid())
-    temporary.write_text(text)
-    os.replace(temporary, path)
+    """Whole or not at all, and no temporary left by a kill (jointcomp._paths.write_atomically)."""
+    write_atomically(path, lambda stream: stream.write(text.encode("utf-8")))
 
 
 def _save_figure(figure, path):
-    path = pathlib.Path(path)
-    temporary = path.with_name("." + path.name + ".tmp%d.png" % os.getpid())
-    figure.savefig(temporary, dpi=110)
-    os.replace(temporary, path)
+    write_atomically(path, lambda stream: figure.savefig(stream, dpi=110, format="png"))
 
 
 def monte_carlo(urdf, parameters, *, samples=100, seed=DEFAULT_SEED, report=None, distribution=None,

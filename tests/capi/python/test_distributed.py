@@ -250,3 +250,23 @@ def test_out_is_checked_before_any_work(tmp_path, monkeypatch, capsys):
         assert "--out: " in capsys.readouterr().err
         assert jd.main(["fleet"] + robot_files + ["--campaign", str(campaign), "--out", str(out)]) == 1
         assert message in capsys.readouterr().err
+
+
+def test_a_writer_killed_part_way_leaves_nothing_behind(tmp_path):
+    # Every output of montecarlo and fleet: whole or absent, and no ".name.tmpPID" left by a kill.
+    import subprocess
+    import sys
+    from jointcomp._paths import write_atomically
+    write_atomically(tmp_path / "a.txt", lambda stream: stream.write(b"first\n"))
+    write_atomically(tmp_path / "a.txt", lambda stream: stream.write(b"second\n"))
+    assert (tmp_path / "a.txt").read_text() == "second\n" and (tmp_path / "a.txt").stat().st_mode & 0o777 == 0o644
+    dying = ("import os, signal, sys\n"
+             "from jointcomp._paths import write_atomically\n"
+             "def write(stream):\n"
+             "    stream.write(b'half')\n"
+             "    stream.flush()\n"
+             "    os.kill(os.getpid(), signal.SIGKILL)\n"
+             "write_atomically(sys.argv[1], write)\n")
+    status = subprocess.run([sys.executable, "-c", dying, str(tmp_path / "a.txt")]).returncode
+    assert status == -9
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a.txt"] and (tmp_path / "a.txt").read_text() == "second\n"
