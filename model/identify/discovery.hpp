@@ -52,7 +52,7 @@ struct DiscoveryOptions {
   int max_harmonic_order = 4;
   double min_cv_gain = 0.02;       // relative drop of the CV error a candidate must bring
   double noise_floor = 0.0;        // m, 3-D RMS; 0: sqrt(3) times the campaigns' position_noise
-  int refit_iterations = 2;        // joint refits after each accepted step
+  int refit_iterations = 1;        // joint refits after each accepted step
   double velocity_scale = 1e-3;    // rad/s, backlash smooth sign
   std::vector<std::string> types;  // candidate types to try; empty: all
   // The largest weight of a candidate's prior (a periodic table's roughness), relative to the data of one
