@@ -412,12 +412,21 @@ std::vector<double> sweepValues(const JointSweepSpec& s, bool back_and_forth) {
     throw InvalidArgument("joint sweep: from and to must differ and step must be positive");
   }
   const double span = s.to_rad - s.from_rad;
-  const long steps = std::lround(std::abs(span) / s.step_rad);
-  if (steps < 1 || steps > 10000000) throw InvalidArgument("joint sweep: the step does not fit the range");
+  const double ratio = std::abs(span) / s.step_rad;
+  if (!(ratio <= static_cast<double>(kMaxSweepRows))) {
+    throw InvalidArgument("joint sweep: " + formatNumber(ratio) + " steps are more than " +
+                          std::to_string(kMaxSweepRows) + " rows");
+  }
+  const long steps = std::lround(ratio);
+  if (steps < 1) throw InvalidArgument("joint sweep: the step does not fit the range");
   std::vector<double> one_way;
   for (long k = 0; k <= steps; ++k) one_way.push_back(s.from_rad + span * static_cast<double>(k) / steps);
   if (!back_and_forth) return one_way;
   if (s.cycles < 1) throw InvalidArgument("back-and-forth: cycles must be at least 1");
+  if (s.cycles > kMaxSweepRows / (2 * steps)) {
+    throw InvalidArgument("back-and-forth: " + std::to_string(s.cycles) + " cycles of " + std::to_string(2 * steps) +
+                          " steps are more than " + std::to_string(kMaxSweepRows) + " rows");
+  }
   std::vector<double> values{one_way.front()};
   for (int c = 0; c < s.cycles; ++c) {
     values.insert(values.end(), one_way.begin() + 1, one_way.end());
@@ -493,7 +502,10 @@ void simulateRandom(Simulator& sim, const CampaignSimulationSpec& spec,
                     const std::function<void(const std::string&)>& progress) {
   const Robot& robot = sim.robot();
   const RandomPosesSpec& r = spec.random;
-  if (r.count < 1) throw InvalidArgument("random poses: count must be at least 1");
+  if (r.count < 1 || r.count > kMaxRandomPoses) {
+    throw InvalidArgument("random poses: count is " + std::to_string(r.count) + ", must be from 1 to " +
+                          std::to_string(kMaxRandomPoses));
+  }
   if (!(r.row_period_s > 0.0)) throw InvalidArgument("random poses: row_period_s must be positive");
   tell(progress, "measuring " + std::to_string(r.count) + " random poses");
   RobotWorkspace commanded(robot);

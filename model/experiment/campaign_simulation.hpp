@@ -40,6 +40,12 @@
 
 namespace jointcomp {
 
+// The most rows a simulated campaign has, whoever asks (the CLI, the C API's JSON): a joint sweep's
+// commands over all its cycles, and random poses. Beyond them a simulation is refused with the number,
+// before it allocates anything (a million rows is about 150 MB of campaign file).
+constexpr long kMaxSweepRows = 1000000;
+constexpr int kMaxRandomPoses = 100000;
+
 enum class CampaignProtocol { Stiffness, JointSweep, Spiral, RandomPoses, BackAndForth };
 
 // "stiffness", "joint-sweep", "spiral", "random", "back-and-forth" (and "joint2-sweep" for the paper's

@@ -221,6 +221,40 @@ TEST(CampaignSimulation, BackAndForthGoesUpAndDown) {
   for (std::size_t k = 0; k < campaign.size(); ++k) EXPECT_NEAR(campaign.command[k][1], expected[k] * kDegree, 1e-12);
 }
 
+// Rows are bounded whoever asks (issue 41: simulate --cycles 1e9 took 5.2 GB in 30 s, and the C API's
+// {"count": 2e9} ran away too): refused with the number before anything is allocated.
+TEST(CampaignSimulation, MoreRowsThanTheLimitAreRefusedWithTheNumber) {
+  const JointErrorModel truth = truthModel();
+  CampaignSimulationSpec spec;
+  spec.protocol = CampaignProtocol::RandomPoses;
+  spec.random.count = 2000000000;
+  try {
+    simulateCampaign(truth, spec);
+    ADD_FAILURE() << "2e9 random poses were accepted";
+  } catch (const InvalidArgument& error) {
+    EXPECT_THAT(error.what(), HasSubstr("count is 2000000000, must be from 1 to 100000"));
+  }
+  spec.protocol = CampaignProtocol::BackAndForth;
+  spec.sweep.from_rad = -2 * kDegree;
+  spec.sweep.to_rad = 2 * kDegree;
+  spec.sweep.step_rad = 1 * kDegree;
+  spec.sweep.cycles = 1000000000;
+  try {
+    simulateCampaign(truth, spec);
+    ADD_FAILURE() << "1e9 cycles were accepted";
+  } catch (const InvalidArgument& error) {
+    EXPECT_THAT(error.what(), HasSubstr("1000000000 cycles of 8 steps are more than 1000000 rows"));
+  }
+  spec.protocol = CampaignProtocol::JointSweep;
+  spec.sweep.step_rad = 1e-300;
+  try {
+    simulateCampaign(truth, spec);
+    ADD_FAILURE() << "a step of 1e-300 rad was accepted";
+  } catch (const InvalidArgument& error) {
+    EXPECT_THAT(error.what(), HasSubstr("steps are more than 1000000 rows"));
+  }
+}
+
 TEST(CampaignSimulation, SpiralFollowsThePapersPath) {
   const JointErrorModel truth = truthModel();
   CampaignSimulationSpec spec;
