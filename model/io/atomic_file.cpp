@@ -11,6 +11,7 @@
 #include <unistd.h>
 
 #include "model/common/errors.hpp"
+#include "model/common/input_file.hpp"
 
 namespace jointcomp {
 namespace {
@@ -125,23 +126,7 @@ void writeFileAtomically(const std::string& path, const std::string& contents) {
 }
 
 std::string readTextFile(const std::string& path, const char* what, std::uintmax_t max_bytes) {
-  auto tooLarge = [&]() {
-    return Error(path + ": the " + what + " is larger than " + std::to_string(max_bytes >> 20) +
-                 " MiB; is it the right file?");
-  };
-  std::error_code error;
-  if (std::filesystem::is_regular_file(path, error) && std::filesystem::file_size(path, error) > max_bytes && !error)
-    throw tooLarge();
-  std::ifstream file(path, std::ios::binary);
-  if (!file) throw Error(path + ": cannot open the " + what);
-  std::string text;
-  char buffer[1 << 16];
-  while (file.read(buffer, sizeof(buffer)) || file.gcount() > 0) {
-    text.append(buffer, static_cast<std::size_t>(file.gcount()));
-    if (text.size() > max_bytes) throw tooLarge();
-  }
-  if (file.bad()) throw Error(path + ": cannot read the " + what);
-  return text;
+  return readInputFile(path, what, max_bytes);
 }
 
 }  // namespace jointcomp

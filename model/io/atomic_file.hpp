@@ -16,7 +16,8 @@ constexpr std::uintmax_t kMaxMeasurementFileBytes = 2048u << 20;  // 2 GiB
 // Throws Error naming the path when the file cannot be written.
 void writeFileAtomically(const std::string& path, const std::string& contents);
 // The whole file; throws Error naming the path when it cannot be read or holds more than max_bytes (a
-// file that is not regular, such as a pipe or a device, is read up to the limit, never past it).
+// folder or a device is refused before it is read, a pipe is read up to the limit, never past it:
+// model/common/input_file.hpp).
 std::string readTextFile(const std::string& path, const char* what,
                          std::uintmax_t max_bytes = kMaxMeasurementFileBytes);
 

@@ -2,16 +2,18 @@
 
 #include <algorithm>
 #include <cmath>
-#include <fstream>
+#include <cstdio>
+#include <cstring>
 #include <limits>
+#include <map>
 #include <mutex>
-#include <sstream>
 
 #include <console_bridge/console.h>
 #include <urdf_parser/urdf_parser.h>
 #include <Eigen/Eigenvalues>
 
 #include "model/common/errors.hpp"
+#include "model/common/input_file.hpp"
 
 namespace jointcomp {
 namespace {
@@ -45,6 +47,17 @@ Eigen::Isometry3d toIsometry(const urdf::Pose& pose) {
   return transform;
 }
 
+std::string formatted(double value) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.6g", value);
+  return text;
+}
+
+bool withinReach(const urdf::Pose& pose) {
+  return std::abs(pose.position.x) <= kMaxUrdfDistance && std::abs(pose.position.y) <= kMaxUrdfDistance &&
+         std::abs(pose.position.z) <= kMaxUrdfDistance;
+}
+
 bool isFinite(const urdf::Pose& pose) {
   return std::isfinite(pose.position.x) && std::isfinite(pose.position.y) && std::isfinite(pose.position.z) &&
          std::isfinite(pose.rotation.x) && std::isfinite(pose.rotation.y) && std::isfinite(pose.rotation.z) &&
@@ -68,6 +81,7 @@ public:
   ChainBuilder(const urdf::ModelInterface& model, std::string source) : model_(model), source_(std::move(source)) {}
 
   Robot build(const UrdfChainOptions& options) {
+    checkTree();
     Robot robot;
     robot.name = model_.getName();
     robot.source = source_;
@@ -83,11 +97,17 @@ public:
     for (const auto& urdf_joint : path) {
       const std::string where = "joint '" + urdf_joint->name + "'";
       if (!isFinite(urdf_joint->parent_to_joint_origin_transform)) fail(where + ": <origin> is not finite");
+      if (!withinReach(urdf_joint->parent_to_joint_origin_transform))
+        fail(where + ": <origin> is more than " + formatted(kMaxUrdfDistance) + " m away");
       pending = pending * toIsometry(urdf_joint->parent_to_joint_origin_transform);
       if (urdf_joint->type == urdf::Joint::FIXED) continue;
       if (urdf_joint->type != urdf::Joint::REVOLUTE && urdf_joint->type != urdf::Joint::CONTINUOUS) {
         fail(where + " is " + jointTypeName(urdf_joint->type) +
              "; jointcomp models chains of revolute (and continuous) joints only");
+      }
+      if (urdf_joint->mimic) {
+        fail(where + " mimics joint '" + urdf_joint->mimic->joint_name +
+             "'; jointcomp models independently driven joints (choose a tip link before it)");
       }
       robot.joints.push_back(makeJoint(*urdf_joint, pending, where));
       pending.setIdentity();
@@ -113,6 +133,18 @@ public:
 
 private:
   [[noreturn]] void fail(const std::string& what) const { throw UrdfError(source_ + ": " + what); }
+
+  // urdfdom lets a link be the child of two joints (the last one read wins, silently); a URDF is a tree.
+  void checkTree() const {
+    std::map<std::string, std::string> parent_joint_of;
+    for (const auto& [name, joint] : model_.joints_) {
+      const auto [first, inserted] = parent_joint_of.emplace(joint->child_link_name, name);
+      if (!inserted) {
+        fail("link '" + joint->child_link_name + "' is the child of joints '" + first->second + "' and '" + name +
+             "'; a URDF is a tree: every link has one parent");
+      }
+    }
+  }
 
   // The leaf below `root` with the most moving joints on its way: ROS-Industrial URDFs hang fixed frames
   // (base, flange, tool0, a camera) off the arm, and the arm is the longest moving chain. Of leaves with
@@ -207,22 +239,31 @@ private:
   }
 
   // Adds the inertial of `link` (whose frame is `link_in_body` in the body frame) and of every link
-  // fixed to it. A moving joint off the chain is a branch the model cannot represent.
-  void accumulateBody(const urdf::LinkConstSharedPtr& link, const Eigen::Isometry3d& link_in_body,
+  // fixed to it. A moving joint off the chain is a branch the model cannot represent. A stack, not
+  // recursion: a URDF may hang thousands of fixed links in a row.
+  void accumulateBody(const urdf::LinkConstSharedPtr& first, const Eigen::Isometry3d& first_in_body,
                       const std::string& next_on_chain, const std::vector<urdf::JointConstSharedPtr>& path,
                       BodyInertia& body) const {
-    if (link->inertial) addInertial(*link, link_in_body, body);
-    for (const auto& child : link->child_joints) {
-      if (child->name == next_on_chain) continue;
-      const bool on_path = std::any_of(path.begin(), path.end(), [&](const auto& j) { return j->name == child->name; });
-      if (child->type != urdf::Joint::FIXED) {
-        // Moving joints below the last body lie beyond the tip: the chain ends there (as in KDL).
-        if (on_path || next_on_chain.empty()) continue;
-        fail("joint '" + child->name + "' branches off the chain at link '" + link->name +
-             "'; jointcomp models a single serial chain (choose another tip link or remove the branch)");
+    std::vector<std::pair<urdf::LinkConstSharedPtr, Eigen::Isometry3d>> stack = {{first, first_in_body}};
+    while (!stack.empty()) {
+      const auto [link, link_in_body] = stack.back();
+      stack.pop_back();
+      if (link->inertial) addInertial(*link, link_in_body, body);
+      // Children in reverse, so that they are visited (and their inertias summed) in the URDF's order.
+      for (auto child_it = link->child_joints.rbegin(); child_it != link->child_joints.rend(); ++child_it) {
+        const urdf::JointConstSharedPtr& child = *child_it;
+        if (child->name == next_on_chain) continue;
+        const bool on_path =
+            std::any_of(path.begin(), path.end(), [&](const auto& j) { return j->name == child->name; });
+        if (child->type != urdf::Joint::FIXED) {
+          // Moving joints below the last body lie beyond the tip: the chain ends there (as in KDL).
+          if (on_path || next_on_chain.empty()) continue;
+          fail("joint '" + child->name + "' branches off the chain at link '" + link->name +
+               "'; jointcomp models a single serial chain (choose another tip link or remove the branch)");
+        }
+        stack.emplace_back(model_.getLink(child->child_link_name),
+                           link_in_body * toIsometry(child->parent_to_joint_origin_transform));
       }
-      accumulateBody(model_.getLink(child->child_link_name),
-                     link_in_body * toIsometry(child->parent_to_joint_origin_transform), next_on_chain, path, body);
     }
   }
 
@@ -236,6 +277,13 @@ private:
       fail(where + " has a value that is not finite");
     }
     if (inertial.mass <= 0.0) fail(where + ": <mass> must be positive, is " + std::to_string(inertial.mass));
+    if (inertial.mass > kMaxUrdfMass || inertia.cwiseAbs().maxCoeff() > kMaxUrdfInertia ||
+        !withinReach(inertial.origin)) {
+      fail(where + ": a mass of " + formatted(inertial.mass) + " kg, an inertia of " +
+           formatted(inertia.cwiseAbs().maxCoeff()) + " kg m^2 or an origin beyond " + formatted(kMaxUrdfDistance) +
+           " m is no robot's link (at most " + formatted(kMaxUrdfMass) + " kg and " + formatted(kMaxUrdfInertia) +
+           " kg m^2)");
+    }
     Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> principal(inertia);
     const Eigen::Vector3d& moments = principal.eigenvalues();
     const double tolerance = 1e-9 * std::max(1.0, moments.cwiseAbs().maxCoeff());
@@ -265,8 +313,59 @@ private:
 
 }  // namespace
 
+namespace {
+
+// Where `text` at `from` continues after the end of a markup item that starts there and ends with
+// `closing`; text.size() when it never ends (the parser then reports the error).
+std::size_t after(const std::string& text, std::size_t from, const char* closing) {
+  const std::size_t at = text.find(closing, from);
+  return at == std::string::npos ? text.size() : at + std::strlen(closing);
+}
+
+// The deepest nesting of elements in the XML `text`, counted without parsing it (TinyXML parses nested
+// elements by recursion, and 200,000 levels crash it): comments, CDATA, processing instructions and
+// declarations are skipped, quoted attribute values may hold '>'. Stops counting past `limit`.
+int elementDepth(const std::string& text, int limit) {
+  int depth = 0, deepest = 0;
+  std::size_t at = 0;
+  while ((at = text.find('<', at)) != std::string::npos && deepest <= limit) {
+    if (text.compare(at, 4, "<!--") == 0) {
+      at = after(text, at + 4, "-->");
+    } else if (text.compare(at, 9, "<![CDATA[") == 0) {
+      at = after(text, at + 9, "]]>");
+    } else if (text.compare(at, 2, "<?") == 0) {
+      at = after(text, at + 2, "?>");
+    } else if (text.compare(at, 2, "<!") == 0 || text.compare(at, 2, "</") == 0) {
+      if (text[at + 1] == '/') depth = std::max(0, depth - 1);
+      at = after(text, at + 2, ">");
+    } else {
+      char quote = 0;
+      std::size_t end = at + 1;
+      for (; end < text.size() && (quote != 0 || text[end] != '>'); ++end) {
+        if (quote == 0 && (text[end] == '"' || text[end] == '\''))
+          quote = text[end];
+        else if (text[end] == quote)
+          quote = 0;
+      }
+      if (end >= text.size() || text[end - 1] != '/') deepest = std::max(deepest, ++depth);
+      at = end;
+    }
+  }
+  return deepest;
+}
+
+}  // namespace
+
 Robot loadRobotFromUrdfString(const std::string& urdf_xml, const std::string& source_name,
                               const UrdfChainOptions& options) {
+  if (urdf_xml.size() > kMaxUrdfBytes) {
+    throw UrdfError(source_name + ": the URDF has " + std::to_string(urdf_xml.size()) + " bytes; at most " +
+                    std::to_string(kMaxUrdfBytes) + " are read (is it the right file?)");
+  }
+  if (elementDepth(urdf_xml, kMaxUrdfDepth) > kMaxUrdfDepth) {
+    throw UrdfError(source_name + ": the URDF nests elements more than " + std::to_string(kMaxUrdfDepth) +
+                    " deep; a robot description needs a few levels");
+  }
   installCapturingHandlerOnce();
   CapturingOutputHandler::capturedText().clear();
   urdf::ModelInterfaceSharedPtr model;
@@ -283,12 +382,15 @@ Robot loadRobotFromUrdfString(const std::string& urdf_xml, const std::string& so
 }
 
 Robot loadRobotFromUrdfFile(const std::string& path, const UrdfChainOptions& options) {
-  std::ifstream file(path, std::ios::binary);
-  if (!file) throw UrdfError(path + ": cannot open the URDF file");
-  std::ostringstream text;
-  text << file.rdbuf();
-  if (!file.good() && !file.eof()) throw UrdfError(path + ": cannot read the URDF file");
-  return loadRobotFromUrdfString(text.str(), path, options);
+  std::string text;
+  try {
+    text = readInputFile(path, "URDF", kMaxUrdfBytes);
+  } catch (const UrdfError&) {
+    throw;
+  } catch (const Error& error) {
+    throw UrdfError(error.what());
+  }
+  return loadRobotFromUrdfString(text, path, options);
 }
 
 }  // namespace jointcomp
