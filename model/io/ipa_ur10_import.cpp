@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "model/common/errors.hpp"
+#include "model/common/strict_json.hpp"
 #include "model/io/atomic_file.hpp"
 #include "model/io/text_cells.hpp"
 
@@ -66,7 +67,8 @@ Eigen::Vector3d ipaTargetInFlange(const std::string& trafo_path) {
     if (!(stream >> token))
       throw MeasurementError(trafo_path + ": expected 16 numbers (a 4x4 matrix), found " + std::to_string(i));
     double value = 0.0;
-    if (!parseDecimalComma(token, value)) throw MeasurementError(trafo_path + ": '" + token + "' is not a number");
+    if (!parseDecimalComma(token, value))
+      throw MeasurementError(trafo_path + ": '" + shortExcerpt(token) + "' is not a number");
     transform(i / 4, i % 4) = value;
   }
   if (!transform.row(3).isApprox(Eigen::RowVector4d(0, 0, 0, 1), 1e-9)) {
@@ -137,7 +139,7 @@ MeasurementCampaign parseIpaUr10(const std::string& text, const std::string& mea
       double value = 0.0;
       const std::string& cell = cells[column_of.at(column)];
       if (!parseDecimalComma(cell, value))
-        fail(line_number, "column '" + column + "': '" + cell + "' is not a finite number");
+        fail(line_number, "column '" + shortExcerpt(column) + "': '" + shortExcerpt(cell) + "' is not a finite number");
       return value;
     };
     JointVector command(6);

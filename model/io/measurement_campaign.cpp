@@ -1,5 +1,6 @@
 #include "model/io/measurement_campaign.hpp"
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <cstdio>
@@ -30,7 +31,7 @@ public:
   // A cell as a number; empty cells give `empty_value`, or fail when the column is required.
   double number(const std::string& cell, int line, const std::string& column, bool required, double empty_value) const {
     if (cell.empty()) {
-      if (required) fail(line, "column '" + column + "': empty cell in a required column");
+      if (required) fail(line, "column '" + shortExcerpt(column) + "': empty cell in a required column");
       return empty_value;
     }
     double value = 0.0;
@@ -39,11 +40,12 @@ public:
     if (*begin == '+') ++begin;
     const auto result = std::from_chars(begin, end, value);
     if (result.ec == std::errc::result_out_of_range)
-      fail(line, "column '" + column + "': '" + shortExcerpt(cell) + "' is not finite");
+      fail(line, "column '" + shortExcerpt(column) + "': '" + shortExcerpt(cell) + "' is not finite");
     if (result.ec != std::errc() || result.ptr != end) {
-      fail(line, "column '" + column + "': '" + shortExcerpt(cell) + "' is not a number");
+      fail(line, "column '" + shortExcerpt(column) + "': '" + shortExcerpt(cell) + "' is not a number");
     }
-    if (!std::isfinite(value)) fail(line, "column '" + column + "': '" + shortExcerpt(cell) + "' is not finite");
+    if (!std::isfinite(value))
+      fail(line, "column '" + shortExcerpt(column) + "': '" + shortExcerpt(cell) + "' is not finite");
     return value;
   }
 
@@ -88,7 +90,7 @@ public:
         requireCommaSeparated(header, line, line_number);
         for (std::size_t c = 0; c < header.size(); ++c) {
           if (header[c].empty()) fail(line_number, "column " + std::to_string(c + 1) + " of the header has no name");
-          if (column_of.count(header[c])) fail(line_number, "column '" + header[c] + "' appears twice");
+          if (column_of.count(header[c])) fail(line_number, "column '" + shortExcerpt(header[c]) + "' appears twice");
           column_of[header[c]] = static_cast<int>(c);
         }
         header_seen = true;
@@ -145,7 +147,7 @@ private:
           const std::string digits = name.substr(p.size());
           const int index = digits.size() > 4 ? kMaxJoints + 1 : std::stoi(digits);
           if (index < 1 || index > dof) {
-            fail(line, "column '" + name + "' but the joints are q1 ... q" + std::to_string(dof));
+            fail(line, "column '" + shortExcerpt(name) + "' but the joints are q1 ... q" + std::to_string(dof));
           }
         }
       }
@@ -228,7 +230,8 @@ private:
       } else if (frame == "instrument") {
         campaign.frame = MeasurementFrame::Instrument;
       } else {
-        throw MeasurementError(source_ + ": metadata 'frame' must be 'base' or 'instrument', is '" + frame + "'");
+        throw MeasurementError(source_ + ": metadata 'frame' must be 'base' or 'instrument', is '" +
+                               shortExcerpt(frame) + "'");
       }
     }
     if (meta.count("target")) {
@@ -303,7 +306,20 @@ std::string campaignToText(const MeasurementCampaign& campaign) {
   }
   if (campaign.position_noise > 0.0) metadata["noise_mm"] = formatNumber(campaign.position_noise * 1e3);
   if (campaign.angle_noise > 0.0) metadata["noise_deg"] = formatNumber(campaign.angle_noise / kDegree);
-  for (const auto& entry : metadata) out << "# " << entry.first << ": " << entry.second << "\n";
+  for (const auto& entry : metadata) {
+    // A line break would start another line the reader takes for metadata, a header or a row (a newline in
+    // import-csv --robot or in the input's path corrupted the header): refused, naming the key.
+    const auto control = [](const std::string& text) {
+      return std::any_of(text.begin(), text.end(),
+                         [](char c) { return static_cast<unsigned char>(c) < 0x20 && c != '\t'; });
+    };
+    if (control(entry.first) || control(entry.second) || entry.first.find(':') != std::string::npos) {
+      throw MeasurementError("campaign metadata '" + shortExcerpt(entry.first) +
+                             "': a line break, control character or ':' in a key cannot be written (value '" +
+                             shortExcerpt(entry.second) + "')");
+    }
+    out << "# " << entry.first << ": " << entry.second << "\n";
+  }
 
   bool any_temperature = false, any_wrench = false, any_payload = false;
   for (std::size_t k = 0; k < campaign.size(); ++k) {

@@ -240,3 +240,48 @@ INSTANTIATE_TEST_SUITE_P(
 
 }  // namespace
 }  // namespace jointcomp
+
+namespace jointcomp {
+namespace {
+
+// A 10 MB name in a campaign is quoted as a short excerpt, not echoed whole (issue 41: a message of
+// 10,000,067 bytes).
+TEST(MeasurementCampaign, LongNamesAreQuotedAsShortExcerpts) {
+  const std::string huge(10000000, 'k');
+  const std::string format = "# format: jointcomp-measurements/1\n";
+  const std::vector<std::string> texts = {
+      format + "t,q1," + huge + "," + huge + ",x,y,z\n0,0,0,0,0,0,0\n",         // a column twice
+      format + "t,q1,q" + std::string(5000000, '9') + ",x,y,z\n0,0,0,0,0,0\n",  // a joint beyond the robot
+      format + "# frame: " + huge + "\nt,q1,x,y,z\n0,0,0,0,0\n",                // an unknown frame
+  };
+  for (const std::string& text : texts) {
+    try {
+      parseCampaign(text, "long.csv");
+      ADD_FAILURE() << "a campaign with a 10 MB name was read";
+    } catch (const MeasurementError& error) {
+      EXPECT_LT(std::string(error.what()).size(), 1000u) << std::string(error.what()).substr(0, 300);
+      EXPECT_THAT(error.what(), HasSubstr("long.csv"));
+    }
+  }
+}
+
+// The writer applies the reader's rules to the metadata: a newline in a value (import-csv --robot, an
+// input path) wrote a header the reader then read as another line.
+TEST(MeasurementCampaign, MetadataWithALineBreakIsNotWritten) {
+  MeasurementCampaign campaign = readCampaignFile(campaignFile("good.csv"));
+  campaign.robot = "rx170\nt,q1,q2";
+  try {
+    campaignToText(campaign);
+    ADD_FAILURE() << "a robot name with a newline was written";
+  } catch (const MeasurementError& error) {
+    EXPECT_THAT(error.what(), HasSubstr("campaign metadata 'robot': a line break"));
+  }
+  campaign.robot = "rx170";
+  campaign.metadata["source"] = "C:\\data\texport.csv";  // a tab is harmless
+  EXPECT_EQ(parseCampaign(campaignToText(campaign), "again.csv").metadata.at("source"), "C:\\data\texport.csv");
+  campaign.metadata["a: b"] = "c";
+  EXPECT_THROW(campaignToText(campaign), MeasurementError);
+}
+
+}  // namespace
+}  // namespace jointcomp
