@@ -391,6 +391,10 @@ CalibrationData prepareCalibrationData(const JointErrorModel& prior, const Measu
     throw MeasurementError(campaign.source + ": the campaign has " + std::to_string(campaign.dof) +
                            " joint columns, robot '" + robot.name + "' has " + std::to_string(robot.dof()) + " joints");
   }
+  if (!campaign.robot.empty() && campaign.robot != robot.name) {  // as parameter files are checked
+    throw MeasurementError(campaign.source + ": the campaign is of robot '" + campaign.robot + "', the model of '" +
+                           robot.name + "'; a campaign calibrates only the robot it was measured on");
+  }
   const std::size_t rows = campaign.command.size();
   if (campaign.position.size() != rows) {
     throw MeasurementError(campaign.source + ": " + std::to_string(campaign.position.size()) + " positions for " +
@@ -921,6 +925,10 @@ void checkCampaignsAgree(const std::vector<MeasurementCampaign>& campaigns) {
       throw InvalidArgument("campaign '" + m.source + "' differs from '" + first.source +
                             "' in joints, frame (base or instrument) or positions; campaigns used together must "
                             "agree in all three");
+    }
+    if (!m.robot.empty() && !first.robot.empty() && m.robot != first.robot) {
+      throw InvalidArgument("campaign '" + m.source + "' is of robot '" + m.robot + "', '" + first.source +
+                            "' of robot '" + first.robot + "'; campaigns used together must be of one robot");
     }
   }
 }

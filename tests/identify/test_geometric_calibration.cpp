@@ -12,6 +12,7 @@
 #include <gtest/gtest.h>
 
 #include "calibration_test_support.hpp"
+#include "model/common/errors.hpp"
 #include "model/effects/compliance.hpp"
 #include "model/effects/joint_offset.hpp"
 #include "model/identify/calibration_report.hpp"
@@ -367,6 +368,36 @@ TEST(GeometricCalibration, RowResidualsAreTheErrorAndJointErrorsThatExplainIt) {
     // ... and they are the smallest such (no larger than the true joint-3 error that also explains it).
     EXPECT_LE(r.joint_error.norm(), 2e-4 * (1.0 + 1e-3));
   }
+}
+
+}  // namespace
+}  // namespace jointcomp
+
+namespace jointcomp {
+namespace {
+
+// A campaign carries the robot it was measured on, as a parameter file does (issue 41: calibrate --urdf
+// ur10.urdf on a campaign of "# robot: rx170" "calibrated" the UR10 to 0.285 mm and said nothing).
+TEST(GeometricCalibration, ACampaignOfAnotherRobotIsRefusedNamingBoth) {
+  GeometricParameters truth = GeometricParameters::zero(6);
+  truth.target = kNominalTarget;
+  MeasurementCampaign campaign =
+      simulateGeometricCampaign(ur10Model(), truth, randomPoses(40, 5), kNoise, 5, kNominalTarget);
+  EXPECT_NO_THROW(calibrateGeometry(ur10Model(), campaign));
+  campaign.robot = "rx170";
+  campaign.source = "rx170_campaign.csv";
+  try {
+    calibrateGeometry(ur10Model(), campaign);
+    ADD_FAILURE() << "a campaign of another robot was calibrated";
+  } catch (const MeasurementError& error) {
+    EXPECT_THAT(error.what(), ::testing::HasSubstr("rx170_campaign.csv: the campaign is of robot 'rx170', the "
+                                                   "model of 'ur10'"));
+  }
+  // Two campaigns used together: of one robot (here, neither is of the model's).
+  MeasurementCampaign other = campaign;
+  other.robot = "ur10";
+  other.source = "ur10_campaign.csv";
+  EXPECT_THROW(calibrateGeometry(ur10Model(), std::vector<MeasurementCampaign>{other, campaign}), InvalidArgument);
 }
 
 }  // namespace
