@@ -65,10 +65,10 @@ int runCalibrate(int argc, char** argv) {
   const JointErrorModel& prior = setup.parameters.model;
   GeometricCalibrationOptions calibration;
   calibration.loss = parseRobustLoss(options.get("loss", "huber"));
-  if (options.has("loss-scale-mm")) calibration.loss_scale = std::stod(options.get("loss-scale-mm", "0")) * 1e-3;
-  if (options.has("pivot-threshold")) {
-    calibration.identifiability.relative_pivot_threshold = std::stod(options.get("pivot-threshold", "1e-4"));
-  }
+  // Not given: 0, the automatic scale; given, it must be a positive number (0, -1 and nan fell back to it).
+  calibration.loss_scale = options.number("loss-scale-mm", 0.0, {0.0, 1e6, true}) * 1e-3;
+  calibration.identifiability.relative_pivot_threshold =
+      options.number("pivot-threshold", calibration.identifiability.relative_pivot_threshold, {0.0, 1.0, true});
   calibration.fixed = splitCommaList(options.get("fix", ""));
   calibration.progress = consoleProgress(options);
 
@@ -80,7 +80,7 @@ int runCalibrate(int argc, char** argv) {
   for (const std::string& path : holdouts) held.emplace_back(path, readCampaignFile(path));
   const CalibrationRun run = runCalibration(prior, campaigns, held, calibration);
 
-  const std::string urdf_out = out + "/" + robot->name + "_calibrated.urdf";
+  const std::string urdf_out = out + "/" + plainFileName(robot->name) + "_calibrated.urdf";  // inside --out
   saveRobotUrdf(*run.calibrated_robot, urdf_out,
                 "  " + robot->name + " after kinematic calibration by jointcomp calibrate\n  nominal: " + urdf +
                     "\n  campaign: " + campaign_path + "\n  Joint placements corrected; " +

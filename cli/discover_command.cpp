@@ -29,6 +29,20 @@
 #include "model/robot/load_urdf.hpp"
 
 namespace jointcomp::cli {
+namespace {
+
+// --folds: at most one per kMinRowsPerFold rows of the fitted campaigns (300 folds of 300 rows took 4.5 GB).
+void checkFoldsFitRows(int folds, const std::vector<MeasurementCampaign>& fitted) {
+  std::size_t rows = 0;
+  for (const MeasurementCampaign& campaign : fitted) rows += campaign.size();
+  if (static_cast<std::size_t>(folds) * kMinRowsPerFold > rows) {
+    throw UsageError("--folds: " + std::to_string(folds) + " folds need at least " +
+                     std::to_string(folds * kMinRowsPerFold) + " rows; the fitted campaigns have " +
+                     std::to_string(rows));
+  }
+}
+
+}  // namespace
 
 int runDiscover(int argc, char** argv) {
   std::vector<std::string> campaigns, holdouts;
@@ -65,11 +79,12 @@ int runDiscover(int argc, char** argv) {
   if (base != "frame" && base != "textbook")
     throw std::invalid_argument("--base must be frame or textbook, not '" + base + "'");
   discovery.base_geometry = base == "textbook";
-  discovery.max_steps = std::stoi(options.get("max-steps", "8"));
-  discovery.max_harmonic_order = std::stoi(options.get("orders", "4"));
-  discovery.folds = std::stoi(options.get("folds", "5"));
-  discovery.min_cv_gain = std::stod(options.get("min-cv-gain", "0.02"));
-  discovery.noise_floor = std::stod(options.get("noise-floor-mm", "0")) * 1e-3;
+  discovery.max_steps = static_cast<int>(options.integer("max-steps", discovery.max_steps, 0, kMaxDiscoverySteps));
+  discovery.max_harmonic_order =
+      static_cast<int>(options.integer("orders", discovery.max_harmonic_order, 1, kMaxHarmonicOrder));
+  discovery.folds = static_cast<int>(options.integer("folds", discovery.folds, 2, kMaxFolds));
+  discovery.min_cv_gain = options.number("min-cv-gain", discovery.min_cv_gain, {0.0, 1.0});
+  discovery.noise_floor = options.number("noise-floor-mm", 0.0, {0.0, 1e3}) * 1e-3;
   discovery.types = splitCommaList(options.get("types", ""));
   for (const std::string& type : discovery.types) {
     bool known = false;
@@ -80,6 +95,7 @@ int runDiscover(int argc, char** argv) {
   std::vector<MeasurementCampaign> fitted, held;
   for (const std::string& path : campaigns) fitted.push_back(readCampaignFile(path));
   for (const std::string& path : holdouts) held.push_back(readCampaignFile(path));
+  checkFoldsFitRows(discovery.folds, fitted);
   std::printf("jointcomp discover: robot %s, %zu fitted and %zu held-out campaign(s), base %s\n", robot->name.c_str(),
               fitted.size(), held.size(), base.c_str());
   const auto fit_started = std::chrono::steady_clock::now();

@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -20,6 +21,7 @@
 #include "cli/commands.hpp"
 #include "cli/file_locations.hpp"
 #include "cli/options.hpp"
+#include "cli/output_paths.hpp"
 
 extern char** environ;
 
@@ -27,6 +29,11 @@ namespace jointcomp::cli {
 namespace {
 
 constexpr const char* kPython = "/usr/bin/python3";  // Debian's, with python3-distributed and numpy
+// The most draws of one Monte Carlo run: each keeps its error along the path (about 100 kB in Python); the
+// same as jointcomp.distributed.MAX_SAMPLES.
+constexpr long long kMaxSamples = 10000;
+constexpr long long kMaxWorkers = 1024;
+constexpr double kMaxTimeout = 1e7;  // s, about 4 months
 
 bool exists(const std::string& path) {
   struct stat info {};
@@ -128,6 +135,26 @@ void parse(CLI::App& app, int argc, char** argv) {
   parseCommandLine(app, argc, argv);
 }
 
+// Why `text` is no Dask scheduler address (PROTOCOL://HOST:PORT or HOST:PORT), or "" when it is one: a
+// garbage address made Dask try for 120 s and end in a traceback.
+std::string schedulerAddressProblem(const std::string& text) {
+  std::string rest = text;
+  const std::size_t scheme = text.find("://");
+  if (scheme != std::string::npos) {
+    const std::string protocol = text.substr(0, scheme);
+    if (protocol != "tcp" && protocol != "tls" && protocol != "ucx" && protocol != "ws" && protocol != "wss")
+      return excerpt(text) + " is not a scheduler address: the protocol must be tcp, tls, ucx, ws or wss";
+    rest = text.substr(scheme + 3);
+  }
+  const std::size_t colon = rest.rfind(':');
+  const std::string host = colon == std::string::npos ? "" : rest.substr(0, colon);
+  const std::string port = colon == std::string::npos ? "" : rest.substr(colon + 1);
+  const bool plain_host = !host.empty() && host.find_first_of(" /\t\n") == std::string::npos;
+  if (!plain_host || !integerProblem(port, 1, 65535).empty())
+    return excerpt(text) + " is not a scheduler address (PROTOCOL://HOST:PORT, e.g. tcp://10.0.0.5:8786)";
+  return "";
+}
+
 struct ClusterOptions {
   std::string scheduler;
   int workers = 0;
@@ -136,10 +163,13 @@ struct ClusterOptions {
   void add(CLI::App& app) {
     app.add_option("--scheduler", scheduler,
                    "address of a running Dask scheduler, e.g. tcp://host:8786 "
-                   "(default: a local cluster of worker processes)");
-    app.add_option("--workers", workers, "local worker processes (default: the machine's cores)")
-        ->check(CLI::Range(1, 1 << 16));
-    app.add_option("--timeout", timeout, "seconds for all tasks, then an error")->check(CLI::Range(1e-3, 1e9));
+                   "(default: a local cluster of worker processes)")
+        ->check(std::function<std::string(const std::string&)>(schedulerAddressProblem));
+    app.add_option("--workers", workers,
+                   "local worker processes, 1 to " + std::to_string(kMaxWorkers) + " (default: the machine's cores)")
+        ->check(integerCheck(1, kMaxWorkers));
+    app.add_option("--timeout", timeout, "seconds for all tasks, then an error (at most 1e7)")
+        ->check(numberCheck({0.0, kMaxTimeout, true}));
   }
   void append(std::vector<std::string>& arguments) const {
     if (!scheduler.empty()) arguments.insert(arguments.end(), {"--scheduler", scheduler});
@@ -172,14 +202,16 @@ int runMonteCarlo(int argc, char** argv) {
   app.add_option("--distribution", distribution, "JSON file: a list of {parameter, law, scale, relative}")
       ->check(CLI::ExistingFile)
       ->excludes(report_option);
-  app.add_option("--samples", samples, "number of draws")->check(CLI::Range(1, 1 << 30));
-  app.add_option("--seed", seed, "random seed (draw k uses its own generator of seed and k)")
-      ->check(CLI::Range(0LL, (1LL << 62)));
+  app.add_option("--samples", samples, "number of draws, 1 to " + std::to_string(kMaxSamples))
+      ->check(integerCheck(1, kMaxSamples));
+  app.add_option("--seed", seed, "random seed, 0 to 2^62 (draw k uses its own generator of seed and k)")
+      ->check(integerCheck(0, kMaxSeed));
   app.add_flag("--plant", plant, "simulate the flexible-joint plant (needs drives) instead of the quasi-static robot");
   app.add_option("--out", out, "output folder");
   ClusterOptions cluster;
   cluster.add(app);
   parse(app, argc, argv);
+  prepareOutputFolder(out);  // before any work, as every command does
   std::vector<std::string> arguments = {
       "montecarlo",         "--urdf", urdf, "--params", params, "--samples", std::to_string(samples), "--seed",
       std::to_string(seed), "--out",  out};
@@ -218,6 +250,7 @@ int runFleet(int argc, char** argv) {
   ClusterOptions cluster;
   cluster.add(app);
   parse(app, argc, argv);
+  prepareOutputFolder(out);  // before any work, as every command does
   std::vector<std::string> arguments = {"fleet", "--urdf", urdf, "--params", params, "--method", method, "--out", out};
   for (const std::string& campaign : campaigns) arguments.insert(arguments.end(), {"--campaign", campaign});
   for (const std::string& holdout : holdouts) arguments.insert(arguments.end(), {"--holdout", holdout});

@@ -19,23 +19,6 @@
 #include "model/robot/load_urdf.hpp"
 
 namespace jointcomp::cli {
-namespace {
-
-int integerOption(const Options& options, const std::string& name, int fallback) {
-  if (!options.has(name)) return fallback;
-  const std::string text = options.get(name, "");
-  std::size_t used = 0;
-  int value = 0;
-  try {
-    value = std::stoi(text, &used);
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  if (used == 0 || used != text.size()) throw std::invalid_argument("--" + name + ": '" + text + "' is not an integer");
-  return value;
-}
-
-}  // namespace
 
 int runIdentify(int argc, char** argv) {
   if (argc >= 2 && (std::string(argv[1]) == "--help" || std::string(argv[1]) == "-h")) {
@@ -98,9 +81,11 @@ int runIdentify(int argc, char** argv) {
   } else {
     if (options.has("use")) throw std::invalid_argument("identify transmission takes no --use");
     TransmissionIdentificationOptions o;
-    o.joint = integerOption(options, "joint", 2) - 1;
-    o.stage = integerOption(options, "stage", 2);
-    if (options.has("orders")) o.candidate_orders = numberList(options.get("orders", ""), "orders");
+    o.joint = static_cast<int>(options.integer("joint", 2, 1, kMaxJoints)) - 1;
+    o.stage = static_cast<int>(options.integer("stage", 2, 1, 16));
+    if (options.has("orders"))
+      o.candidate_orders =
+          numberList(options.get("orders", ""), "orders", {0.0, static_cast<double>(kMaxHarmonicOrder), true});
     const TransmissionIdentificationResult result = identifyTransmissionError(nominal, campaign, o);
     const JointErrorModel updated = withIdentifiedHarmonics(nominal, result, campaign_path);
     saveParameterFile(updated, sources.updated_parameters, drives);

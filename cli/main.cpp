@@ -2,6 +2,7 @@
 #include <cstdio>
 #include <cstring>
 #include <exception>
+#include <new>
 #include <string>
 
 #include "cli/commands.hpp"
@@ -95,6 +96,13 @@ int main(int argc, char** argv) {
   } catch (const jointcomp::cli::UsageError& error) {
     std::fprintf(stderr, "jointcomp %s: %s\n", command.c_str(), error.what());
     return 2;
+  } catch (const std::bad_alloc&) {
+    // Not "std::bad_alloc": say what it means and where to look.
+    std::fprintf(stderr,
+                 "jointcomp %s: out of memory: the inputs ask for more than this machine has (the limits of the "
+                 "options are in jointcomp %s --help)\n",
+                 command.c_str(), command.c_str());
+    return 1;
   } catch (const std::exception& error) {
     std::fprintf(stderr, "jointcomp %s: %s\n", command.c_str(), error.what());
     return 1;

@@ -1,7 +1,10 @@
 #include "cli/options.hpp"
 
+#include <charconv>
+#include <cmath>
 #include <cstdio>
 #include <map>
+#include <system_error>
 
 #include <CLI/CLI.hpp>
 
@@ -17,27 +20,28 @@ const char* optionHelp(const std::string& name) {
       {"out", "output folder (a file for simulate and the importers); checked before any work"},
       {"campaign", "measurement campaign(s) to fit (docs/measurement-campaign.md), comma-separated or repeated"},
       {"holdout", "held-out campaign(s), evaluated with only their instrument frame refitted; repeatable"},
-      {"seed", "random seed"},
+      {"seed", "random seed, 0 to 2^62"},
       {"compensate-joints", "joints whose references are compensated, e.g. 2,3 (default: all)"},
       {"no-plot", "write no plot"},
       {"quiet", "print no progress lines"},
       {"quasi-static", "simulate the quasi-static robot instead of the flexible-joint plant"},
       {"feed-rate",
-       "tool speed along the path in m/s (default: the paper's 0.03); acceleration and jerk limits scale with it"},
+       "tool speed along the path in m/s, 0.003 to 2 (default: the paper's 0.03); acceleration and jerk limits "
+       "scale with it"},
       {"no-dynamic-correction",
        "only the paper's three runs (by default the plant's run has a fourth: stiffness, kinematic and dynamic "
        "correction)"},
       {"loss", "robust loss of the fit: huber, cauchy or none"},
-      {"loss-scale-mm", "scale of the robust loss in mm (default: from the least-squares residuals)"},
-      {"pivot-threshold", "relative pivot below which a parameter counts as not identifiable"},
+      {"loss-scale-mm", "scale of the robust loss in mm, above 0 (default: from the least-squares residuals)"},
+      {"pivot-threshold", "relative pivot below which a parameter counts as not identifiable, above 0 and at most 1"},
       {"fix", "calibration parameters held at nominal, comma-separated names"},
       {"base", "discovery's base model: frame or textbook"},
-      {"max-steps", "most effects discovery adds"},
-      {"orders", "highest harmonic order offered by default"},
-      {"folds", "time blocks of the cross-validation"},
+      {"max-steps", "most effects discovery adds, 0 to 64"},
+      {"orders", "highest harmonic order offered by default, 1 to 64 (identify: a list of orders)"},
+      {"folds", "time blocks of the cross-validation, 2 to 20, and at most one per 5 rows of the fitted campaigns"},
       {"types", "candidate effect types to try, comma-separated (default: all)"},
-      {"noise-floor-mm", "instrument noise floor in mm (3-D RMS), where discovery may stop"},
-      {"min-cv-gain", "smallest relative cross-validation gain a candidate needs"},
+      {"noise-floor-mm", "instrument noise floor in mm (3-D RMS), where discovery may stop, 0 to 1000"},
+      {"min-cv-gain", "smallest relative cross-validation gain a candidate needs, 0 to 1"},
       {"joint", "joint number (1-based)"},
       {"stage", "gear stage"},
       {"use", "stiffness identification: local or global"},
@@ -47,13 +51,13 @@ const char* optionHelp(const std::string& name) {
       {"target", "target on the flange x,y,z in mm"},
       {"from", "sweep start in deg"},
       {"to", "sweep end in deg"},
-      {"step", "sweep step in deg"},
-      {"settle", "settling time per pose in s"},
-      {"cycles", "number of back-and-forth cycles"},
-      {"count", "number of random poses"},
+      {"step", "sweep step in deg (at most 1e6 steps)"},
+      {"settle", "settling time per pose in s, at most 3600"},
+      {"cycles", "number of back-and-forth cycles, 1 to 10000 (at most 1e6 rows in all)"},
+      {"count", "number of random poses, 1 to 100000"},
       {"pose", "joint angles in deg, comma-separated"},
       {"no-noise", "simulate perfect instruments"},
-      {"global-poses", "poses of the global stiffness protocol"},
+      {"global-poses", "poses of the global stiffness protocol, 0 to 1000"},
       {"warm-up", "thermal warm-up RISE_DEGC[,TAU_S[,START_DEGC]]"},
       {"in", "the file to import"},
       {"trafo", "the IPA tracker-to-base transform file"},
@@ -67,6 +71,95 @@ const char* optionHelp(const std::string& name) {
   };
   const auto found = help.find(name);
   return found == help.end() ? "" : found->second;
+}
+
+std::string excerpt(const std::string& text, std::size_t keep) {
+  if (text.size() <= keep) return "'" + text + "'";
+  return "'" + text.substr(0, keep) + "...' (" + std::to_string(text.size()) + " characters)";
+}
+
+namespace {
+
+std::string formatBound(double value) {
+  char text[40];
+  std::snprintf(text, sizeof text, "%.10g", value);
+  return text;
+}
+
+// from_chars takes no leading '+'; a sign is fine as long as the rest is the number.
+const char* afterPlus(const std::string& text) {
+  const char* first = text.data();
+  return text.size() > 1 && text[0] == '+' && text[1] != '-' ? first + 1 : first;
+}
+
+}  // namespace
+
+std::string numberProblem(const std::string& text, const Bounds& bounds) {
+  double value = 0.0;
+  const char* end = text.data() + text.size();
+  const auto [stop, error] = std::from_chars(afterPlus(text), end, value);
+  const std::string quoted = excerpt(text);
+  const std::string range = (bounds.min_open ? "greater than " : "from ") + formatBound(bounds.min) +
+                            (bounds.min_open ? " and at most " : " to ") + formatBound(bounds.max);
+  if (text.empty() || stop != end || (error != std::errc() && error != std::errc::result_out_of_range))
+    return quoted + " is not a number";
+  if (error == std::errc::result_out_of_range) return quoted + " is out of range: it must be " + range;
+  if (!std::isfinite(value)) return quoted + " is not a finite number";
+  if (value < bounds.min || (bounds.min_open && value == bounds.min) || value > bounds.max)
+    return quoted + " is out of range: it must be " + range;
+  return "";
+}
+
+std::string integerProblem(const std::string& text, long long min, long long max) {
+  long long value = 0;
+  const char* end = text.data() + text.size();
+  const auto [stop, error] = std::from_chars(afterPlus(text), end, value);
+  const std::string quoted = excerpt(text);
+  const std::string range = "an integer from " + std::to_string(min) + " to " + std::to_string(max);
+  if (text.empty() || stop != end || (error != std::errc() && error != std::errc::result_out_of_range))
+    return quoted + " is not " + (text.find_first_of(".eE") != std::string::npos ? "an integer" : "a number") + " (" +
+           range + ")";
+  if (error == std::errc::result_out_of_range || value < min || value > max)
+    return quoted + " is out of range: it must be " + range;
+  return "";
+}
+
+double parseNumber(const std::string& text, const std::string& option, const Bounds& bounds) {
+  const std::string problem = numberProblem(text, bounds);
+  if (!problem.empty()) throw UsageError("--" + option + ": " + problem);
+  double value = 0.0;
+  std::from_chars(afterPlus(text), text.data() + text.size(), value);
+  return value;
+}
+
+long long parseInteger(const std::string& text, const std::string& option, long long min, long long max) {
+  const std::string problem = integerProblem(text, min, max);
+  if (!problem.empty()) throw UsageError("--" + option + ": " + problem);
+  long long value = 0;
+  std::from_chars(afterPlus(text), text.data() + text.size(), value);
+  return value;
+}
+
+std::vector<double> numberList(const std::string& text, const std::string& option, const Bounds& bounds) {
+  std::vector<double> values;
+  for (const std::string& item : splitCommaList(text)) values.push_back(parseNumber(item, option, bounds));
+  return values;
+}
+
+std::function<std::string(const std::string&)> integerCheck(long long min, long long max) {
+  return [min, max](const std::string& text) { return integerProblem(text, min, max); };
+}
+
+std::function<std::string(const std::string&)> numberCheck(const Bounds& bounds) {
+  return [bounds](const std::string& text) { return numberProblem(text, bounds); };
+}
+
+double Options::number(const std::string& name, double fallback, const Bounds& bounds) const {
+  return has(name) ? parseNumber(get(name, ""), name, bounds) : fallback;
+}
+
+long long Options::integer(const std::string& name, long long fallback, long long min, long long max) const {
+  return has(name) ? parseInteger(get(name, ""), name, min, max) : fallback;
 }
 
 Options::Options(int argc, char** argv, const std::set<std::string>& known, const std::set<std::string>& flags,

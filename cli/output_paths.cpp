@@ -45,6 +45,18 @@ void prepareOutputFolder(const std::string& folder, const std::string& option) {
   if (!problem.empty()) throw std::invalid_argument(option + ": " + problem);
 }
 
+std::string plainFileName(const std::string& text, const std::string& fallback) {
+  std::string name;
+  for (const char c : text) {
+    const bool plain =
+        (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '.' || c == '_' || c == '-';
+    if (name.empty() && c == '.') continue;  // no leading dot
+    name += plain ? c : '_';
+    if (name.size() == kMaxPlainNameLength) break;
+  }
+  return name.empty() ? fallback : name;
+}
+
 void prepareOutputFile(const std::string& file, const std::string& option) {
   if (file.empty()) throw std::invalid_argument(option + ": the path is empty");
   std::error_code error;

@@ -1,4 +1,5 @@
 // `jointcomp simulate`: a measurement campaign generated from a "true" robot with simulated instruments.
+#include <cstdint>
 #include <cstdio>
 #include <filesystem>
 #include <memory>
@@ -19,12 +20,22 @@ namespace jointcomp::cli {
 namespace {
 
 constexpr double kDegree = 3.14159265358979323846 / 180.0;
+// What the options of a simulated campaign may be (beyond them a run is refused naming the option): angles
+// within ten turns, a target within 10 m of the flange, settling up to an hour per pose, rows as the
+// experiment layer allows (kMaxSweepRows, kMaxRandomPoses).
+constexpr Bounds kAngleDeg = {-3600.0, 3600.0};
+constexpr Bounds kTargetMm = {-1e4, 1e4};
+constexpr long long kMaxCycles = 10000;
+constexpr long long kMaxGlobalPoses = 1000;
 
-double numberOption(const Options& options, const std::string& name, double fallback) {
-  if (!options.has(name)) return fallback;
-  const std::vector<double> values = numberList(options.get(name, ""), name);
-  if (values.size() != 1) throw std::invalid_argument("--" + name + " takes one number");
-  return values[0];
+// --warm-up RISE_DEGC[,TAU_S[,START_DEGC]] into `profile`.
+void readWarmUp(const std::string& text, TemperatureProfile& profile) {
+  const std::vector<std::string> items = splitCommaList(text);
+  if (items.empty() || items.size() > 3) throw UsageError("--warm-up takes RISE_DEGC[,TAU_S[,START_DEGC]]");
+  profile.enabled = true;
+  profile.rise_degc = parseNumber(items[0], "warm-up", {-200.0, 200.0});
+  if (items.size() > 1) profile.time_constant_s = parseNumber(items[1], "warm-up", {0.0, 1e7, true});
+  if (items.size() > 2) profile.start_degc = parseNumber(items[2], "warm-up", {-100.0, 200.0});
 }
 
 }  // namespace
@@ -51,7 +62,7 @@ int runSimulate(int argc, char** argv) {
   std::string truth_written;
   if (options.has("perturb")) {
     PerturbationSpec perturbation;
-    perturbation.seed = std::stoull(options.get("perturb", "2012"));
+    perturbation.seed = static_cast<std::uint64_t>(options.integer("perturb", 2012, 0, kMaxSeed));
     truth = perturbedModel(truth, perturbation);
     std::filesystem::path truth_file(out);
     truth_file.replace_extension(".truth.json");
@@ -59,15 +70,15 @@ int runSimulate(int argc, char** argv) {
     spec.metadata["truth"] =
         truth_written + " (" + truth_path + " perturbed with seed " + options.get("perturb", "") + ")";
   }
-  spec.seed = options.has("seed") ? std::stoull(options.get("seed", "1")) : 1;
+  spec.seed = static_cast<std::uint64_t>(options.integer("seed", 1, 0, kMaxSeed));
   spec.noise = !options.has("no-noise");
   if (options.has("target")) {
-    const std::vector<double> target = numberList(options.get("target", ""), "target");
+    const std::vector<double> target = numberList(options.get("target", ""), "target", kTargetMm);
     if (target.size() != 3) throw std::invalid_argument("--target takes x,y,z in mm");
     spec.target_in_flange = Eigen::Vector3d(target[0], target[1], target[2]) * 1e-3;
   }
   if (options.has("pose")) {
-    const std::vector<double> pose = numberList(options.get("pose", ""), "pose");
+    const std::vector<double> pose = numberList(options.get("pose", ""), "pose", kAngleDeg);
     if (static_cast<int>(pose.size()) != robot->dof()) {
       throw std::invalid_argument("--pose takes " + std::to_string(robot->dof()) + " joint angles in degrees");
     }
@@ -76,25 +87,16 @@ int runSimulate(int argc, char** argv) {
     spec.stiffness.pose = q;
     spec.sweep.pose = q;
   }
-  spec.sweep.joint = static_cast<int>(numberOption(options, "joint", 2)) - 1;
-  spec.sweep.from_rad = numberOption(options, "from", spec.sweep.from_rad / kDegree) * kDegree;
-  spec.sweep.to_rad = numberOption(options, "to", spec.sweep.to_rad / kDegree) * kDegree;
-  spec.sweep.step_rad = numberOption(options, "step", spec.sweep.step_rad / kDegree) * kDegree;
-  spec.sweep.settle_s = numberOption(options, "settle", spec.sweep.settle_s);
-  spec.sweep.cycles = static_cast<int>(numberOption(options, "cycles", spec.sweep.cycles));
-  spec.random.count = static_cast<int>(numberOption(options, "count", spec.random.count));
-  spec.stiffness.global_poses = static_cast<int>(numberOption(options, "global-poses", spec.stiffness.global_poses));
-  if (options.has("warm-up")) {
-    const std::vector<double> warm_up = numberList(options.get("warm-up", ""), "warm-up");
-    if (warm_up.empty() || warm_up.size() > 3)
-      throw std::invalid_argument("--warm-up takes RISE_DEGC[,TAU_S[,START_DEGC]]");
-    spec.temperature.enabled = true;
-    spec.temperature.rise_degc = warm_up[0];
-    if (warm_up.size() > 1) spec.temperature.time_constant_s = warm_up[1];
-    if (warm_up.size() > 2) spec.temperature.start_degc = warm_up[2];
-    if (!(spec.temperature.time_constant_s > 0.0))
-      throw std::invalid_argument("--warm-up: the time constant must be positive");
-  }
+  spec.sweep.joint = static_cast<int>(options.integer("joint", 2, 1, kMaxJoints)) - 1;
+  spec.sweep.from_rad = options.number("from", spec.sweep.from_rad / kDegree, kAngleDeg) * kDegree;
+  spec.sweep.to_rad = options.number("to", spec.sweep.to_rad / kDegree, kAngleDeg) * kDegree;
+  spec.sweep.step_rad = options.number("step", spec.sweep.step_rad / kDegree, {0.0, 360.0, true}) * kDegree;
+  spec.sweep.settle_s = options.number("settle", spec.sweep.settle_s, {0.0, 3600.0, true});
+  spec.sweep.cycles = static_cast<int>(options.integer("cycles", spec.sweep.cycles, 1, kMaxCycles));
+  spec.random.count = static_cast<int>(options.integer("count", spec.random.count, 1, kMaxRandomPoses));
+  spec.stiffness.global_poses =
+      static_cast<int>(options.integer("global-poses", spec.stiffness.global_poses, 0, kMaxGlobalPoses));
+  if (options.has("warm-up")) readWarmUp(options.get("warm-up", ""), spec.temperature);
   if (options.has("plant")) {
     if (!setup.parameters.hasDrives()) {
       throw ParameterError(truth_path + ": no \"plant\" object (drives and controller gains) for the plant");

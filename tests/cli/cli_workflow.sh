@@ -165,7 +165,7 @@ expect_error() {  # expect_error FRAGMENT ARGS...
 }
 expect_error "unknown protocol 'circle'" simulate --protocol circle --truth "$params" --out "$work/x.csv"
 expect_error "--warm-up takes" simulate --protocol random --truth "$params" --warm-up 1,2,3,4 --out "$work/x.csv"
-expect_error "time constant must be positive" simulate --protocol random --truth "$params" --warm-up 5,0 --out "$work/x.csv"
+expect_error "--warm-up: '0' is out of range: it must be greater than 0" simulate --protocol random --truth "$params" --warm-up 5,0 --out "$work/x.csv"
 expect_error "missing.csv" discover --campaign "$work/missing.csv" --out "$work/x"
 expect_error "unknown effect type 'gremlin'" discover --campaign "$work/fit.csv" --types gremlin --out "$work/x"
 # A malformed "plant" object is an error in every command that reads the file, not only in those that
@@ -181,7 +181,7 @@ for command in calibrate discover; do
 done
 expect_error "kp_nm_per_rad" identify stiffness --params "$work/bad_plant.json" --campaign "$work/fit.csv" --out "$work/x"
 expect_error "kp_nm_per_rad" paper --quasi-static --params "$work/bad_plant.json" --out "$work/x"
-expect_error "--feed-rate: '3' is not a tool speed in m/s" paper --quasi-static --feed-rate 3 --out "$work/x"
+expect_error "--feed-rate: '3' is out of range: it must be from 0.003 to 2" paper --quasi-static --feed-rate 3 --out "$work/x"
 expect_error "--feed-rate: 'fast' is not a number" paper --quasi-static --feed-rate fast --out "$work/x"
 expect_error "identify: unknown kind 'speed'" identify speed --campaign "$work/fit.csv" --out "$work/x"
 # A user's own export (';', decimal commas, a title line, its own names, radians and metres) imported, and the

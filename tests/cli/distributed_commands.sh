@@ -26,13 +26,41 @@ expect_usage() {
   grep -qF -- "$phrase" log.txt || { cat log.txt; fail "jointcomp $*: no '$phrase' in the message"; }
   grep -qF -- "Usage: jointcomp $1" log.txt || { cat log.txt; fail "jointcomp $*: no usage"; }
 }
-expect_usage "--samples: Value 0 not in range" montecarlo --samples 0
-expect_usage "--workers: Value 0 not in range" montecarlo --workers 0
+expect_usage "--samples: '0' is out of range: it must be an integer from 1 to 10000" montecarlo --samples 0
+expect_usage "--samples: '1073741824' is out of range: it must be an integer from 1 to 10000" montecarlo --samples 1073741824
+expect_usage "--samples: '1e3' is not an integer" montecarlo --samples 1e3
+expect_usage "--seed: '-1' is out of range" montecarlo --seed -1
+expect_usage "--seed: '5x' is not a number" montecarlo --seed 5x
+expect_usage "--timeout: 'nan' is not a finite number" fleet --campaign "$model/params/rx170.json" --timeout nan
+expect_usage "--timeout: '0' is out of range: it must be greater than 0" montecarlo --timeout 0
+expect_usage "--workers: '0' is out of range" montecarlo --workers 0
+expect_usage "--scheduler: 'garbage' is not a scheduler address" montecarlo --scheduler garbage
+expect_usage "--scheduler: 'http://host:8786' is not a scheduler address" fleet --campaign "$model/params/rx170.json" \
+  --scheduler http://host:8786
+expect_usage "--scheduler: 'tcp://host:99999' is not a scheduler address" montecarlo --scheduler tcp://host:99999
 expect_usage "--report: File does not exist: absent.json" montecarlo --report absent.json
 expect_usage "--report excludes --distribution" montecarlo --report "$model/params/rx170.json" --distribution "$model/params/rx170.json"
 expect_usage "--campaign is required" fleet
 expect_usage "--campaign: File does not exist: absent.csv" fleet --campaign absent.csv
 expect_usage "--method: discovery not in" fleet --campaign "$model/params/rx170.json" --method discovery
+
+# --out is checked before any work, by the C++ side (Python is not even started): a file, a /proc path and an
+# empty path are refused at once, exit 1.
+expect_refused() {
+  local phrase="$1"
+  shift
+  local status=0
+  "$jointcomp" "$@" >log.txt 2>&1 || status=$?
+  [ "$status" -eq 1 ] || { cat log.txt; fail "jointcomp $* exited $status, expected 1"; }
+  grep -qF -- "$phrase" log.txt || { cat log.txt; fail "jointcomp $*: no '$phrase' in the message"; }
+  if grep -q "^wrote \|draw\|Dask" log.txt; then cat log.txt; fail "jointcomp $* worked before refusing"; fi
+}
+echo "not a folder" >a_file
+expect_refused "--out: 'a_file' exists and is not a folder" montecarlo --samples 2 --out a_file
+expect_refused "--out: '/proc/jointcomp-out' cannot be created" montecarlo --samples 2 --out /proc/jointcomp-out
+expect_refused "--out: the path is empty" montecarlo --samples 2 --out ""
+expect_refused "--out: 'a_file' exists and is not a folder" fleet --campaign "$model/params/rx170.json" --out a_file
+expect_refused "--out: the path is empty" fleet --campaign "$model/params/rx170.json" --out ""
 
 # A malformed report reaches Python, which names it (exit 1).
 echo '{"format": "something else"}' >odd.json

@@ -54,4 +54,16 @@ if grep -q "^wrote .*\.fmu" log.txt; then
     fail "the FMUs are not in <out>/fmu"
 fi
 [ ! -e out ] || { ls -R out; fail "paper wrote into ./out although --out said otherwise"; }
+# A name from the user's data never leads outside --out: a robot named "../../victim" in its URDF made
+# calibrate write <out>/../../victim_calibrated.urdf.
+mkdir -p victim_home/a/b
+sed 's|<robot name="rx170">|<robot name="../../victim">|' "$model/robots/rx170.urdf" >victim.urdf
+sed 's|"robot": "rx170"|"robot": "../../victim"|' "$model/params/rx170.json" >victim.json
+"$jointcomp" simulate --protocol random --count 30 --urdf victim.urdf --truth victim.json --out victim.csv \
+  >log.txt 2>&1 || { cat log.txt; fail "simulate of the victim robot failed"; }
+"$jointcomp" calibrate --urdf victim.urdf --params victim.json --campaign victim.csv --out victim_home/a/b \
+  --no-plot --quiet >log.txt 2>&1 || { cat log.txt; fail "calibrate of the victim robot failed"; }
+[ -s victim_home/a/b/_.._victim_calibrated.urdf ] || { ls -R victim_home; fail "no _.._victim_calibrated.urdf"; }
+[ "$(ls victim_home)" = a ] && [ "$(ls victim_home/a)" = b ] || { ls -R victim_home; fail "calibrate wrote outside --out"; }
+
 echo "output_paths: bad --out refused before any work; outputs under --out"
