@@ -63,14 +63,14 @@ struct DiscoveryOptions {
   double max_ridge_weight = 1.0;
   // Knots per revolution of the periodic tables offered (each part of each joint, every count).
   std::vector<int> table_knots = {16, 32, 64, 128};
-  // Pairs: the best candidate of one family on each of two joints, fitted together (effects that only help
-  // together are found).
+  // Pairs: the best candidate of one family on each of two joints, fitted together, compete when they lower
+  // the CV error by more than their members alone summed (effects that only help together are found).
   bool pairs = true;
   // The transfer check. A candidate is rejected when, predicted from the other groups, it makes a group of
   // rows (a time block, a part of the joint space, a range of one of its joints' angles) worse by more than
   // 1 % and by more than transfer_significance standard errors of that group's change (its sub-blocks'
   // spread). Joint-space parts smaller than min_group_share of the rows join the nearest larger part.
-  double transfer_significance = 2.0;
+  double transfer_significance = 3.0;
   double min_group_share = 0.05;
   int angle_ranges = 5;  // ranges of a joint's angle, equally filled, for leave-one-range-out CV
   const EffectRegistry* registry = nullptr;  // whose discovery families compete; null: the built-in one

@@ -137,7 +137,7 @@ nlohmann::ordered_json discoveryReportJson(const DiscoveryResult& result, const 
                          {"max_prior_weight", options.max_prior_weight},
                          {"max_ridge_weight", options.max_ridge_weight},
                          {"ties", "within one standard error of the fold-wise CV differences or a quarter of "
-                                  "min_cv_gain: the lowest BIC"},
+                                  "min_cv_gain: the fewest parameters, then the lowest BIC"},
                          {"base", baseName(options)},
                          {"max_steps", options.max_steps},
                          {"max_harmonic_order", options.max_harmonic_order},

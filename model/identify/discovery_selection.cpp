@@ -200,7 +200,12 @@ std::string label(const Selection& s, const Evaluation& e) {
   return text;
 }
 
-// The pairs worth fitting: per family, the best single candidate of each joint that gains; each two of them.
+// A pair competes only when it helps more than its two members do alone, summed: effects that help only
+// together (each hiding the other), not two independent ones, which the greedy steps take one at a time.
+constexpr double kPairSynergy = 1.05;
+
+// The pairs worth fitting: per family, the best single candidate of each joint that gains; each two of them,
+// where the pair is synergistic.
 std::vector<Evaluation> pairs(const Selection& s, const std::vector<Evaluation>& alone) {
   std::map<std::pair<const DiscoveryFamily*, int>, const Evaluation*> best;
   for (const Evaluation& e : alone) {
@@ -213,7 +218,10 @@ std::vector<Evaluation> pairs(const Selection& s, const std::vector<Evaluation>&
   std::vector<Evaluation> out;
   for (auto a = best.begin(); a != best.end(); ++a) {
     for (auto b = std::next(a); b != best.end(); ++b) {
-      if (a->first.first == b->first.first) out.push_back(evaluatePair(s, *a->second, *b->second));
+      if (a->first.first != b->first.first) continue;
+      Evaluation pair = evaluatePair(s, *a->second, *b->second);
+      const double gain_a = s.base.cv - a->second->fit.cv, gain_b = s.base.cv - b->second->fit.cv;
+      if (s.base.cv - pair.fit.cv > kPairSynergy * (gain_a + gain_b)) out.push_back(std::move(pair));
     }
   }
   return out;
@@ -244,11 +252,19 @@ Choice chooseCandidate(const Selection& s) {
       choice.rejected = label(s, e) + ": " + e.hurt;
     }
   }
-  // Of the candidates tied with the best, the one the BIC prefers (which weighs their parameters).
-  const Evaluation* chosen = nullptr;
+  // Of the candidates tied with the best, the one with the fewest (effective) parameters, then the lowest BIC:
+  // an offset rather than the joint's whole placement or a drift that starts from an offset.
+  std::vector<const Evaluation*> tied_set;
+  double fewest = std::numeric_limits<double>::infinity();
   for (const Evaluation& e : all) {
     if (!best || !e.passes() || !tied(e.fit, best->fit, s.options.min_cv_gain)) continue;
-    if (!chosen || e.delta_bic < chosen->delta_bic) chosen = &e;
+    tied_set.push_back(&e);
+    fewest = std::min(fewest, e.added);
+  }
+  const Evaluation* chosen = nullptr;
+  for (const Evaluation* e : tied_set) {
+    if (e->added > fewest + 0.5) continue;
+    if (!chosen || e->delta_bic < chosen->delta_bic) chosen = e;
   }
   for (const Evaluation& e : all) {
     if (&e != chosen && e.fit.cv < runner_cv && e.added > 0.0) {
