@@ -15,6 +15,16 @@
 namespace jointcomp {
 namespace {
 
+// The plausible ranges of a campaign's values, in the file's units: far beyond any robot cell, yet wide
+// enough for any real campaign (a laser tracker reaches 80 m; a continuous joint may wind many turns). The
+// reader refuses values beyond them and the writer does not write them.
+constexpr double kMaxTimeS = 1e10;
+constexpr double kMaxAngleDeg = 1e5;
+constexpr double kMaxLengthMm = 1e6;
+constexpr double kMaxTemperatureDegC = 1000.0;
+constexpr double kMaxWrench = 1e7;  // N, N m
+constexpr double kMaxPayloadKg = 1e5;
+
 constexpr const char* kFormatLine = "jointcomp-measurements/1";
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kDegree = kPi / 180.0;
@@ -54,7 +64,7 @@ public:
   void requirePlausible(double value, double limit, int line, const std::string& column, const char* unit) const {
     if (std::isnan(value) || std::abs(value) <= limit) return;
     char text[200];
-    std::snprintf(text, sizeof text, "column '%s': %.6g %s is beyond the plausible range of +-%g %s", column.c_str(),
+    std::snprintf(text, sizeof text, "column '%s': %.15g %s is beyond the plausible range of +-%g %s", column.c_str(),
                   value, unit, limit, unit);
     fail(line, text);
   }
@@ -177,7 +187,7 @@ private:
       return std::isnan(value) ? absent : value * scale;
     };
     const double t = number(*cell("t"), line, "t", true, 0.0);
-    requirePlausible(t, 1e10, line, "t", "s");
+    requirePlausible(t, kMaxTimeS, line, "t", "s");
     if (!campaign.time.empty() && t < campaign.time.back()) {
       fail(line, "column 't': time decreases (" + cell("t")->substr(0, 32) + " after " +
                      std::to_string(campaign.time.back()) + ")");
@@ -187,14 +197,14 @@ private:
     for (int j = 0; j < campaign.dof; ++j) {
       const std::string column = "q" + std::to_string(j + 1);
       const double degrees = number(*cell(column), line, column, true, 0.0);
-      requirePlausible(degrees, 1e5, line, column, "deg");
+      requirePlausible(degrees, kMaxAngleDeg, line, column, "deg");
       command[j] = degrees * kDegree;
     }
     campaign.command.push_back(command);
     if (campaign.has_position) {
-      campaign.position.emplace_back(optional("x", 1e-3, kNotMeasured, 1e6, "mm"),
-                                     optional("y", 1e-3, kNotMeasured, 1e6, "mm"),
-                                     optional("z", 1e-3, kNotMeasured, 1e6, "mm"));
+      campaign.position.emplace_back(optional("x", 1e-3, kNotMeasured, kMaxLengthMm, "mm"),
+                                     optional("y", 1e-3, kNotMeasured, kMaxLengthMm, "mm"),
+                                     optional("z", 1e-3, kNotMeasured, kMaxLengthMm, "mm"));
       const Eigen::Vector3d& p = campaign.position.back();
       if (std::isnan(p.x()) != std::isnan(p.y()) || std::isnan(p.x()) != std::isnan(p.z())) {
         fail(line, "columns x, y, z: measured in part only (all three or none)");
@@ -203,15 +213,15 @@ private:
     if (campaign.has_measured_angles) {
       JointVector measured(campaign.dof);
       for (int j = 0; j < campaign.dof; ++j)
-        measured[j] = optional("qm" + std::to_string(j + 1), kDegree, kNotMeasured, 1e5, "deg");
+        measured[j] = optional("qm" + std::to_string(j + 1), kDegree, kNotMeasured, kMaxAngleDeg, "deg");
       campaign.measured_angles.push_back(measured);
     }
-    campaign.temperature.push_back(optional("temp", 1.0, kNotMeasured, 1000.0, "degC"));
+    campaign.temperature.push_back(optional("temp", 1.0, kNotMeasured, kMaxTemperatureDegC, "degC"));
     Vector6 wrench;
     const char* names[6] = {"fx", "fy", "fz", "mx", "my", "mz"};
-    for (int k = 0; k < 6; ++k) wrench[k] = optional(names[k], 1.0, 0.0, 1e7, k < 3 ? "N" : "N m");
+    for (int k = 0; k < 6; ++k) wrench[k] = optional(names[k], 1.0, 0.0, kMaxWrench, k < 3 ? "N" : "N m");
     campaign.wrench.push_back(wrench);
-    const double payload = optional("payload", 1.0, 0.0, 1e5, "kg");
+    const double payload = optional("payload", 1.0, 0.0, kMaxPayloadKg, "kg");
     if (payload < 0.0) fail(line, "column 'payload': negative mass");
     campaign.payload.push_back(payload);
   }
@@ -238,7 +248,11 @@ private:
       std::stringstream list(meta.at("target"));
       std::string item;
       std::vector<double> values;
-      while (std::getline(list, item, ',')) values.push_back(metaNumber("target", item) * 1e-3);
+      while (std::getline(list, item, ',')) {
+        const double mm = metaNumber("target", item);
+        requirePlausible(mm, kMaxLengthMm, 1, "# target", "mm");
+        values.push_back(mm * 1e-3);
+      }
       if (values.size() != 3) throw MeasurementError(source_ + ": metadata 'target' must be 'x,y,z' in mm");
       campaign.has_target = true;
       campaign.target_in_flange = Eigen::Vector3d(values[0], values[1], values[2]);
@@ -257,6 +271,38 @@ std::string formatNumber(double value) {
   char buffer[40];
   const auto result = std::to_chars(buffer, buffer + sizeof buffer, value);
   return std::string(buffer, result.ptr);
+}
+
+// The writer applies the reader's rules: a value the reader would refuse (not finite where a number is
+// required, beyond its plausible range) is not written. Throws MeasurementError naming the row and column.
+void checkReadable(const MeasurementCampaign& c) {
+  auto check = [&](double value, double limit, bool optional, const std::string& where, const char* unit) {
+    if ((optional && std::isnan(value)) || (std::isfinite(value) && std::abs(value) <= limit)) return;
+    char text[160];
+    std::snprintf(text, sizeof text, "%.15g %s cannot be written: the reader takes at most +-%g %s", value, unit, limit,
+                  unit);
+    throw MeasurementError(c.source + ": " + where + ": " + text);
+  };
+  const char* wrench[6] = {"fx", "fy", "fz", "mx", "my", "mz"};
+  const char* xyz[3] = {"x", "y", "z"};
+  for (std::size_t k = 0; k < c.size(); ++k) {
+    const std::string row = "row " + std::to_string(k + 1) + ", column '";
+    check(c.time[k], kMaxTimeS, false, row + "t'", "s");
+    for (int j = 0; j < c.dof; ++j) {
+      check(c.command[k][j] / kDegree, kMaxAngleDeg, false, row + "q" + std::to_string(j + 1) + "'", "deg");
+      if (c.has_measured_angles) {
+        check(c.measured_angles[k][j] / kDegree, kMaxAngleDeg, true, row + "qm" + std::to_string(j + 1) + "'", "deg");
+      }
+    }
+    for (int a = 0; a < 3 && c.has_position; ++a)
+      check(c.position[k][a] * 1e3, kMaxLengthMm, true, row + xyz[a] + "'", "mm");
+    check(c.temperature[k], kMaxTemperatureDegC, true, row + "temp'", "degC");
+    for (int a = 0; a < 6; ++a) check(c.wrench[k][a], kMaxWrench, false, row + wrench[a] + "'", a < 3 ? "N" : "N m");
+    check(c.payload[k], kMaxPayloadKg, false, row + "payload'", "kg");
+    if (c.payload[k] < 0.0) throw MeasurementError(c.source + ": " + row + "payload': negative mass cannot be written");
+  }
+  for (int a = 0; a < 3 && c.has_target; ++a)
+    check(c.target_in_flange[a] * 1e3, kMaxLengthMm, false, "metadata 'target'", "mm");
 }
 
 }  // namespace
@@ -293,6 +339,7 @@ MeasurementCampaign readCampaignFile(const std::string& path) {
 
 std::string campaignToText(const MeasurementCampaign& campaign) {
   campaign.validate();
+  checkReadable(campaign);
   std::ostringstream out;
   out << "# format: " << kFormatLine << "\n";
   std::map<std::string, std::string> metadata = campaign.metadata;

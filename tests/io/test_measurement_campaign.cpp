@@ -3,6 +3,7 @@
 // write -> read gives the campaign back within 1e-12; and every kind of broken file (tests/data/campaigns)
 // is rejected with the file, the line and the column named.
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <string>
 
@@ -216,7 +217,7 @@ INSTANTIATE_TEST_SUITE_P(
         BrokenFile{"nan_cell.csv", 4, "column 'y': 'nan' is not finite"},
         BrokenFile{"overflow.csv", 4, "column 'z': '1e999' is not finite"},
         BrokenFile{"absurd_position.csv", 4, "column 'z': 1e+308 mm is beyond the plausible range of +-1e+06 mm"},
-        BrokenFile{"absurd_angle.csv", 4, "column 'q2': 4e+07 deg is beyond the plausible range"},
+        BrokenFile{"absurd_angle.csv", 4, "column 'q2': 40000000 deg is beyond the plausible range"},
         BrokenFile{"decreasing_t.csv", 5, "column 't': time decreases"},
         BrokenFile{"wrong_cell_count.csv", 4, "row has 5 cells, the header has 6"},
         BrokenFile{"semicolon_separated.csv", 2, "the header's columns are separated by ';'"},
@@ -281,6 +282,46 @@ TEST(MeasurementCampaign, MetadataWithALineBreakIsNotWritten) {
   EXPECT_EQ(parseCampaign(campaignToText(campaign), "again.csv").metadata.at("source"), "C:\\data\texport.csv");
   campaign.metadata["a: b"] = "c";
   EXPECT_THROW(campaignToText(campaign), MeasurementError);
+}
+
+// The writer applies the reader's rules (issue 41: importers and simulate wrote inf from x = 1.7e308 m,
+// times of 2e12 s from --settle 1e9, payload -5 and '# target: -1e+300', which the reader then refused or
+// should have).
+TEST(MeasurementCampaign, WhatTheReaderWouldRefuseIsNotWritten) {
+  const MeasurementCampaign good = readCampaignFile(campaignFile("good.csv"));
+  const auto refused = [&](const std::function<void(MeasurementCampaign&)>& spoil, const std::string& phrase) {
+    MeasurementCampaign campaign = good;
+    spoil(campaign);
+    try {
+      campaignToText(campaign);
+      ADD_FAILURE() << "written: " << phrase;
+    } catch (const MeasurementError& error) {
+      EXPECT_THAT(error.what(), HasSubstr(phrase));
+    }
+  };
+  ASSERT_TRUE(good.has_position);
+  refused([](MeasurementCampaign& c) { c.position[0].x() = 1.7e308; }, "row 1, column 'x': inf mm cannot be written");
+  refused([](MeasurementCampaign& c) { c.time.back() = 2e12; }, "column 't': 2000000000000 s cannot be written");
+  refused([](MeasurementCampaign& c) { c.command[1][0] = 1e307; }, "row 2, column 'q1'");
+  refused([](MeasurementCampaign& c) { c.payload[0] = -5; }, "payload': negative mass");
+  refused(
+      [](MeasurementCampaign& c) {
+        c.has_target = true;
+        c.target_in_flange.x() = -1e297;
+      },
+      "metadata 'target': -1e+300 mm cannot be written");
+  // ... and the reader refuses such a target too.
+  MeasurementCampaign without_target = good;
+  without_target.has_target = false;
+  without_target.metadata.erase("target");
+  std::string text = campaignToText(without_target);
+  text.insert(text.find('\n') + 1, "# target: -1e+300,0,0\n");
+  try {
+    parseCampaign(text, "target.csv");
+    ADD_FAILURE() << "a target of -1e300 mm was read";
+  } catch (const MeasurementError& error) {
+    EXPECT_THAT(error.what(), HasSubstr("'# target': -1e+300 mm is beyond the plausible range"));
+  }
 }
 
 }  // namespace
