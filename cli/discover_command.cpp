@@ -21,6 +21,7 @@
 #include "cli/plot.hpp"
 #include "cli/robot_setup.hpp"
 #include "model/common/errors.hpp"
+#include "model/effects/periodic_table.hpp"
 #include "model/identify/discovery_report.hpp"
 #include "model/io/atomic_file.hpp"
 #include "model/io/measurement_campaign.hpp"
@@ -42,6 +43,26 @@ void checkFoldsFitRows(int folds, const std::vector<MeasurementCampaign>& fitted
   }
 }
 
+// The resolution of the tables, the weights of their priors and the rules of the transfer check.
+void readSelectionOptions(const Options& options, DiscoveryOptions& discovery) {
+  if (options.has("table-knots")) {
+    discovery.table_knots.clear();
+    for (double knots : numberList(options.get("table-knots", ""), "table-knots",
+                                   {static_cast<double>(PeriodicTableEffect::kMinKnots),
+                                    static_cast<double>(PeriodicTableEffect::kMaxKnots)})) {
+      if (knots != std::floor(knots)) throw UsageError("--table-knots: " + std::to_string(knots) + " is not a whole number");
+      discovery.table_knots.push_back(static_cast<int>(knots));
+    }
+  }
+  discovery.max_prior_weight = options.number("max-prior-weight", discovery.max_prior_weight, {0.0, 1e6});
+  discovery.max_ridge_weight = options.number("max-ridge-weight", discovery.max_ridge_weight, {0.0, 1e6});
+  discovery.transfer_significance =
+      options.number("transfer-significance", discovery.transfer_significance, {0.0, 100.0});
+  discovery.min_group_share = options.number("min-group-share", discovery.min_group_share, {0.0, 0.49});
+  discovery.angle_ranges = static_cast<int>(options.integer("angle-ranges", discovery.angle_ranges, 2, 50));
+  discovery.pairs = !options.has("no-pairs");
+}
+
 }  // namespace
 
 int runDiscover(int argc, char** argv) {
@@ -59,8 +80,10 @@ int runDiscover(int argc, char** argv) {
   }
   const Options options(static_cast<int>(rest.size()), rest.data(),
                         {"urdf", "base-link", "tip-link", "campaign", "holdout", "params", "out", "base", "max-steps",
-                         "orders", "folds", "types", "noise-floor-mm", "loss", "min-cv-gain", "no-plot", "quiet"},
-                        {"no-plot", "quiet"});
+                         "orders", "folds", "types", "noise-floor-mm", "loss", "min-cv-gain", "table-knots",
+                         "max-prior-weight", "max-ridge-weight", "transfer-significance", "min-group-share",
+                         "angle-ranges", "no-pairs", "no-plot", "quiet"},
+                        {"no-pairs", "no-plot", "quiet"});
   if (campaigns.empty() || !options.has("out")) {
     throw std::invalid_argument(
         "discover needs --campaign FILE[,FILE..] and --out DIR (and --urdf, --params, --holdout)");
@@ -75,7 +98,7 @@ int runDiscover(int argc, char** argv) {
   DiscoveryOptions discovery;
   discovery.calibration.loss = parseRobustLoss(options.get("loss", "huber"));
   discovery.calibration.progress = consoleProgress(options);
-  const std::string base = options.get("base", "frame");
+  const std::string base = options.get("base", "textbook");
   if (base != "frame" && base != "textbook")
     throw std::invalid_argument("--base must be frame or textbook, not '" + base + "'");
   discovery.base_geometry = base == "textbook";
@@ -85,6 +108,7 @@ int runDiscover(int argc, char** argv) {
   discovery.folds = static_cast<int>(options.integer("folds", discovery.folds, 2, kMaxFolds));
   discovery.min_cv_gain = options.number("min-cv-gain", discovery.min_cv_gain, {0.0, 1.0});
   discovery.noise_floor = options.number("noise-floor-mm", 0.0, {0.0, 1e3}) * 1e-3;
+  readSelectionOptions(options, discovery);
   discovery.types = splitCommaList(options.get("types", ""));
   for (const std::string& type : discovery.types) {
     bool known = false;

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The README's statements on the real UR10 (why Series B stays near 0.43 mm), measured again from the data by
+# The measurements of docs/ur10-study.md on the real UR10 (what the textbook calibration leaves), made again from the data by
 # examples/python/ur10_residual_study.py after jointcomp's own import and calibration:
 # B's poses lie far from A's, A's residual field makes B worse, no output harmonic fitted on A helps B much,
 # the T-Mac's orientation residual is repeatable but not explained by a full kinematic orientation model, and
