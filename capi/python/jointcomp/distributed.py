@@ -964,6 +964,8 @@ def main(argv=None):
     try:
         if arguments.workers is not None and arguments.workers < 1:
             raise DistributedError("--workers is %d, must be at least 1" % arguments.workers)
+        if not (math.isfinite(arguments.timeout) and arguments.timeout > 0):  # nan ended in a traceback
+            raise DistributedError("--timeout is %r, must be a positive number of seconds" % arguments.timeout)
         prepare_output_folder(arguments.out, DistributedError)
         if arguments.command == "montecarlo":
             result = monte_carlo(arguments.urdf, arguments.params, samples=arguments.samples, seed=arguments.seed,

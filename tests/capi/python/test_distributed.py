@@ -270,3 +270,10 @@ def test_a_writer_killed_part_way_leaves_nothing_behind(tmp_path):
     status = subprocess.run([sys.executable, "-c", dying, str(tmp_path / "a.txt")]).returncode
     assert status == -9
     assert sorted(p.name for p in tmp_path.iterdir()) == ["a.txt"] and (tmp_path / "a.txt").read_text() == "second\n"
+
+
+def test_a_timeout_that_is_no_number_of_seconds_is_refused(capsys):
+    for timeout in ("nan", "-1", "0", "inf"):
+        assert jd.main(["montecarlo", "--urdf", str(RX170_URDF), "--params", str(RX170_PARAMETERS),
+                        "--timeout", timeout, "--out", "unused"]) == 1
+        assert "--timeout is" in capsys.readouterr().err
