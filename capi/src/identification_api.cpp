@@ -2,6 +2,7 @@
 // report handle out. The work is the model's (model/identify); this file reads the options, runs it, and
 // builds the reports with the same functions as the command-line tool, so both give the same documents.
 #include <chrono>
+#include <cmath>
 #include <filesystem>
 #include <memory>
 #include <string>
@@ -82,6 +83,26 @@ void deliver(std::unique_ptr<jc_robot> robot, jc_robot** robot_out, std::unique_
              jc_report** report_out) {
   if (robot_out) *robot_out = robot.release();
   if (report_out) *report_out = report.release();
+}
+
+
+// The tables' knots, the priors' largest weights and the transfer check's settings (discovery.hpp); the
+// library checks their ranges.
+void readSelectionOptions(JsonFields& fields, DiscoveryOptions& options) {
+  if (fields.has("table_knots")) {
+    options.table_knots.clear();
+    for (double knots : fields.numbers("table_knots")) {
+      if (knots != std::floor(knots) || knots < 1 || knots > 1e6) fields.fail("table_knots", "must be whole numbers");
+      options.table_knots.push_back(static_cast<int>(knots));
+    }
+  }
+  if (fields.has("max_prior_weight")) options.max_prior_weight = fields.nonNegativeNumber("max_prior_weight");
+  if (fields.has("max_ridge_weight")) options.max_ridge_weight = fields.nonNegativeNumber("max_ridge_weight");
+  if (fields.has("transfer_significance"))
+    options.transfer_significance = fields.nonNegativeNumber("transfer_significance");
+  if (fields.has("min_group_share")) options.min_group_share = fields.nonNegativeNumber("min_group_share");
+  if (fields.has("angle_ranges")) options.angle_ranges = fields.integer("angle_ranges");
+  options.pairs = fields.flagOr("pairs", options.pairs);
 }
 
 }  // namespace
@@ -271,7 +292,9 @@ jc_status jc_discover(jc_robot* nominal, const char* campaign_paths, const char*
     const std::vector<std::string> campaigns = pathList(campaign_paths, "campaign_paths", true);
     const std::vector<std::string> holdouts = pathList(holdout_paths, "holdout_paths", false);
     DiscoveryOptions options;
+    options.base_geometry = true;  // as `jointcomp discover`: from the textbook calibration
     readOptions(options_json, [&](JsonFields& fields) {
+      readSelectionOptions(fields, options);
       if (fields.has("base")) {
         const std::string base = fields.text("base");
         if (base != "frame" && base != "textbook") fields.fail("base", "must be \"frame\" or \"textbook\"");

@@ -490,6 +490,7 @@ TEST_F(CapiMatchesCore, SimulationIdentificationAndCalibration) {
       JC_OK)
       << jc_last_error();
   DiscoveryOptions discovery;
+  discovery.base_geometry = true;  // the C API's default, as the command's
   discovery.max_steps = 1;
   discovery.types = {"offset"};
   const DiscoveryResult found = discoverEffects(*model_, {readCampaignFile(poses_path)}, {}, discovery);

@@ -57,7 +57,7 @@ PY
 cp "$work/fit.csv" "$work/fit.before"
 
 "$jointcomp" discover --urdf "$urdf" --params "$params" --campaign "$work/fit.csv" --holdout "$work/held.csv" \
-  --types offset,harmonic,hysteresis,payload --max-steps 3 --out "$work/discover" --no-plot >/dev/null
+  --base frame --types offset,harmonic,hysteresis,payload --max-steps 3 --out "$work/discover" --no-plot >/dev/null
 "$python" - "$work/discover" <<'PY'
 import json, sys
 report = json.load(open(sys.argv[1] + "/report.json"))

@@ -300,10 +300,12 @@ JOINTCOMP_API jc_status jc_calibrate(jc_robot* nominal, const char* campaign_pat
                                      const char* options_json, jc_robot** calibrated, jc_report** report);
 /* Residual discovery: the effects the model misses, added one at a time while they lower the time-blocked
    cross-validated error and the BIC (see model/identify/discovery.hpp). campaign_paths: the fitted
-   campaigns (at least one); holdout_paths: NULL or the held-out ones. options: "base": "frame" (default)
-   or "textbook"; "max_steps" (default 8); "max_harmonic_order" (default 4); "folds" (default 5);
-   "min_cv_gain" (default 0.02); "noise_floor_mm" (default: from the campaigns); "types" (effect types to
-   try, default all); "loss" as for jc_calibrate. *extended: the robot with the discovered effects. */
+   campaigns (at least one); holdout_paths: NULL or the held-out ones. options: "base": "textbook" (default,
+   as jc_calibrate fits it) or "frame"; "max_steps" (default 8); "max_harmonic_order" (default 4); "folds"
+   (default 5); "min_cv_gain" (default 0.02); "noise_floor_mm" (default: from the campaigns); "types" (effect
+   types to try, default all); "loss" as for jc_calibrate; "table_knots" (default [16, 32, 64, 128]),
+   "max_prior_weight" (10), "max_ridge_weight" (1), "transfer_significance" (3), "min_group_share" (0.05),
+   "angle_ranges" (5), "pairs" (true). *extended: the robot with the discovered effects. */
 JOINTCOMP_API jc_status jc_discover(jc_robot* nominal, const char* campaign_paths, const char* holdout_paths,
                                     const char* options_json, jc_robot** extended, jc_report** report);
 /* The report as JSON (the same document the command-line tool writes as report.json) and as a readable

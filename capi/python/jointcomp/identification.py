@@ -111,6 +111,8 @@ def calibrate(nominal, campaigns, holdouts=None, **options):
 
 def discover(nominal, campaigns, holdouts=None, **options):
     """Residual discovery on ``campaigns`` (one path or several), judged on ``holdouts``. Options: base
-    ("frame" or "textbook"), max_steps, max_harmonic_order, folds, min_cv_gain, noise_floor_mm, types, loss."""
+    ("textbook", the default, or "frame"), max_steps, max_harmonic_order, folds, min_cv_gain, noise_floor_mm,
+    types, loss, table_knots, max_prior_weight, max_ridge_weight, transfer_significance, min_group_share,
+    angle_ranges, pairs (jc_discover in jointcomp.h)."""
     return _run(_native.lib.jc_discover, nominal.handle, _paths(campaigns, "campaigns"),
                 _paths(holdouts, "holdouts"), _options(options))
