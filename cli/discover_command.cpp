@@ -50,7 +50,8 @@ void readSelectionOptions(const Options& options, DiscoveryOptions& discovery) {
     for (double knots : numberList(options.get("table-knots", ""), "table-knots",
                                    {static_cast<double>(PeriodicTableEffect::kMinKnots),
                                     static_cast<double>(PeriodicTableEffect::kMaxKnots)})) {
-      if (knots != std::floor(knots)) throw UsageError("--table-knots: " + std::to_string(knots) + " is not a whole number");
+      if (knots != std::floor(knots))
+        throw UsageError("--table-knots: " + std::to_string(knots) + " is not a whole number");
       discovery.table_knots.push_back(static_cast<int>(knots));
     }
   }
@@ -79,10 +80,30 @@ int runDiscover(int argc, char** argv) {
     rest.push_back(argv[i]);
   }
   const Options options(static_cast<int>(rest.size()), rest.data(),
-                        {"urdf", "base-link", "tip-link", "campaign", "holdout", "params", "out", "base", "max-steps",
-                         "orders", "folds", "types", "noise-floor-mm", "loss", "min-cv-gain", "table-knots",
-                         "max-prior-weight", "max-ridge-weight", "transfer-significance", "min-group-share",
-                         "angle-ranges", "no-pairs", "no-plot", "quiet"},
+                        {"urdf",
+                         "base-link",
+                         "tip-link",
+                         "campaign",
+                         "holdout",
+                         "params",
+                         "out",
+                         "base",
+                         "max-steps",
+                         "orders",
+                         "folds",
+                         "types",
+                         "noise-floor-mm",
+                         "loss",
+                         "min-cv-gain",
+                         "table-knots",
+                         "max-prior-weight",
+                         "max-ridge-weight",
+                         "transfer-significance",
+                         "min-group-share",
+                         "angle-ranges",
+                         "no-pairs",
+                         "no-plot",
+                         "quiet"},
                         {"no-pairs", "no-plot", "quiet"});
   if (campaigns.empty() || !options.has("out")) {
     throw std::invalid_argument(

@@ -39,16 +39,19 @@ const char* optionHelp(const std::string& name) {
        "discovery's base model: textbook (default: frame, target, joint offsets, the identifiable geometry and "
        "compliance, as calibrate fits them, so discover is never worse than calibrate) or frame (frame and target "
        "only; offsets, compliance and geometry are then candidates)"},
-      {"table-knots", "knots per revolution of the periodic tables offered, comma-separated, 4 to 720 "
-                      "(default 16,32,64,128)"},
-      {"max-prior-weight", "largest weight of a table's roughness prior, 0 to 1e6 (default 10; 0: none); "
-                           "cross-validation chooses among 0 and five decades up to it"},
+      {"table-knots",
+       "knots per revolution of the periodic tables offered, comma-separated, 4 to 720 "
+       "(default 16,32,64,128)"},
+      {"max-prior-weight",
+       "largest weight of a table's roughness prior, 0 to 1e6 (default 10; 0: none); "
+       "cross-validation chooses among 0 and five decades up to it"},
       {"max-ridge-weight", "largest weight of a table's ridge toward zero, 0 to 1e6 (default 1; 0: none)"},
       {"transfer-significance",
        "standard errors by which a candidate may make a left-out group of rows worse (beyond 1 %), 0 to 100 "
        "(default 3)"},
-      {"min-group-share", "smallest share of the rows a joint-space part of the transfer check holds, 0 to 0.49 "
-                          "(default 0.05; smaller parts join the nearest)"},
+      {"min-group-share",
+       "smallest share of the rows a joint-space part of the transfer check holds, 0 to 0.49 "
+       "(default 0.05; smaller parts join the nearest)"},
       {"angle-ranges", "ranges of a candidate's joint angle left out one at a time, 2 to 50 (default 5)"},
       {"no-pairs", "offer no pairs of one family's candidates on two joints"},
       {"max-steps", "most effects discovery adds, 0 to 64"},

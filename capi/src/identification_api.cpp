@@ -85,7 +85,6 @@ void deliver(std::unique_ptr<jc_robot> robot, jc_robot** robot_out, std::unique_
   if (report_out) *report_out = report.release();
 }
 
-
 // The tables' knots, the priors' largest weights and the transfer check's settings (discovery.hpp); the
 // library checks their ranges.
 void readSelectionOptions(JsonFields& fields, DiscoveryOptions& options) {

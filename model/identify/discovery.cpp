@@ -99,7 +99,8 @@ Features offerCandidates(const DiscoveryData& data, int setups, const DiscoveryO
                                 std::to_string(candidate.columns.rows()) + " rows for " + std::to_string(data.rows()));
         }
         f.family.push_back(family);
-        const bool by_row = !candidate.through_compliance && !candidate.joint_error_blocks && candidate.columns.cols() > 0;
+        const bool by_row =
+            !candidate.through_compliance && !candidate.joint_error_blocks && candidate.columns.cols() > 0;
         f.sparse.push_back(by_row ? sparseFeatures(candidate.columns) : SparseFeatures());
         f.releases.push_back(candidate.releases.empty() ? std::vector<int>{} : layoutIndices(candidate, layout));
       }
@@ -427,8 +428,9 @@ private:
       return false;
     }
     if (!choice.found) {
-      result_.stop_reason = "no candidate lowers the cross-validated error and the BIC without making a part of the "
-                            "data significantly worse";
+      result_.stop_reason =
+          "no candidate lowers the cross-validated error and the BIC without making a part of the "
+          "data significantly worse";
       result_.rejected_at_stop = choice.rejected;
       return false;
     }
@@ -457,7 +459,8 @@ private:
         continue;
       }
       const Active& a = active_[next++];
-      for (const NamedEstimate& e : features_.family[static_cast<std::size_t>(c)]->describe({&candidate, a.theta, a.sigma}, model_))
+      for (const NamedEstimate& e :
+           features_.family[static_cast<std::size_t>(c)]->describe({&candidate, a.theta, a.sigma}, model_))
         record.parameters.push_back(e);
     }
     if (next > first_new) appendCalibrationEstimates(newly_released, record.parameters);
@@ -504,7 +507,7 @@ private:
     result_.joint_residual_rms_final = jointRms(lin_);
     // Where what is left lies (reported when it is well above the noise floor).
     const ResidualRows rows{lin_.joint_residual, lin_.joint_lever, lin_.joint_share, data_.command, data_.motor,
-                            lin_.residual_norm,  lin_.time_block,  lin_.residual, data_.time};
+                            lin_.residual_norm,  lin_.time_block,  lin_.residual,    data_.time};
     result_.unexplained = analyseUnexplained(prior_.robot(), rows, cal_.after.rms, result_.noise_floor);
     result_.final_state = state_;
     result_.fitted_rows = cal_.used_rows;

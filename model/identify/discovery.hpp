@@ -72,7 +72,7 @@ struct DiscoveryOptions {
   // spread). Joint-space parts smaller than min_group_share of the rows join the nearest larger part.
   double transfer_significance = 3.0;
   double min_group_share = 0.05;
-  int angle_ranges = 5;  // ranges of a joint's angle, equally filled, for leave-one-range-out CV
+  int angle_ranges = 5;                      // ranges of a joint's angle, equally filled, for leave-one-range-out CV
   const EffectRegistry* registry = nullptr;  // whose discovery families compete; null: the built-in one
 };
 

@@ -85,11 +85,13 @@ Linearised linearise(const JointErrorModel& model, const CalibrationData& data, 
   for (const Active& a : active) lin.active.push_back(candidatePiece(lin, features, a.candidate, cal));
   lin.problem.groupings.push_back(timeBlocks(rows, cuts.folds, cuts.sub_blocks));
   lin.problem.groupings.push_back(jointSpaceParts(data.command, cuts.folds, cuts.min_share, cuts.sub_blocks));
-  for (int j = 0; j < n; ++j) lin.problem.groupings.push_back(angleRanges(data.command, j, cuts.angle_ranges, cuts.sub_blocks));
+  for (int j = 0; j < n; ++j)
+    lin.problem.groupings.push_back(angleRanges(data.command, j, cuts.angle_ranges, cuts.sub_blocks));
   lin.problem.groupings.push_back(timeBlocks(rows, cuts.folds, 1));  // the refits' CV: whole blocks
   const RowGrouping& time = lin.problem.groupings.front();
   for (int i = 0; i < rows; ++i)
-    lin.time_block.push_back(time.group_of_block[static_cast<std::size_t>(time.block_of_row[static_cast<std::size_t>(i)])]);
+    lin.time_block.push_back(
+        time.group_of_block[static_cast<std::size_t>(time.block_of_row[static_cast<std::size_t>(i)])]);
   accumulateBase(lin.problem);
   return lin;
 }

@@ -40,7 +40,7 @@ struct CandidatePiece {
 };
 struct Linearised {
   LinearisedProblem problem;
-  Eigen::MatrixXd layout_jacobian;  // 3 rows x calibration parameters, weighted
+  Eigen::MatrixXd layout_jacobian;     // 3 rows x calibration parameters, weighted
   std::vector<CandidatePiece> active;  // each accepted candidate's columns (a refit's pieces)
   // With map_joints: the residual mapped to the joints (pinv of dm/dq), per joint, per row (rad), and per row
   // |measured - predicted| (m), the residual itself, and per joint |dm/dq_j| (m/rad).
@@ -49,7 +49,7 @@ struct Linearised {
   std::vector<Eigen::Vector3d> residual;
   std::vector<std::vector<double>> joint_lever;
   std::vector<std::vector<double>> joint_share;  // per joint, per row: its share of |residual|^2 (m^2)
-  std::vector<int> time_block;  // per row
+  std::vector<int> time_block;                   // per row
 };
 
 // How the rows are cut for cross-validation and the transfer check.
@@ -81,14 +81,14 @@ namespace jointcomp::discovery_detail {
 // A candidate (or a pair of them) fitted with the base columns: its best weights of priors, its fit, and
 // what decided.
 struct Evaluation {
-  std::vector<int> candidates;               // indices into Features::candidates
+  std::vector<int> candidates;                         // indices into Features::candidates
   std::vector<double> roughness_weight, ridge_weight;  // per member
   Fit fit;
   double delta_bic = 0.0;
-  double added = 0.0;          // effective parameters added
-  bool gains = false;          // lowers the CV error by min_cv_gain and the BIC
-  std::string hurt;            // empty: transfers; else the group it makes significantly worse
-  double transfer_error = 0.0; // CV error of the time blocks and the joint-space parts together
+  double added = 0.0;                        // effective parameters added
+  bool gains = false;                        // lowers the CV error by min_cv_gain and the BIC
+  std::string hurt;                          // empty: transfers; else the group it makes significantly worse
+  double transfer_error = 0.0;               // CV error of the time blocks and the joint-space parts together
   std::vector<Eigen::VectorXd> member_step;  // per member, its coefficients (SI)
   bool passes() const { return gains && hurt.empty(); }
 };

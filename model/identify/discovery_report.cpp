@@ -136,8 +136,9 @@ nlohmann::ordered_json discoveryReportJson(const DiscoveryResult& result, const 
                          {"table_knots", options.table_knots},
                          {"max_prior_weight", options.max_prior_weight},
                          {"max_ridge_weight", options.max_ridge_weight},
-                         {"ties", "within one standard error of the fold-wise CV differences or a quarter of "
-                                  "min_cv_gain: the fewest parameters, then the lowest BIC"},
+                         {"ties",
+                          "within one standard error of the fold-wise CV differences or a quarter of "
+                          "min_cv_gain: the fewest parameters, then the lowest BIC"},
                          {"base", baseName(options)},
                          {"max_steps", options.max_steps},
                          {"max_harmonic_order", options.max_harmonic_order},
@@ -159,7 +160,9 @@ nlohmann::ordered_json discoveryReportJson(const DiscoveryResult& result, const 
         {"joint_index", s.joint >= 0 ? nlohmann::ordered_json(s.joint + 1) : nlohmann::ordered_json(nullptr)}};
     if (s.joints.size() > 1) {
       nlohmann::ordered_json joints = nlohmann::ordered_json::array();
-      for (int j : s.joints) joints.push_back(j >= 0 ? nlohmann::ordered_json(result.model.robot().joints[static_cast<std::size_t>(j)].name) : nlohmann::ordered_json(nullptr));
+      for (int j : s.joints)
+        joints.push_back(j >= 0 ? nlohmann::ordered_json(result.model.robot().joints[static_cast<std::size_t>(j)].name)
+                                : nlohmann::ordered_json(nullptr));
       entry["joints"] = joints;
       entry["label"] = discoveryStepLabel(s);
     }

@@ -62,8 +62,8 @@ std::string transferHurt(const Selection& s, const FitSystem& system, const Fit&
     const RowGrouping& grouping = problem.groupings[static_cast<std::size_t>(g)];
     for (int group = 0; group < grouping.groups(); ++group) {
       const int rows = grouping.rows_of_group[static_cast<std::size_t>(group)];
-      const GroupChange c = groupChange(fit.errors[gi], s.base.errors[static_cast<std::size_t>(g)],
-                                        grouping.group_of_block, group);
+      const GroupChange c =
+          groupChange(fit.errors[gi], s.base.errors[static_cast<std::size_t>(g)], grouping.group_of_block, group);
       const double worse = c.after - c.before;
       if (worse <= kGroupHurt * c.before || worse <= s.options.transfer_significance * c.standard_error) continue;
       char text[320];
@@ -129,7 +129,8 @@ Evaluation judge(const Selection& s, const FitSystem& system, const std::vector<
   e.transfer_error = partsError(system, e.fit);
   for (std::size_t m = 0; m < members.size(); ++m) {
     Eigen::VectorXd step(static_cast<Eigen::Index>(own[m].size()));
-    for (std::size_t k = 0; k < own[m].size(); ++k) step[static_cast<Eigen::Index>(k)] = e.fit.d[own[m][k]] / system.scale[own[m][k]];
+    for (std::size_t k = 0; k < own[m].size(); ++k)
+      step[static_cast<Eigen::Index>(k)] = e.fit.d[own[m][k]] / system.scale[own[m][k]];
     e.member_step.push_back(step);
   }
   return e;
@@ -172,7 +173,8 @@ Evaluation evaluatePair(const Selection& s, const Evaluation& a, const Evaluatio
   const std::vector<int> members = {a.candidates[0], b.candidates[0]};
   const std::vector<CandidatePiece> pieces = {candidatePiece(s.lin, s.features, members[0], s.cal),
                                               candidatePiece(s.lin, s.features, members[1], s.cal)};
-  const FitSystem system = assembleSystem(s.lin.problem, {&pieces[0].piece, &pieces[1].piece}, groupingsFor(s, members));
+  const FitSystem system =
+      assembleSystem(s.lin.problem, {&pieces[0].piece, &pieces[1].piece}, groupingsFor(s, members));
   return judge(s, system, pieces, members, {a.roughness_weight[0], b.roughness_weight[0]},
                {a.ridge_weight[0], b.ridge_weight[0]});
 }
@@ -196,7 +198,8 @@ bool tied(const Fit& fit, const Fit& best, double min_cv_gain) {
 
 std::string label(const Selection& s, const Evaluation& e) {
   std::string text;
-  for (int c : e.candidates) text += (text.empty() ? "" : " + ") + s.features.candidates[static_cast<std::size_t>(c)].label();
+  for (int c : e.candidates)
+    text += (text.empty() ? "" : " + ") + s.features.candidates[static_cast<std::size_t>(c)].label();
   return text;
 }
 

@@ -8,8 +8,8 @@ namespace jointcomp {
 namespace {
 
 // Places the base's and every piece's sums of one grouping into the system's per-block matrices.
-void assembleGrouping(const LinearisedProblem& problem, const std::vector<const ColumnPiece*>& pieces,
-                      int grouping, const std::vector<int>& first, int columns, FitSystem& system) {
+void assembleGrouping(const LinearisedProblem& problem, const std::vector<const ColumnPiece*>& pieces, int grouping,
+                      const std::vector<int>& first, int columns, FitSystem& system) {
   const BlockSums& base = problem.base_sums[static_cast<std::size_t>(grouping)];
   const int m = static_cast<int>(problem.base.cols());
   const std::size_t blocks = base.gram.size();

@@ -43,13 +43,13 @@ struct GroupingErrors {
 };
 
 struct Fit {
-  double rss = 0.0;               // on all rows after the step
-  double cv = 0.0;                // leave-one-time-block-out sum of squares
-  std::vector<double> cv_fold;    // per time block
-  int rank = 0;                   // of the normal equations (with the prior: all columns)
-  double dof = 0.0;               // effective parameters: the rank, or trace of the hat matrix with a prior
-  Eigen::VectorXd d;              // step in scaled columns, minimises |r + X d|^2 (+ prior)
-  Eigen::MatrixXd inverse;        // (G + P)^+ when asked for
+  double rss = 0.0;                    // on all rows after the step
+  double cv = 0.0;                     // leave-one-time-block-out sum of squares
+  std::vector<double> cv_fold;         // per time block
+  int rank = 0;                        // of the normal equations (with the prior: all columns)
+  double dof = 0.0;                    // effective parameters: the rank, or trace of the hat matrix with a prior
+  Eigen::VectorXd d;                   // step in scaled columns, minimises |r + X d|^2 (+ prior)
+  Eigen::MatrixXd inverse;             // (G + P)^+ when asked for
   std::vector<GroupingErrors> errors;  // per grouping of the system
 };
 

@@ -34,7 +34,8 @@ RowGrouping makeGrouping(std::string kind, const std::vector<int>& group_of_row,
 
 RowGrouping timeBlocks(int rows, int folds, int sub_blocks) {
   std::vector<int> group(static_cast<std::size_t>(rows));
-  for (int i = 0; i < rows; ++i) group[static_cast<std::size_t>(i)] = std::min(folds - 1, static_cast<int>(static_cast<long>(i) * folds / rows));
+  for (int i = 0; i < rows; ++i)
+    group[static_cast<std::size_t>(i)] = std::min(folds - 1, static_cast<int>(static_cast<long>(i) * folds / rows));
   return makeGrouping("time block", group, folds, sub_blocks);
 }
 
@@ -153,7 +154,8 @@ void accumulateBase(LinearisedProblem& problem) {
   const int m = static_cast<int>(problem.base.cols());
   problem.base_joint.assign(static_cast<std::size_t>(problem.dof), Eigen::MatrixXd(m, problem.rows));
   for (int i = 0; i < problem.rows; ++i) {
-    const Eigen::MatrixXd products = problem.base.middleRows(3 * i, 3).transpose() * problem.joint_column.middleRows(3 * i, 3);
+    const Eigen::MatrixXd products =
+        problem.base.middleRows(3 * i, 3).transpose() * problem.joint_column.middleRows(3 * i, 3);
     for (int j = 0; j < problem.dof; ++j) problem.base_joint[static_cast<std::size_t>(j)].col(i) = products.col(j);
   }
   problem.base_sums.clear();
@@ -203,7 +205,8 @@ BlockSums crossWithBase(const LinearisedProblem& problem, const ColumnPiece& pie
   const SparseFeatures* f = piece.features;
   for (int i = 0; i < problem.rows; ++i) {
     Eigen::MatrixXd& gram = sums.gram[static_cast<std::size_t>(g.block_of_row[static_cast<std::size_t>(i)])];
-    if (kd > 0) gram.leftCols(kd).noalias() += problem.base.middleRows(3 * i, 3).transpose() * piece.dense.middleRows(3 * i, 3);
+    if (kd > 0)
+      gram.leftCols(kd).noalias() += problem.base.middleRows(3 * i, 3).transpose() * piece.dense.middleRows(3 * i, 3);
     if (!f) continue;
     const auto u = problem.base_joint[static_cast<std::size_t>(piece.joint)].col(i);
     for (int e = f->start[static_cast<std::size_t>(i)]; e < f->start[static_cast<std::size_t>(i) + 1]; ++e)
@@ -234,10 +237,10 @@ BlockSums crossPieces(const LinearisedProblem& problem, const ColumnPiece& a, co
     const auto r = problem.r.segment<3>(3 * i);
     nonzero(a.features, i, ca, va);
     nonzero(b.features, i, cb, vb);
-    const Eigen::Vector3d ja = a.features ? Eigen::Vector3d(problem.joint_column.block(3 * i, a.joint, 3, 1))
-                                          : Eigen::Vector3d::Zero();
-    const Eigen::Vector3d jb = b.features ? Eigen::Vector3d(problem.joint_column.block(3 * i, b.joint, 3, 1))
-                                          : Eigen::Vector3d::Zero();
+    const Eigen::Vector3d ja =
+        a.features ? Eigen::Vector3d(problem.joint_column.block(3 * i, a.joint, 3, 1)) : Eigen::Vector3d::Zero();
+    const Eigen::Vector3d jb =
+        b.features ? Eigen::Vector3d(problem.joint_column.block(3 * i, b.joint, 3, 1)) : Eigen::Vector3d::Zero();
     const auto da = a.dense.middleRows(3 * i, 3);
     const auto db = b.dense.middleRows(3 * i, 3);
     if (kda > 0 && kdb > 0) gram.topLeftCorner(kda, kdb).noalias() += da.transpose() * db;

@@ -21,9 +21,9 @@ namespace jointcomp {
 
 // A cut of the rows into groups for cross-validation, each group into sub-blocks.
 struct RowGrouping {
-  std::string kind;                // "time block", "joint-space part", "joint 2 angle range"
-  int joint = -1;                  // the joint of an angle-range grouping, else -1
-  std::vector<int> block_of_row;   // per row
+  std::string kind;               // "time block", "joint-space part", "joint 2 angle range"
+  int joint = -1;                 // the joint of an angle-range grouping, else -1
+  std::vector<int> block_of_row;  // per row
   std::vector<int> group_of_block;
   std::vector<int> rows_of_group;
   int groups() const { return static_cast<int>(rows_of_group.size()); }
@@ -61,9 +61,9 @@ SparseFeatures sparseFeatures(const Eigen::MatrixXd& features);
 
 // Columns of a candidate: dense ones (3 per row) and feature columns of one joint (one value per row).
 struct ColumnPiece {
-  Eigen::MatrixXd dense;                    // 3 rows x dense columns, weighted
+  Eigen::MatrixXd dense;                     // 3 rows x dense columns, weighted
   const SparseFeatures* features = nullptr;  // joint error per unit coefficient
-  int joint = -1;                           // joint of the feature columns
+  int joint = -1;                            // joint of the feature columns
   int denseColumns() const { return static_cast<int>(dense.cols()); }
   int featureColumns() const { return features ? features->columns : 0; }
   int columns() const { return denseColumns() + featureColumns(); }
@@ -72,13 +72,13 @@ struct ColumnPiece {
 // The problem at one calibration: r, the base columns (dense) and each row's weighted joint columns.
 struct LinearisedProblem {
   int rows = 0, dof = 0;
-  Eigen::VectorXd r;             // 3 rows
-  Eigen::MatrixXd base;          // 3 rows x base columns (calibration parameters, then accepted effects)
-  Eigen::MatrixXd joint_column;  // 3 rows x dof: a_ij = w_i dm_i/dq_j
+  Eigen::VectorXd r;                        // 3 rows
+  Eigen::MatrixXd base;                     // 3 rows x base columns (calibration parameters, then accepted effects)
+  Eigen::MatrixXd joint_column;             // 3 rows x dof: a_ij = w_i dm_i/dq_j
   std::vector<Eigen::MatrixXd> base_joint;  // per joint, base columns x rows: column i = base_i^T a_ij
   // 0: time blocks, 1: joint-space parts, 2 + j: joint j's angle ranges, last: time blocks whole (refits)
   std::vector<RowGrouping> groupings;
-  std::vector<BlockSums> base_sums;     // per grouping: base x base, base . r, r . r
+  std::vector<BlockSums> base_sums;  // per grouping: base x base, base . r, r . r
   int timeGrouping() const { return 0; }
   int angleGrouping(int joint) const { return 2 + joint; }
   int refitGrouping() const { return static_cast<int>(groupings.size()) - 1; }

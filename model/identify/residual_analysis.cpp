@@ -220,7 +220,8 @@ UnexplainedResidual analyseUnexplained(const Robot& robot, const ResidualRows& r
     }
     const std::vector<double>& residual = rows.joint_residual[static_cast<std::size_t>(j)];
     bool motor_differs = false;  // a directly driven joint's motor is its output: scanned once, as the output
-    for (std::size_t i = 0; i < motor.size() && !motor_differs; ++i) motor_differs = std::abs(motor[i] - output[i]) > 1e-12;
+    for (std::size_t i = 0; i < motor.size() && !motor_differs; ++i)
+      motor_differs = std::abs(motor[i] - output[i]) > 1e-12;
     for (const auto& [name, angle, max_order] : {std::make_tuple("output", &output, kMaxScannedOutputOrder),
                                                  std::make_tuple("motor", &motor, kMaxScannedMotorOrder)}) {
       if (angle == &motor && !motor_differs) continue;

@@ -84,12 +84,12 @@ struct ResidualRows {
   // per joint, per row, its share of |residual|^2 (m^2): |dm/dq_j dq_j|^2 scaled so a row's shares add up to
   // its |residual|^2 (the mapped joint errors may cancel at the target); empty: |dm/dq_j| dq_j is used
   std::vector<std::vector<double>> joint_share;
-  std::vector<JointVector> output_angle;            // per row (rad)
-  std::vector<JointVector> motor_angle;             // per row (rad)
-  std::vector<double> residual_norm;                // per row, |measured - predicted| (m)
-  std::vector<int> block;                           // per row, its time block (0 .. blocks-1, non-decreasing)
-  std::vector<Eigen::Vector3d> residual;            // per row, measured - predicted (m); empty: pose not analysed
-  std::vector<double> time;                         // per row (s), as residual
+  std::vector<JointVector> output_angle;  // per row (rad)
+  std::vector<JointVector> motor_angle;   // per row (rad)
+  std::vector<double> residual_norm;      // per row, |measured - predicted| (m)
+  std::vector<int> block;                 // per row, its time block (0 .. blocks-1, non-decreasing)
+  std::vector<Eigen::Vector3d> residual;  // per row, measured - predicted (m); empty: pose not analysed
+  std::vector<double> time;               // per row (s), as residual
 };
 
 UnexplainedResidual analyseUnexplained(const Robot& robot, const ResidualRows& rows, double fitted_rms,

@@ -51,7 +51,8 @@ DiscoveryResult discoverTables(const JointErrorModel& truth, const std::vector<i
 
 void print(const char* name, const DiscoveryResult& r) {
   std::printf("[ tables ] %-28s", name);
-  for (const DiscoveryStep& s : r.steps) std::printf(" | %s %s%s", s.type.c_str(), s.joint_name.c_str(), s.detail.c_str());
+  for (const DiscoveryStep& s : r.steps)
+    std::printf(" | %s %s%s", s.type.c_str(), s.joint_name.c_str(), s.detail.c_str());
   std::printf(" | held-out %.4f -> %.4f mm, floor %.4f mm\n", r.initial.heldout[0].rms * 1e3,
               r.final_state.heldout[0].rms * 1e3, r.noise_floor * 1e3);
 }
@@ -93,8 +94,8 @@ TEST(DiscoveryTables, RipplesOnTwoJointsAreTakenTogether) {
   single.table_knots = {32, 64, 128};
   single.pairs = false;
   single.max_steps = 3;
-  const DiscoveryResult one_by_one = discoverEffects(rx170Model(), {randomCampaign(truth, 3000, 301)},
-                                                     {randomCampaign(truth, 1000, 302)}, single);
+  const DiscoveryResult one_by_one =
+      discoverEffects(rx170Model(), {randomCampaign(truth, 3000, 301)}, {randomCampaign(truth, 1000, 302)}, single);
   ASSERT_FALSE(one_by_one.steps.empty());
   EXPECT_EQ(one_by_one.steps[0].joints.size(), 1u);
 }

@@ -14,8 +14,8 @@ struct Problem {
   LinearisedProblem problem;
   Eigen::MatrixXd feature_values;  // rows x 5, sparse (two nonzeros a row)
   SparseFeatures features;
-  ColumnPiece piece;   // two dense columns and the five features of joint 1
-  Eigen::MatrixXd X;   // 3 rows x (base + piece), the dense design matrix
+  ColumnPiece piece;  // two dense columns and the five features of joint 1
+  Eigen::MatrixXd X;  // 3 rows x (base + piece), the dense design matrix
 };
 
 Problem makeProblem(int rows, unsigned seed) {
@@ -57,7 +57,8 @@ Problem makeProblem(int rows, unsigned seed) {
   p.X.leftCols(4) = lp.base;
   p.X.middleCols(4, 2) = p.piece.dense;
   for (int i = 0; i < rows; ++i)
-    for (int k = 0; k < 5; ++k) p.X.block(3 * i, 6 + k, 3, 1) = p.feature_values(i, k) * lp.joint_column.block(3 * i, 1, 3, 1);
+    for (int k = 0; k < 5; ++k)
+      p.X.block(3 * i, 6 + k, 3, 1) = p.feature_values(i, k) * lp.joint_column.block(3 * i, 1, 3, 1);
   return p;
 }
 
@@ -91,7 +92,9 @@ TEST(LinearisedFit, LeaveOneGroupOutEqualsARefitWithoutTheGroup) {
     for (int group = 0; group < grouping.groups(); ++group) {
       std::vector<Eigen::Index> kept, left;
       for (int i = 0; i < p.problem.rows; ++i) {
-        const bool out = grouping.group_of_block[static_cast<std::size_t>(grouping.block_of_row[static_cast<std::size_t>(i)])] == group;
+        const bool out =
+            grouping.group_of_block[static_cast<std::size_t>(grouping.block_of_row[static_cast<std::size_t>(i)])] ==
+            group;
         for (int a = 0; a < 3; ++a) (out ? left : kept).push_back(3 * i + a);
       }
       const Eigen::MatrixXd Xk = p.X(kept, Eigen::all);
@@ -105,7 +108,14 @@ TEST(LinearisedFit, LeaveOneGroupOutEqualsARefitWithoutTheGroup) {
     for (double e : fit.errors[g].block) blocks += e;
     EXPECT_NEAR(blocks, total, 1e-8 * total);
   }
-  EXPECT_NEAR(fit.cv, [&] { double s = 0; for (double e : fit.cv_fold) s += e; return s; }(), 1e-12);
+  EXPECT_NEAR(
+      fit.cv,
+      [&] {
+        double s = 0;
+        for (double e : fit.cv_fold) s += e;
+        return s;
+      }(),
+      1e-12);
   EXPECT_EQ(fit.rank, 4 + 2 + 5);
   EXPECT_DOUBLE_EQ(fit.dof, 11.0);
 }
