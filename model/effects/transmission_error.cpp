@@ -39,12 +39,20 @@ std::unique_ptr<Effect> TransmissionErrorEffect::fromJson(const nlohmann::json& 
   fields.text("type");
   std::vector<Harmonic> harmonics;
   const nlohmann::json& list = fields.array("harmonics");
+  if (list.size() > kMaxHarmonics) {  // 100k harmonics in a 14.8 MB file kept `paper` busy for minutes
+    fields.fail("harmonics", "has " + std::to_string(list.size()) + " entries; at most " +
+                                 std::to_string(kMaxHarmonics) + " are read");
+  }
   for (std::size_t i = 0; i < list.size(); ++i) {
     JsonFields entry(list[i], fields.pathOf("harmonics[" + std::to_string(i) + "]"));
     Harmonic h;
     h.joint = readJoint(entry, robot);
     h.stage = readPart(entry, gears, h.joint, robot.joints[h.joint].name);
     h.cycles_per_revolution = entry.positiveNumber("cycles_per_revolution");
+    if (h.cycles_per_revolution > kMaxCyclesPerRevolution) {  // order 1e9: "compensation did not converge"
+      entry.fail("cycles_per_revolution", "is beyond " + std::to_string(static_cast<int>(kMaxCyclesPerRevolution)) +
+                                              " cycles per revolution of its part");
+    }
     // People write degrees; programs write radians, which round-trip exactly. One of the two.
     if (entry.has("amplitude_deg") == entry.has("amplitude_rad")) {
       entry.fail("amplitude_deg", "give exactly one of amplitude_deg and amplitude_rad");

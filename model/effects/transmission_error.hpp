@@ -5,12 +5,19 @@
 // The harmonic-drive signature of the paper is 2 cycles per input revolution of the second stage.
 #pragma once
 
+#include <cstddef>
+
 #include "model/effects/discovery_family.hpp"
 #include "model/effects/effect.hpp"
 #include "model/effects/gear_train.hpp"
 #include "model/robot/sin_cos_near.hpp"
 
 namespace jointcomp {
+
+// What a parameter file may hold of one transmission_error effect: a gear train has a few harmonics per
+// joint, of orders up to its teeth counts. Beyond these the file is refused naming the entry.
+constexpr std::size_t kMaxHarmonics = 1024;
+constexpr double kMaxCyclesPerRevolution = 10000.0;
 
 struct Harmonic {
   int joint = 0;

@@ -9,8 +9,10 @@
 #include <gtest/gtest.h>
 
 #include "effects_test_support.hpp"
+#include "model/common/errors.hpp"
 #include "model/effects/periodic_table.hpp"
 #include "model/effects/transmission_error.hpp"
+#include "model/io/parameter_file.hpp"
 
 namespace jointcomp {
 namespace {
@@ -341,6 +343,38 @@ namespace {
 
 // The slopes the plant uses (d error_j / d motor_j) against central differences of the error itself,
 // for the shipped harmonics and for a periodic table, at random motor angles.
+// A parameter file's harmonics are bounded (issue 41: 100k harmonics in a 14.8 MB file kept `paper` busy
+// for minutes; an order of 1e9 ended in "compensation did not converge" without naming it).
+TEST(TransmissionError, TooManyHarmonicsOrAnAbsurdOrderAreRefusedNamingThem) {
+  nlohmann::json file = effects_test::rx170Json();
+  nlohmann::json* effect = nullptr;
+  for (auto& e : file.at("effects"))
+    if (e.at("type") == "transmission_error") effect = &e;
+  ASSERT_NE(effect, nullptr);
+  const nlohmann::json one = effect->at("harmonics").at(0);
+  nlohmann::json many = nlohmann::json::array();
+  for (std::size_t i = 0; i <= kMaxHarmonics; ++i) many.push_back(one);
+  nlohmann::json crowded = file;
+  for (auto& e : crowded.at("effects"))
+    if (e.at("type") == "transmission_error") e["harmonics"] = many;
+  try {
+    parseParameters(crowded.dump(), "crowded.json", effects_test::rx170());
+    ADD_FAILURE() << "1025 harmonics were read";
+  } catch (const ParameterError& error) {
+    EXPECT_NE(std::string(error.what()).find("has 1025 entries; at most 1024 are read"), std::string::npos)
+        << error.what();
+  }
+  effect->at("harmonics").at(0)["cycles_per_revolution"] = 1e9;
+  try {
+    parseParameters(file.dump(), "order.json", effects_test::rx170());
+    ADD_FAILURE() << "an order of 1e9 was read";
+  } catch (const ParameterError& error) {
+    EXPECT_NE(std::string(error.what()).find("harmonics[0]"), std::string::npos) << error.what();
+    EXPECT_NE(std::string(error.what()).find("is beyond 10000 cycles per revolution"), std::string::npos)
+        << error.what();
+  }
+}
+
 TEST(MotorSlope, MatchesCentralDifferencesOfTheJointError) {
   JointErrorModel model = effects_test::rx170Model();
   PeriodicTable table;
