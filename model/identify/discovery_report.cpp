@@ -186,12 +186,19 @@ nlohmann::ordered_json discoveryReportJson(const DiscoveryResult& result, const 
   report["final"]["joint_residual_rms_rad"] = result.joint_residual_rms_final;
   report["stop_reason"] = result.stop_reason;
   report["rejected_at_stop"] = result.rejected_at_stop;
+  // The final error over the floor: of the first held-out campaign (or the fitted rows), and of each held-out one.
+  auto overFloor = [&](double rms) {
+    return result.noise_floor > 0.0 ? nlohmann::ordered_json(rms / result.noise_floor)
+                                    : nlohmann::ordered_json(nullptr);
+  };
   const double final_held =
       result.final_state.heldout.empty() ? result.final_state.fitted.rms : result.final_state.heldout[0].rms;
-  report["noise_floor"] = {
-      {"rms_3d_mm", result.noise_floor * 1e3},
-      {"final_over_floor", result.noise_floor > 0.0 ? nlohmann::ordered_json(final_held / result.noise_floor)
-                                                    : nlohmann::ordered_json(nullptr)}};
+  nlohmann::ordered_json per_heldout = nlohmann::ordered_json::array();
+  for (const ErrorStatistics& h : result.final_state.heldout) per_heldout.push_back(overFloor(h.rms));
+  report["noise_floor"] = {{"rms_3d_mm", result.noise_floor * 1e3},
+                           {"final_over_floor", overFloor(final_held)},
+                           {"fitted_over_floor", overFloor(result.final_state.fitted.rms)},
+                           {"held_out_over_floor", per_heldout}};
   report["unexplained"] = unexplainedJson(result);
   report["not_candidates"] = nlohmann::ordered_json::array();
   report["seconds"] = seconds;
@@ -211,13 +218,8 @@ std::string discoverySummary(const DiscoveryResult& result, const DiscoveryOptio
   summary << line;
   for (std::size_t k = 0; k < result.heldout_coverage.size(); ++k) {
     const HeldoutCoverage& c = result.heldout_coverage[k];
-    std::snprintf(line, sizeof(line), "held-out %s: its poses lie %.3f rad (median) from the nearest fitted pose%s\n",
-                  campaignName(sources, true, static_cast<int>(k)).c_str(), c.median_pose_distance,
-                  result.unexplained.pose.computed &&
-                          c.median_pose_distance > 2.0 * result.unexplained.pose.median_distance_other_times
-                      ? ", beyond where the fitted residual is known as a function of the pose: only effects whose "
-                        "physical form carries over to other poses can help it"
-                      : "");
+    std::snprintf(line, sizeof(line), "held-out %s: its poses lie %.3f rad (median) from the nearest fitted pose\n",
+                  campaignName(sources, true, static_cast<int>(k)).c_str(), c.median_pose_distance);
     summary << line;
     if (!c.flagged) continue;
     summary << "warning: held-out " << campaignName(sources, true, static_cast<int>(k))
@@ -240,6 +242,13 @@ std::string discoverySummary(const DiscoveryResult& result, const DiscoveryOptio
     if (!s.after.heldout.empty()) {
       summary << "    held-out RMS [mm] before: " << heldRms(s.before, sources) << "\n";
       summary << "    held-out RMS [mm] after:  " << heldRms(s.after, sources) << "\n";
+    }
+    for (std::size_t k = 0; k < s.after.heldout.size() && k < s.before.heldout.size(); ++k) {
+      if (s.after.heldout[k].rms <= s.before.heldout[k].rms * 1.005) continue;
+      std::snprintf(line, sizeof(line), "    warning: this step makes held-out %s worse (%.4f -> %.4f mm)\n",
+                    campaignName(sources, true, static_cast<int>(k)).c_str(), s.before.heldout[k].rms * 1e3,
+                    s.after.heldout[k].rms * 1e3);
+      summary << line;
     }
     for (const DiscoveredParameter& p : s.parameters) {
       std::snprintf(line, sizeof(line), "    %-48s %.6g +- %.3g\n", p.name.c_str(), p.value, p.sigma);
