@@ -102,6 +102,8 @@ jc_status guarded(const char* function, Body&& body) noexcept {
     return fail(function, JC_ERROR_SOLVER, error.what());
   } catch (const PlantLimitError& error) {
     return fail(function, JC_ERROR_PLANT_LIMIT, error.what());
+  } catch (const Error& error) {  // the untyped ones: a file that cannot be read or written
+    return fail(function, JC_ERROR_FILE, error.what());
   } catch (const std::bad_alloc&) {
     return fail(function, JC_ERROR_OUT_OF_MEMORY, "out of memory");
   } catch (const std::exception& error) {

@@ -894,6 +894,9 @@ static void test_identification(jc_robot* robot, jc_robot* bare) {
   calibrated = NULL;
   EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "both NULL", jc_robot_save(robot, NULL, NULL));
   EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "urdf_path is empty", jc_robot_save(robot, "", params));
+  /* A path that cannot be written is a file error, not "a bug" (JC_ERROR_INTERNAL, issue 41). */
+  EXPECT_STATUS(JC_ERROR_FILE, "/nonexistent/folder/r.urdf: cannot",
+                jc_robot_save(robot, "/nonexistent/folder/r.urdf", NULL));
   EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "options_json.loss",
                 jc_calibrate(robot, poses, NULL, "{\"loss\": \"square\"}", &calibrated, &report));
   EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "options_json.fixed",
