@@ -62,6 +62,7 @@ void readSelectionOptions(const Options& options, DiscoveryOptions& discovery) {
   discovery.min_group_share = options.number("min-group-share", discovery.min_group_share, {0.0, 0.49});
   discovery.angle_ranges = static_cast<int>(options.integer("angle-ranges", discovery.angle_ranges, 2, 50));
   discovery.pairs = !options.has("no-pairs");
+  discovery.heldout_same_instrument = options.has("holdout-same-instrument");
 }
 
 }  // namespace

@@ -54,6 +54,9 @@ const char* optionHelp(const std::string& name) {
        "(default 0.05; smaller parts join the nearest)"},
       {"angle-ranges", "ranges of a candidate's joint angle left out one at a time, 2 to 50 (default 5)"},
       {"no-pairs", "offer no pairs of one family's candidates on two joints"},
+      {"holdout-same-instrument",
+       "the held-out campaigns were measured with the fitted ones' instrument, not moved: an instrument scale "
+       "discovery finds applies to them (default: each is another set-up)"},
       {"max-steps", "most effects discovery adds, 0 to 64"},
       {"orders", "highest harmonic order offered by default, 1 to 64 (identify: a list of orders)"},
       {"folds", "time blocks of the cross-validation, 2 to 20, and at most one per 5 rows of the fitted campaigns"},

@@ -349,7 +349,8 @@ private:
         state.paths.push_back(roughness(part, false, static_cast<int>(c)));
       }
     }
-    const GeometricCalibrationOptions cal_options = calibrationOptions();
+    GeometricCalibrationOptions cal_options = calibrationOptions();
+    cal_options.same_instrument = options_.heldout_same_instrument;
     for (std::size_t k = 0; k < heldout_.size(); ++k) {
       const HoldoutEvaluation e = evaluateOnCampaign(model_, cal_.estimate, heldout_[k], true, cal_options);
       state.heldout.push_back(e.statistics);

@@ -72,7 +72,10 @@ struct DiscoveryOptions {
   // spread). Joint-space parts smaller than min_group_share of the rows join the nearest larger part.
   double transfer_significance = 3.0;
   double min_group_share = 0.05;
-  int angle_ranges = 5;                      // ranges of a joint's angle, equally filled, for leave-one-range-out CV
+  int angle_ranges = 5;  // ranges of a joint's angle, equally filled, for leave-one-range-out CV
+  // The held-out campaigns were measured with the fitted campaigns' instrument (the same tracker, not moved):
+  // an instrument scale discovery finds applies to them too. false: each is another set-up.
+  bool heldout_same_instrument = false;
   const EffectRegistry* registry = nullptr;  // whose discovery families compete; null: the built-in one
 };
 

@@ -1182,7 +1182,7 @@ HoldoutEvaluation evaluateOnCampaign(const JointErrorModel& prior, const Geometr
   evaluation.row = data.row;
   evaluation.skipped_rows = data.skipped_rows;
   GeometricParameters used = parameters.ofSetUp(0);
-  used.instrument_scale = 0.0;  // another set-up: the fitted campaign's instrument scale is not its own
+  if (!options.same_instrument) used.instrument_scale = 0.0;  // another set-up: the fitted scale is not its own
   const bool fit = refit_frame && campaign.frame == MeasurementFrame::Instrument;
   if (campaign.frame == MeasurementFrame::Base) {
     used.frame_translation.setZero();

@@ -187,7 +187,10 @@ struct GeometricCalibrationOptions {
   bool fit_placements = true;
   bool fit_compliance = true;
   bool fit_instrument_scale = false;  // a property of the set-up, not the robot: only when asked
-  std::vector<std::string> fixed;     // parameter names held at nominal whatever the data say
+  // evaluateOnCampaign: the held-out campaign was measured with the fitted campaigns' (first) instrument set-up,
+  // so its instrument scale applies; false: another set-up, evaluated without it
+  bool same_instrument = false;
+  std::vector<std::string> fixed;  // parameter names held at nominal whatever the data say
   IdentifiabilityOptions identifiability;
   RobustLoss loss = RobustLoss::Huber;
   // Scale k of the robust loss (m); 0: loss_scale_sigmas times the robust per-axis sigma of the

@@ -52,6 +52,24 @@ TEST(DiscoveryInstrumentScale, IsNamedRatherThanSpreadOverPlacements) {
   EXPECT_GT(spread.final_state.heldout[0].rms, 1.5 * named.final_state.heldout[0].rms);
 }
 
+// A held-out campaign from the same tracker reads long by the same scale: told so, discovery applies the
+// scale it found to it too, and it is predicted at the noise floor; treated as another set-up it is not.
+TEST(DiscoveryInstrumentScale, AHeldOutCampaignOfTheSameInstrumentSharesItsScale) {
+  const JointErrorModel truth = rx170Model();
+  DiscoveryOptions options;
+  options.types = {"offset", "geometric", "instrument_scale"};
+  options.max_steps = 4;
+  const MeasurementCampaign fitted = scaled(randomCampaign(truth, 300, 91), kScale);
+  const MeasurementCampaign held = scaled(randomCampaign(truth, 150, 92), kScale);
+  const DiscoveryResult apart = discoverEffects(rx170Model(), {fitted}, {held}, options);
+  options.heldout_same_instrument = true;
+  const DiscoveryResult shared = discoverEffects(rx170Model(), {fitted}, {held}, options);
+  ASSERT_FALSE(shared.steps.empty());
+  EXPECT_EQ(shared.steps.front().type, "instrument_scale");
+  EXPECT_LT(shared.final_state.heldout[0].rms, 1.3 * shared.noise_floor);
+  EXPECT_GT(apart.final_state.heldout[0].rms, 1.5 * shared.final_state.heldout[0].rms);
+}
+
 // Two set-ups (the tracker moved, and read long in the second): the candidate frees each set-up's scale,
 // and the second one's is found while the first stays at zero.
 TEST(DiscoveryInstrumentScale, EachInstrumentSetUpHasItsOwnScale) {
