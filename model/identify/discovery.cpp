@@ -384,10 +384,12 @@ private:
 
   // Refits everything together: calibrates the base with the effects fixed, then a joint Gauss-Newton step
   // of the effects' coefficients with the base; then the final model of the step and its uncertainties.
-  void refit() {
+  // A step that freed no calibration parameter starts from the calibration it was chosen at: its coefficients
+  // were fitted together with that calibration's free parameters.
+  void refit(bool released) {
     for (int it = 0; it < options_.refit_iterations; ++it) {
       model_ = buildModel(prior_, active_, features_, data_, options_);
-      cal_ = calibrate(model_);
+      if (it > 0 || released || active_.empty()) cal_ = calibrate(model_);
       if (active_.empty()) break;
       lin_ = linearise(model_, fittedRows(model_), cal_, features_, active_, cuts_, false);
       fitBase(false);
@@ -449,7 +451,7 @@ private:
     }
     const std::size_t first_new = active_.size();
     acceptCoefficients(chosen);
-    refit();
+    refit(!newly_released.empty());
     state_ = evaluate(base_fit_.cv);
     record.after = state_;
     std::size_t next = first_new;
