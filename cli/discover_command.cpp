@@ -148,7 +148,7 @@ int runDiscover(int argc, char** argv) {
   const DiscoveryResult result = discoverEffects(prior, fitted, held, discovery);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - fit_started).count();
 
-  const std::string urdf_out = out + "/" + robot->name + "_discovered.urdf";
+  const std::string urdf_out = out + "/" + plainFileName(robot->name) + "_discovered.urdf";
   saveRobotUrdf(result.model.robot(), urdf_out,
                 "  " + robot->name + " after jointcomp discover\n  nominal: " + urdf +
                     "\n  Joint placements corrected; joint offsets, compliance and the discovered effects are in the "

@@ -17,6 +17,11 @@ std::vector<NamedEstimate> DiscoveryFamily::describe(const FittedCandidate&, con
   return {};
 }
 
+std::string DiscoveryFamily::physicalProblem(const DiscoveryData&, const DiscoveryCandidate&, const Eigen::VectorXd&,
+                                             const JointVector&) const {
+  return {};
+}
+
 const std::string& jointNameOf(const DiscoveryData& data, int joint) {
   return data.robot->joints[static_cast<std::size_t>(joint)].name;
 }

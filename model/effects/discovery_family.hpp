@@ -104,6 +104,11 @@ public:
   // Named estimates of one accepted candidate's coefficients; `model` holds the effect makeEffect built.
   // The calibration parameters it freed are reported by discovery itself.
   virtual std::vector<NamedEstimate> describe(const FittedCandidate& fitted, const JointErrorModel& model) const;
+  // Empty when `theta` (the candidate's coefficients, SI) make a physical effect over the fitted rows (their
+  // torques, angles, times), given each joint's linear compliance `compliance` (rad/(N m)); else why not.
+  // Discovery refuses a candidate whose fit is not physical, however well it fits.
+  virtual std::string physicalProblem(const DiscoveryData& data, const DiscoveryCandidate& candidate,
+                                      const Eigen::VectorXd& theta, const JointVector& compliance) const;
 };
 
 // A family that only frees one of the calibration's own parameters of each joint (offset, compliance,

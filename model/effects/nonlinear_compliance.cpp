@@ -1,5 +1,9 @@
 #include "model/effects/nonlinear_compliance.hpp"
 
+#include <cstdio>
+
+#include <algorithm>
+
 #include <cmath>
 
 #include <nlohmann/json.hpp>
@@ -40,6 +44,24 @@ void NonlinearComplianceEffect::addJointError(const Robot&, const JointContext& 
 
 double NonlinearComplianceDiscovery::feature(const DiscoveryData& data, int row, int joint) const {
   return NonlinearComplianceEffect::feature(data.load_torque[row][joint]);
+}
+
+std::string NonlinearComplianceDiscovery::physicalProblem(const DiscoveryData& data,
+                                                          const DiscoveryCandidate& candidate,
+                                                          const Eigen::VectorXd& theta,
+                                                          const JointVector& compliance) const {
+  const int j = candidate.joint;
+  if (j < 0 || theta.size() != 1 || theta[0] >= 0.0) return {};
+  double most = 0.0;  // N m, the largest torque the joint carried in the fitted rows
+  for (const JointVector& torque : data.load_torque) most = std::max(most, std::abs(torque[j]));
+  const double linear = j < compliance.size() ? std::max(0.0, compliance[j]) : 0.0;
+  if (linear + 3.0 * theta[0] * most * most > 0.0) return {};
+  char text[240];
+  std::snprintf(text, sizeof(text),
+                "not physical: %s's deflection turns back at %.4g N m, inside the fitted torques (up to %.4g N m): "
+                "compliance %.4g rad/(N m), cubic %.4g rad/(N m)^3",
+                jointNameOf(data, j).c_str(), std::sqrt(linear / (-3.0 * theta[0])), most, linear, theta[0]);
+  return text;
 }
 
 std::unique_ptr<Effect> NonlinearComplianceDiscovery::effectOf(const DiscoveryData& data,

@@ -32,11 +32,15 @@ public:
   static double feature(double torque) { return -torque * torque * torque; }
 };
 
-// Discovery: "nonlinear_compliance", one column per joint, tau_j^3 (needs the load torque).
+// Discovery: "nonlinear_compliance", one column per joint, tau_j^3 (needs the load torque). Physical only when
+// the joint's whole deflection c1 tau + c3 tau^3 grows with the torque over the fitted rows' torques
+// (c1 + 3 c3 tau^2 > 0): a softening that turns the deflection back is refused.
 class NonlinearComplianceDiscovery : public PerJointFeatureDiscovery {
 public:
   NonlinearComplianceDiscovery()
       : PerJointFeatureDiscovery("nonlinear_compliance", "cubic_compliance_rad_per_nm3", true) {}
+  std::string physicalProblem(const DiscoveryData& data, const DiscoveryCandidate& candidate,
+                              const Eigen::VectorXd& theta, const JointVector& compliance) const override;
 
 protected:
   double feature(const DiscoveryData& data, int row, int joint) const override;

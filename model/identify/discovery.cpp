@@ -248,6 +248,8 @@ public:
                                                 (s.joint_name.empty() ? "" : " " + s.joint_name) + s.detail +
                                                 ", fitted RMS " + std::to_string(s.after.fitted.rms * 1e3) + " mm");
     }
+    if (result_.rejected_at_stop.find(undone_) == std::string::npos)
+      result_.rejected_at_stop = joined(undone_, result_.rejected_at_stop);
     report(options_.calibration.progress, "discovery stopped: " + result_.stop_reason);
     finish();
     return std::move(result_);
@@ -366,7 +368,7 @@ private:
   // The candidate (or pair) to accept: chooseCandidate (discovery_selection.cpp).
   Choice choose() const {
     const Fit base = solveSystem(baseSystem(lin_.problem), Penalty(), false);
-    const Selection selection{lin_, features_, offered_, cal_, base, options_, cuts_};
+    const Selection selection{lin_, data_, features_, offered_, cal_, base, options_, cuts_};
     return chooseCandidate(selection);
   }
 
@@ -434,7 +436,7 @@ private:
       result_.stop_reason =
           "no candidate lowers the cross-validated error and the BIC without making a part of the "
           "data significantly worse";
-      result_.rejected_at_stop = choice.rejected;
+      result_.rejected_at_stop = joined(undone_, choice.rejected);
       return false;
     }
     const Evaluation& chosen = choice.chosen;
@@ -450,8 +452,20 @@ private:
       }
     }
     const std::size_t first_new = active_.size();
+    const std::vector<Active> active_before = active_;
+    const std::set<int> released_before = released_;
     acceptCoefficients(chosen);
     refit(!newly_released.empty());
+    const std::string unphysical = unphysicalActive();
+    if (!unphysical.empty()) {
+      // The joint refit carried an effect beyond what is physical: the step is undone and not offered again.
+      active_ = active_before;
+      released_ = released_before;
+      refit(true);
+      undone_ += (undone_.empty() ? "" : "; ") + record.type + " " + record.joint_name + record.detail +
+                 " undone after its refit, " + unphysical;
+      return true;
+    }
     state_ = evaluate(base_fit_.cv);
     record.after = state_;
     std::size_t next = first_new;
@@ -469,6 +483,21 @@ private:
     if (next > first_new) appendCalibrationEstimates(newly_released, record.parameters);
     result_.steps.push_back(record);
     return true;
+  }
+
+  // Empty when every accepted effect is physical at its current coefficients; else the first problem.
+  std::string unphysicalActive() const {
+    for (const Active& a : active_) {
+      const std::size_t c = static_cast<std::size_t>(a.candidate);
+      const std::string problem =
+          features_.family[c]->physicalProblem(data_, features_.candidates[c], a.theta, cal_.estimate.compliance);
+      if (!problem.empty()) return problem;
+    }
+    return {};
+  }
+
+  static std::string joined(const std::string& a, const std::string& b) {
+    return a.empty() ? b : b.empty() ? a : a + "; " + b;
   }
 
   // The step's record before it is taken: what was chosen (one candidate, or two together), and the evidence.
@@ -500,7 +529,7 @@ private:
     record.delta_bic = chosen.delta_bic;
     record.candidates_tried = choice.tried;
     record.runner_up = choice.runner_up;
-    record.rejected = choice.rejected;
+    record.rejected = joined(undone_, choice.rejected);
     return record;
   }
 
@@ -542,6 +571,7 @@ private:
   Fit base_fit_;
   Eigen::VectorXd base_scale_;
   std::vector<int> active_first_;  // first column of each piece in the refit system
+  std::string undone_;             // steps undone because their refit was not physical, and why
   const Cuts cuts_;
   DiscoveryState state_;
   DiscoveryResult result_;

@@ -88,13 +88,15 @@ struct Evaluation {
   double added = 0.0;                        // effective parameters added
   bool gains = false;                        // lowers the CV error by min_cv_gain and the BIC
   std::string hurt;                          // empty: transfers; else the group it makes significantly worse
+  std::string unphysical;                    // empty: every member's fit is physical (DiscoveryFamily::physicalProblem)
   double transfer_error = 0.0;               // CV error of the time blocks and the joint-space parts together
   std::vector<Eigen::VectorXd> member_step;  // per member, its coefficients (SI)
-  bool passes() const { return gains && hurt.empty(); }
+  bool passes() const { return gains && hurt.empty() && unphysical.empty(); }
 };
 
 struct Selection {
   const Linearised& lin;
+  const DiscoveryData& data;
   const Features& features;
   const std::vector<bool>& offered;
   const GeometricCalibrationResult& cal;

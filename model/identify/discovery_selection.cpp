@@ -132,6 +132,10 @@ Evaluation judge(const Selection& s, const FitSystem& system, const std::vector<
     for (std::size_t k = 0; k < own[m].size(); ++k)
       step[static_cast<Eigen::Index>(k)] = e.fit.d[own[m][k]] / system.scale[own[m][k]];
     e.member_step.push_back(step);
+    const std::size_t c = static_cast<std::size_t>(members[m]);
+    if (e.unphysical.empty())
+      e.unphysical =
+          s.features.family[c]->physicalProblem(s.data, s.features.candidates[c], step, s.cal.estimate.compliance);
   }
   return e;
 }
@@ -250,9 +254,9 @@ Choice chooseCandidate(const Selection& s) {
   double runner_cv = std::numeric_limits<double>::infinity(), rejected_cv = runner_cv;
   for (const Evaluation& e : all) {
     if (e.passes() && (!best || e.fit.cv < best->fit.cv)) best = &e;
-    if (e.gains && !e.hurt.empty() && e.fit.cv < rejected_cv) {
+    if (e.gains && !e.passes() && e.fit.cv < rejected_cv) {
       rejected_cv = e.fit.cv;
-      choice.rejected = label(s, e) + ": " + e.hurt;
+      choice.rejected = label(s, e) + ": " + (e.unphysical.empty() ? e.hurt : e.unphysical);
     }
   }
   // Of the candidates tied with the best, the one with the fewest (effective) parameters, then the lowest BIC:
