@@ -251,7 +251,11 @@ std::string discoverySummary(const DiscoveryResult& result, const DiscoveryOptio
       summary << line;
     }
     for (const DiscoveredParameter& p : s.parameters) {
-      std::snprintf(line, sizeof(line), "    %-48s %.6g +- %.3g\n", p.name.c_str(), p.value, p.sigma);
+      // A derived figure without its own uncertainty (a table's spectrum) is printed without "+- 0".
+      if (p.sigma > 0.0)
+        std::snprintf(line, sizeof(line), "    %-48s %.6g +- %.3g\n", p.name.c_str(), p.value, p.sigma);
+      else
+        std::snprintf(line, sizeof(line), "    %-48s %.6g\n", p.name.c_str(), p.value);
       summary << line;
     }
     if (!s.rejected.empty()) summary << "    rejected, does not transfer: " << s.rejected << "\n";
