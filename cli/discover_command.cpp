@@ -65,6 +65,60 @@ void readSelectionOptions(const Options& options, DiscoveryOptions& discovery) {
   discovery.heldout_same_instrument = options.has("holdout-same-instrument");
 }
 
+// The discovered URDF and parameter file, report.json, steps.csv, summary.txt (printed too) and the plot.
+void writeDiscoveryOutputs(const DiscoveryResult& result, const DiscoveryOptions& discovery, const RobotSetup& setup,
+                           const std::vector<std::string>& campaigns, const std::vector<std::string>& holdouts,
+                           const std::string& out, double seconds, bool plot) {
+  const std::shared_ptr<const Robot>& robot = setup.robot;
+  const std::string& urdf = setup.urdf;
+  const std::string urdf_out = out + "/" + plainFileName(robot->name) + "_discovered.urdf";
+  saveRobotUrdf(result.model.robot(), urdf_out,
+                "  " + robot->name + " after jointcomp discover\n  nominal: " + urdf +
+                    "\n  Joint placements corrected; joint offsets, compliance and the discovered effects are in the "
+                    "parameter file.");
+  const std::string params_out = out + "/parameters.json";
+  saveParameterFile(result.model, params_out, setup.parameters.drives);  // the prior's drives, if any
+
+  DiscoverySources sources;
+  sources.urdf = urdf;
+  sources.parameters = setup.params;
+  sources.campaigns = campaigns;
+  sources.held_out = holdouts;
+  sources.outputs = {{"parameters", params_out}, {"urdf", urdf_out}};
+  writeFileAtomically(out + "/report.json", discoveryReportJson(result, discovery, sources, seconds).dump(2) + "\n");
+  writeFileAtomically(out + "/steps.csv", discoveryStepsCsv(result));
+  const std::string summary = discoverySummary(result, discovery, sources) + "Wrote " + params_out + ", " + urdf_out +
+                              ", " + out + "/report.json, " + out + "/steps.csv\n";
+  writeFileAtomically(out + "/summary.txt", summary);
+  std::fputs(summary.c_str(), stdout);
+  if (plot) drawPlot("plot_discovery.py", out + "/steps.csv", out + "/discovery.png");
+}
+
+// Every option of the discovery itself, read whole and range-checked.
+DiscoveryOptions discoveryOptionsFrom(const Options& options) {
+  DiscoveryOptions discovery;
+  discovery.calibration.loss = parseRobustLoss(options.get("loss", "huber"));
+  discovery.calibration.progress = consoleProgress(options);
+  const std::string base = options.get("base", "textbook");
+  if (base != "frame" && base != "textbook")
+    throw std::invalid_argument("--base must be frame or textbook, not '" + base + "'");
+  discovery.base_geometry = base == "textbook";
+  discovery.max_steps = static_cast<int>(options.integer("max-steps", discovery.max_steps, 0, kMaxDiscoverySteps));
+  discovery.max_harmonic_order =
+      static_cast<int>(options.integer("orders", discovery.max_harmonic_order, 1, kMaxHarmonicOrder));
+  discovery.folds = static_cast<int>(options.integer("folds", discovery.folds, 2, kMaxFolds));
+  discovery.min_cv_gain = options.number("min-cv-gain", discovery.min_cv_gain, {0.0, 1.0});
+  discovery.noise_floor = options.number("noise-floor-mm", 0.0, {0.0, 1e3}) * 1e-3;
+  readSelectionOptions(options, discovery);
+  discovery.types = splitCommaList(options.get("types", ""));
+  for (const std::string& type : discovery.types) {
+    bool known = false;
+    for (const std::string& t : discoveryEffectTypes()) known = known || t == type;
+    if (!known) throw std::invalid_argument("--types: unknown effect type '" + type + "'");
+  }
+  return discovery;
+}
+
 }  // namespace
 
 int runDiscover(int argc, char** argv) {
@@ -103,40 +157,22 @@ int runDiscover(int argc, char** argv) {
                          "min-group-share",
                          "angle-ranges",
                          "no-pairs",
+                         "holdout-same-instrument",
                          "no-plot",
                          "quiet"},
-                        {"no-pairs", "no-plot", "quiet"});
+                        {"no-pairs", "holdout-same-instrument", "no-plot", "quiet"});
   if (campaigns.empty() || !options.has("out")) {
     throw std::invalid_argument(
         "discover needs --campaign FILE[,FILE..] and --out DIR (and --urdf, --params, --holdout)");
   }
   const RobotSetup setup = loadRobotSetup(options, robotFile("ur10"));
-  const std::string& urdf = setup.urdf;
   const std::string out = options.get("out", "");
   prepareOutputFolder(out);
   const auto started = std::chrono::steady_clock::now();
   const std::shared_ptr<const Robot>& robot = setup.robot;
   const JointErrorModel& prior = setup.parameters.model;
-  DiscoveryOptions discovery;
-  discovery.calibration.loss = parseRobustLoss(options.get("loss", "huber"));
-  discovery.calibration.progress = consoleProgress(options);
-  const std::string base = options.get("base", "textbook");
-  if (base != "frame" && base != "textbook")
-    throw std::invalid_argument("--base must be frame or textbook, not '" + base + "'");
-  discovery.base_geometry = base == "textbook";
-  discovery.max_steps = static_cast<int>(options.integer("max-steps", discovery.max_steps, 0, kMaxDiscoverySteps));
-  discovery.max_harmonic_order =
-      static_cast<int>(options.integer("orders", discovery.max_harmonic_order, 1, kMaxHarmonicOrder));
-  discovery.folds = static_cast<int>(options.integer("folds", discovery.folds, 2, kMaxFolds));
-  discovery.min_cv_gain = options.number("min-cv-gain", discovery.min_cv_gain, {0.0, 1.0});
-  discovery.noise_floor = options.number("noise-floor-mm", 0.0, {0.0, 1e3}) * 1e-3;
-  readSelectionOptions(options, discovery);
-  discovery.types = splitCommaList(options.get("types", ""));
-  for (const std::string& type : discovery.types) {
-    bool known = false;
-    for (const std::string& t : discoveryEffectTypes()) known = known || t == type;
-    if (!known) throw std::invalid_argument("--types: unknown effect type '" + type + "'");
-  }
+  const DiscoveryOptions discovery = discoveryOptionsFrom(options);
+  const std::string base = discovery.base_geometry ? "textbook" : "frame";
 
   std::vector<MeasurementCampaign> fitted, held;
   for (const std::string& path : campaigns) fitted.push_back(readCampaignFile(path));
@@ -148,27 +184,7 @@ int runDiscover(int argc, char** argv) {
   const DiscoveryResult result = discoverEffects(prior, fitted, held, discovery);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - fit_started).count();
 
-  const std::string urdf_out = out + "/" + plainFileName(robot->name) + "_discovered.urdf";
-  saveRobotUrdf(result.model.robot(), urdf_out,
-                "  " + robot->name + " after jointcomp discover\n  nominal: " + urdf +
-                    "\n  Joint placements corrected; joint offsets, compliance and the discovered effects are in the "
-                    "parameter file.");
-  const std::string params_out = out + "/parameters.json";
-  saveParameterFile(result.model, params_out, setup.parameters.drives);  // the prior's drives, if any
-
-  DiscoverySources sources;
-  sources.urdf = urdf;
-  sources.parameters = setup.params;
-  sources.campaigns = campaigns;
-  sources.held_out = holdouts;
-  sources.outputs = {{"parameters", params_out}, {"urdf", urdf_out}};
-  writeFileAtomically(out + "/report.json", discoveryReportJson(result, discovery, sources, seconds).dump(2) + "\n");
-  writeFileAtomically(out + "/steps.csv", discoveryStepsCsv(result));
-  const std::string summary = discoverySummary(result, discovery, sources) + "Wrote " + params_out + ", " + urdf_out +
-                              ", " + out + "/report.json, " + out + "/steps.csv\n";
-  writeFileAtomically(out + "/summary.txt", summary);
-  std::fputs(summary.c_str(), stdout);
-  if (!options.has("no-plot")) drawPlot("plot_discovery.py", out + "/steps.csv", out + "/discovery.png");
+  writeDiscoveryOutputs(result, discovery, setup, campaigns, holdouts, out, seconds, !options.has("no-plot"));
 
   std::printf("done in %.2f s (discovery %.2f s)\n",
               std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count(), seconds);

@@ -71,6 +71,18 @@ assert abs(offset["offset_rad"][2] - 1e-3) < 1e-4, offset
 assert "plant" in parameters, "the drives of the nominal file are kept"
 PY
 cmp -s "$work/fit.csv" "$work/fit.before" || fail "discover modified its input campaign"
+# The selection's settings are options of their own (read whole, range-checked by the library's rules).
+"$jointcomp" discover --urdf "$urdf" --params "$params" --campaign "$work/fit.csv" --holdout "$work/held.csv" \
+  --max-steps 0 --table-knots 16,32 --max-prior-weight 1 --max-ridge-weight 0.1 --transfer-significance 2 \
+  --min-group-share 0.1 --angle-ranges 4 --no-pairs --holdout-same-instrument --out "$work/discover_options" \
+  --no-plot >/dev/null || fail "discover refused its selection options"
+"$python" - "$work/discover_options/report.json" <<'PY' || fail "report.json does not carry the selection options"
+import json, sys
+selection = json.load(open(sys.argv[1]))["selection"]
+assert selection["table_knots"] == [16, 32] and selection["pairs"] is False, selection
+assert selection["transfer_significance"] == 2 and selection["angle_ranges"] == 4, selection
+assert selection["base"] == "textbook", selection
+PY
 
 "$jointcomp" calibrate --urdf "$urdf" --params "$params" --campaign "$work/fit.csv" --holdout "$work/held.csv" \
   --out "$work/calibrate" --no-plot >/dev/null
