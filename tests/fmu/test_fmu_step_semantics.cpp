@@ -1,0 +1,198 @@
+// What a co-simulation master relies on beyond the calls themselves (issue 39, the FMU's step semantics):
+// the ModelStructure declares every direct dependency of an output on an input, a discarded step tells
+// its reason to a user who did not switch debug logging on and lets the master terminate, the bounds
+// the modelDescription declares are values initialisation accepts.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <map>
+#include <set>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "tests/fmu/fmu_master.hpp"
+
+namespace jointcomp {
+namespace {
+
+using namespace fmutest;  // NOLINT(google-build-using-namespace): the master of fmu_master.hpp
+
+// ---- What modelDescription.xml declares ---------------------------------------------------------------
+
+struct Declared {
+  std::map<std::uint32_t, std::set<std::uint32_t>> depends;  // output vr -> the input vrs it depends on
+  std::map<std::uint32_t, std::string> name;                 // vr -> name
+  std::map<std::uint32_t, std::string> causality;
+  struct Bound {
+    std::string name, type;
+    bool has_min = false, has_max = false;
+    double min = 0.0, max = 0.0;
+  };
+  std::vector<Bound> parameter_bounds;  // Real and Integer parameters with a min or a max
+};
+
+std::vector<std::uint32_t> numbers(const std::string& list) {
+  std::vector<std::uint32_t> result;
+  std::istringstream in(list);
+  for (std::uint32_t n = 0; in >> n;) result.push_back(n);
+  return result;
+}
+
+// The variables in file order (FMI 2 indices are 1-based positions in it) and the ModelStructure's outputs.
+Declared readDeclared(int version) {
+  const std::string xml = readFile(unzipped(version) + "/modelDescription.xml");
+  Declared d;
+  std::vector<std::uint32_t> by_position;
+  const std::size_t variables_end = xml.find("</ModelVariables>");
+  for (std::size_t at = xml.find("<ModelVariables>"); (at = xml.find('<', at + 1)) < variables_end;) {
+    const std::size_t end = xml.find('>', at);
+    const std::string vr_text = attribute(xml, at, end, "valueReference");
+    if (vr_text.empty()) continue;
+    const auto vr = static_cast<std::uint32_t>(std::stoul(vr_text));
+    by_position.push_back(vr);
+    d.name[vr] = attribute(xml, at, end, "name");
+    d.causality[vr] = attribute(xml, at, end, "causality");
+    // The type element: the variable's own (FMI 3) or its child (FMI 2).
+    const std::size_t type_at = version == 3 ? at : xml.find('<', end);
+    const std::size_t type_end = xml.find('>', type_at);
+    std::string type = xml.substr(type_at + 1, xml.find_first_of(" />", type_at + 1) - type_at - 1);
+    const std::string min = attribute(xml, type_at, type_end, "min"), max = attribute(xml, type_at, type_end, "max");
+    if (d.causality[vr] == "parameter" && (!min.empty() || !max.empty()) && type != "Enumeration") {
+      Declared::Bound b{d.name[vr], type, !min.empty(), !max.empty(), 0.0, 0.0};
+      if (b.has_min) b.min = std::stod(min);
+      if (b.has_max) b.max = std::stod(max);
+      d.parameter_bounds.push_back(b);
+    }
+  }
+  const std::size_t structure = xml.find("<ModelStructure>");
+  const std::size_t structure_end = xml.find("</ModelStructure>");
+  const std::string tag = version == 2 ? "<Unknown " : "<Output ";
+  const std::size_t outputs_end = version == 2 ? xml.find("</Outputs>", structure) : structure_end;
+  for (std::size_t at = structure; (at = xml.find(tag, at + 1)) < outputs_end;) {
+    const std::size_t end = xml.find('>', at);
+    std::uint32_t output = 0;
+    if (version == 2) {
+      output = by_position.at(std::stoul(attribute(xml, at, end, "index")) - 1);
+    } else {
+      output = static_cast<std::uint32_t>(std::stoul(attribute(xml, at, end, "valueReference")));
+    }
+    std::set<std::uint32_t>& inputs = d.depends[output];
+    for (std::uint32_t k : numbers(attribute(xml, at, end, "dependencies"))) {
+      inputs.insert(version == 2 ? by_position.at(k - 1) : k);
+    }
+  }
+  return d;
+}
+
+// The input's role: its name without the joint number or the wrench component.
+std::string role(const std::string& name) {
+  if (name.rfind("tool_wrench.", 0) == 0) return "tool_wrench";
+  return name.substr(0, name.find_last_of('_'));
+}
+
+// ---- The probe ---------------------------------------------------------------------------------------
+
+struct Setting {
+  long compensation;
+  bool use_velocity_inputs, compensate_wrench;
+};
+
+// After ten steps of a slow move, each input moved alone (from an FMU state taken there, so that each probe
+// starts from the same point): the outputs that change before any doStep depend on it directly.
+void probe(int version, const Setting& s, std::map<std::uint32_t, std::set<std::uint32_t>>& found) {
+  auto m = makeMaster(version);
+  ASSERT_TRUE(m->instantiate()) << m->log();
+  ASSERT_EQ(m->enterInitialization(), kOK) << m->log();
+  ASSERT_EQ(m->setEnumeration(m->vr("reference"), 1), kOK) << m->log();  // the inputs
+  ASSERT_EQ(m->setEnumeration(m->vr("compensation"), s.compensation), kOK) << m->log();
+  ASSERT_EQ(m->setBoolean(m->vr("use_velocity_inputs"), s.use_velocity_inputs), kOK) << m->log();
+  ASSERT_EQ(m->setBoolean(m->vr("compensate_wrench"), s.compensate_wrench), kOK) << m->log();
+  const auto q = m->vrs("q_desired_", kDof), qd = m->vrs("qd_desired_", kDof), qdd = m->vrs("qdd_desired_", kDof);
+  const std::vector<std::uint32_t> wrench = {m->vr("tool_wrench.force_x"),  m->vr("tool_wrench.force_y"),
+                                             m->vr("tool_wrench.force_z"),  m->vr("tool_wrench.moment_x"),
+                                             m->vr("tool_wrench.moment_y"), m->vr("tool_wrench.moment_z")};
+  const std::vector<double> pose = {0.1, 60 * kDegree, 60 * kDegree, 0.1, 60 * kDegree, 0.1};
+  const double h = 0.001;
+  for (int k = 0; k <= 10; ++k) {
+    std::vector<double> position(kDof), velocity(kDof, 0.05), acceleration(kDof, 0.5);
+    for (int j = 0; j < kDof; ++j) position[j] = pose[j] + 0.05 * k * h + 0.25 * (k * h) * (k * h);
+    ASSERT_EQ(m->setReals(q, position), kOK) << m->log();
+    ASSERT_EQ(m->setReals(qd, velocity), kOK) << m->log();
+    ASSERT_EQ(m->setReals(qdd, acceleration), kOK) << m->log();
+    ASSERT_EQ(m->setReals(wrench, {10.0, -20.0, -50.0, 2.0, -3.0, 1.0}), kOK) << m->log();
+    if (k == 0) {
+      ASSERT_EQ(m->exitInitialization(), kOK) << m->log();
+    }
+    if (k < 10) {
+      ASSERT_EQ(m->doStep(k * h, h), kOK) << m->log();
+    }
+  }
+  void* here = nullptr;
+  ASSERT_EQ(m->getState(&here), kOK) << m->log();
+  std::vector<double> before, after, value;
+  ASSERT_EQ(m->getReals(m->md.outputs, before), kOK) << m->log();
+  std::vector<std::uint32_t> inputs = q;
+  for (const auto* list : {&qd, &qdd, &wrench}) inputs.insert(inputs.end(), list->begin(), list->end());
+  for (std::uint32_t input : inputs) {
+    ASSERT_EQ(m->getReals({input}, value), kOK) << m->log();
+    const bool position = std::find(q.begin(), q.end(), input) != q.end();
+    const bool force = std::find(wrench.begin(), wrench.end(), input) != wrench.end();
+    ASSERT_EQ(m->setReals({input}, {value[0] + (position ? 1e-3 : force ? 40.0 : 5.0)}), kOK) << m->log();
+    ASSERT_EQ(m->getReals(m->md.outputs, after), kOK) << m->log();
+    for (std::size_t i = 0; i < after.size(); ++i) {
+      if (after[i] != before[i]) found[m->md.outputs[i]].insert(input);
+    }
+    ASSERT_EQ(m->setState(here), kOK) << m->log();
+  }
+  ASSERT_EQ(m->freeState(&here), kOK);
+}
+
+class FmuSemantics : public ::testing::TestWithParam<int> {};
+
+// Every output that moves with an input before the next doStep is declared to depend on it, and every input
+// role an output is declared to depend on moves it in some setting (q_ref on qdd_desired with compensation
+// = dynamic: issue 39).
+TEST_P(FmuSemantics, TheModelStructureDeclaresEveryDirectDependencyAProbeFinds) {
+  const Declared declared = readDeclared(GetParam());
+  std::map<std::uint32_t, std::set<std::uint32_t>> found;
+  for (long compensation = 0; compensation <= 3; ++compensation) {
+    for (bool velocities : {false, true}) {
+      for (bool wrench : {false, true}) {
+        SCOPED_TRACE("compensation " + std::to_string(compensation) + ", use_velocity_inputs " +
+                     std::to_string(velocities) + ", compensate_wrench " + std::to_string(wrench));
+        probe(GetParam(), {compensation, velocities, wrench}, found);
+        if (HasFatalFailure()) return;
+      }
+    }
+  }
+  ASSERT_FALSE(declared.depends.empty());
+  for (const auto& [output, inputs] : declared.depends) {
+    const std::string& name = declared.name.at(output);
+    const std::set<std::uint32_t>& moved = found[output];
+    for (std::uint32_t input : moved) {
+      EXPECT_TRUE(inputs.count(input)) << name << " moves with " << declared.name.at(input)
+                                       << " before any doStep, but the ModelStructure does not declare it";
+    }
+    std::set<std::string> declared_roles, moved_roles;
+    for (std::uint32_t input : inputs) declared_roles.insert(role(declared.name.at(input)));
+    for (std::uint32_t input : moved) moved_roles.insert(role(declared.name.at(input)));
+    EXPECT_EQ(declared_roles, moved_roles) << name << ": the roles declared and the roles a probe moves it with";
+  }
+  // The finding of issue 39 itself.
+  bool q_ref_2_on_qdd_2 = false;
+  for (const auto& [vr, name] : declared.name) {
+    if (name != "q_ref_2") continue;
+    for (std::uint32_t input : found[vr]) q_ref_2_on_qdd_2 |= declared.name.at(input) == "qdd_desired_2";
+  }
+  EXPECT_TRUE(q_ref_2_on_qdd_2);
+}
+
+INSTANTIATE_TEST_SUITE_P(Fmi, FmuSemantics, ::testing::Values(2, 3), [](const ::testing::TestParamInfo<int>& param) {
+  return "Fmi" + std::to_string(param.param);
+});
+
+}  // namespace
+}  // namespace jointcomp
