@@ -440,7 +440,7 @@ FMI2_EXPORT fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKin
   if (!value) return to2(instance.nullArgument("fmi2GetBooleanStatus", "value"));
   if (s != fmi2Terminated)
     return to2(instance.unsupported("fmi2GetBooleanStatus", "only fmi2Terminated is a boolean status"));
-  *value = 0;  // the FMU never asks to end the simulation
+  *value = instance.wantsToTerminate() ? 1 : 0;  // after a discarded step
   return fmi2OK;
   FMI2_END("fmi2GetBooleanStatus")
 }

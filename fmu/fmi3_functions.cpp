@@ -555,9 +555,10 @@ FMI3_EXPORT fmi3Status fmi3DoStep(fmi3Instance instance, fmi3Float64 currentComm
   if (!earlyReturn) return to3(self.nullArgument("fmi3DoStep", "earlyReturn"));
   if (!lastSuccessfulTime) return to3(self.nullArgument("fmi3DoStep", "lastSuccessfulTime"));
   *eventHandlingNeeded = false;
-  *terminateSimulation = false;
   *earlyReturn = false;
-  return to3(self.doStep("fmi3DoStep", currentCommunicationPoint, communicationStepSize, lastSuccessfulTime));
+  const Status status = self.doStep("fmi3DoStep", currentCommunicationPoint, communicationStepSize, lastSuccessfulTime);
+  *terminateSimulation = self.wantsToTerminate();  // a discarded step: only a reset or an earlier state goes on
+  return to3(status);
   FMI3_END("fmi3DoStep")
 }
 

@@ -189,8 +189,14 @@ Vector6 wrenchOf(const std::vector<double>& values) {
 
 Instance::Instance(std::string name, const std::string& resource_dir, LogSink sink, void* sink_context, bool logging_on)
     : name_(std::move(name)), sink_(sink), sink_context_(sink_context) {
-  for (bool& on : logging_) on = logging_on;
-  logging_[kLogCalls] = false;  // verbose: only when asked for by name
+  // The status categories (logStatusWarning, logStatusDiscard, logStatusError) are what FMI lets an FMU
+  // report whether or not debug logging is on: the reason of a Discard or an Error reaches every user, and
+  // the importer decides what to show. The one debug category, logCalls, is verbose and is switched on
+  // only by name (fmi2SetDebugLogging / fmi3SetDebugLogging), whatever loggingOn says; so is a status
+  // category switched off.
+  for (bool& on : logging_) on = true;
+  logging_[kLogCalls] = false;
+  (void)logging_on;
   std::string dir = resource_dir;
   if (!dir.empty() && dir.back() != '/') dir += '/';
   auto robot = std::make_shared<const Robot>(loadRobotFile(dir + "robot.json"));
@@ -660,8 +666,9 @@ Status Instance::doStep(const char* function, double current_time, double step, 
 // CVODE failed (SolverError: the plant stays at its last good time), or the watchdog stopped a run that left
 // its joint limits or tracking envelope (PlantLimitError: the plant is at the end, and goes on only from a
 // reset or an earlier FMU state). Either way the step is discarded with the reason.
+// The FMU's time stays at the start of the discarded step: the end of the last successful one (FMI 2.0,
+// fmi2LastSuccessfulTime), whatever time the plant stopped at.
 Status Instance::discardStep(const char* function, const char* why, double* last_successful_time) {
-  state_.time = models_->plant->time();
   state_.phase = kStepDiscarded;
   reference_valid_ = false;
   outputs_valid_ = 0;

@@ -128,8 +128,11 @@ public:
   Status serialize(const char* function, const Snapshot* state, unsigned char bytes[], std::size_t size);
   Status deserialize(const char* function, const unsigned char bytes[], std::size_t size, Snapshot** state);
 
-  // For FMI 2's fmi2GetRealStatus(fmi2LastSuccessfulTime).
+  // For FMI 2's fmi2GetRealStatus(fmi2LastSuccessfulTime): after a Discard, the start of the discarded step.
   double lastSuccessfulTime() const { return state_.time; }
+  // fmi2GetBooleanStatus(fmi2Terminated), fmi3DoStep's terminateSimulation: after a discarded step the FMU
+  // cannot go on (only a reset or an earlier FMU state can), so it asks the importer to terminate.
+  bool wantsToTerminate() const { return state_.phase == kStepDiscarded; }
 
 private:
   [[gnu::cold]] void refuse(const char* function, unsigned phases);  // allowed's refusal: logs why

@@ -111,6 +111,8 @@ public:
   virtual int getBoolean(std::uint32_t vr, bool& value) = 0;
   virtual int doStep(double t, double h) = 0;
   virtual double lastSuccessfulTime() = 0;
+  // FMI 2: fmi2GetBooleanStatus(fmi2Terminated); FMI 3: the last fmi3DoStep's terminateSimulation.
+  virtual bool terminateRequested() = 0;
   virtual int getState(void** state) = 0;
   virtual int setState(void* state) = 0;
   virtual int freeState(void** state) = 0;
@@ -436,6 +438,12 @@ public:
     EXPECT_EQ(api.fmi2GetRealStatus(c, fmi2LastSuccessfulTime, &t), kOK);
     return t;
   }
+  bool terminateRequested() override {
+    fmi2Boolean terminated = -1;
+    EXPECT_EQ(api.fmi2GetBooleanStatus(c, fmi2Terminated, &terminated), kOK);
+    EXPECT_TRUE(terminated == 0 || terminated == 1) << "fmi2Boolean " << terminated;
+    return terminated == 1;
+  }
   int getState(void** state) override { return api.fmi2GetFMUstate(c, state); }
   int setState(void* state) override { return api.fmi2SetFMUstate(c, state); }
   int freeState(void** state) override { return api.fmi2FreeFMUstate(c, state); }
@@ -506,12 +514,14 @@ public:
     const int status = api.fmi3DoStep(c, t, h, true, &event, &terminate_now, &early, &last_successful_time);
     if (status == kOK || status == kDiscard) {  // after an error the flags are undefined
       EXPECT_FALSE(event);
-      EXPECT_FALSE(terminate_now);
+      EXPECT_EQ(terminate_now, status == kDiscard);  // a discarded step cannot go on
       EXPECT_FALSE(early);
+      terminate_requested = terminate_now;
     }
     return status;
   }
   double lastSuccessfulTime() override { return last_successful_time; }
+  bool terminateRequested() override { return terminate_requested; }
   int getState(void** state) override { return api.fmi3GetFMUState(c, state); }
   int setState(void* state) override { return api.fmi3SetFMUState(c, state); }
   int freeState(void** state) override { return api.fmi3FreeFMUState(c, state); }
@@ -536,6 +546,7 @@ public:
   const Fmi3Api& api;
   fmi3Instance c = nullptr;
   double last_successful_time = std::nan("");
+  bool terminate_requested = false;
 };
 
 inline std::unique_ptr<Master> makeMaster(int version) {

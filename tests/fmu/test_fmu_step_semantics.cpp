@@ -190,6 +190,44 @@ TEST_P(FmuSemantics, TheModelStructureDeclaresEveryDirectDependencyAProbeFinds) 
   EXPECT_TRUE(q_ref_2_on_qdd_2);
 }
 
+// ---- A discarded step ---------------------------------------------------------------------------------
+
+// A watchdog trip with debug logging off (loggingOn = false, as fmusim and FMPy instantiate by default): the
+// reason reaches the logger, the last successful time is the start of the discarded step, the FMU asks to
+// terminate and fmi2Terminate / fmi3Terminate follow.
+TEST_P(FmuSemantics, ADiscardTellsItsReasonWithoutDebugLoggingAndTerminateFollows) {
+  auto m = makeMaster(GetParam());
+  ASSERT_TRUE(m->instantiate("robot", "", "", false));
+  ASSERT_EQ(m->enterInitialization(), kOK) << m->log();
+  ASSERT_EQ(m->setEnumeration(m->vr("reference"), 1), kOK) << m->log();
+  ASSERT_EQ(m->exitInitialization(), kOK) << m->log();
+  ASSERT_EQ(m->doStep(0.0, 0.01), kOK) << m->log();
+  EXPECT_FALSE(m->terminateRequested());
+  ASSERT_EQ(m->setReals({m->vr("q_desired_1")}, {-0.5}), kOK);  // 0.5 rad beyond the 0.2 rad envelope
+  m->messages.clear();
+  EXPECT_EQ(m->doStep(0.01, 0.01), kDiscard);
+  EXPECT_TRUE(m->logged("logStatusDiscard")) << m->log();
+  EXPECT_TRUE(m->logged("tracking envelope")) << m->log();
+  EXPECT_TRUE(m->logged("joint_1")) << m->log();
+  EXPECT_EQ(m->lastSuccessfulTime(), 0.01);  // the end of the last successful step
+  EXPECT_TRUE(m->terminateRequested());
+  std::vector<double> time;
+  EXPECT_EQ(m->getReals({m->vr("time")}, time), kOK) << m->log();
+  EXPECT_EQ(time.at(0), 0.01);
+  EXPECT_EQ(m->terminate(), kOK) << m->log();
+}
+
+// An error's reason reaches the logger with debug logging off too, and so does a value refused with Discard.
+TEST_P(FmuSemantics, RefusalsTellTheirReasonWithoutDebugLogging) {
+  auto m = makeMaster(GetParam());
+  ASSERT_TRUE(m->instantiate("robot", "", "", false));
+  EXPECT_EQ(m->setReals({m->vr("q_desired_2")}, {100.0}), kDiscard);
+  EXPECT_TRUE(m->logged("q_desired_2")) << m->log();
+  m->messages.clear();
+  EXPECT_EQ(m->doStep(0.0, 0.001), kError);
+  EXPECT_TRUE(m->logged("not allowed in state Instantiated")) << m->log();
+}
+
 INSTANTIATE_TEST_SUITE_P(Fmi, FmuSemantics, ::testing::Values(2, 3), [](const ::testing::TestParamInfo<int>& param) {
   return "Fmi" + std::to_string(param.param);
 });
