@@ -228,6 +228,30 @@ TEST_P(FmuSemantics, RefusalsTellTheirReasonWithoutDebugLogging) {
   EXPECT_TRUE(m->logged("not allowed in state Instantiated")) << m->log();
 }
 
+// ---- Declared bounds ----------------------------------------------------------------------------------
+
+// Every parameter at its declared min and at its declared max initialises: a bound the modelDescription
+// declares is a value the FMU accepts (a min of 0 on a stiffness that must be positive is not).
+TEST_P(FmuSemantics, EveryDeclaredBoundOfAParameterInitialises) {
+  const Declared declared = readDeclared(GetParam());
+  ASSERT_GT(declared.parameter_bounds.size(), 20u);
+  for (const Declared::Bound& b : declared.parameter_bounds) {
+    for (int side = 0; side < 2; ++side) {
+      if (!(side == 0 ? b.has_min : b.has_max)) continue;
+      const double value = side == 0 ? b.min : b.max;
+      auto m = makeMaster(GetParam());
+      ASSERT_TRUE(m->instantiate()) << m->log();
+      ASSERT_EQ(m->enterInitialization(), kOK) << m->log();
+      const int set = b.type == "Real" || b.type == "Float64" ? m->setReals({m->vr(b.name)}, {value})
+                                                              : m->setInteger(m->vr(b.name), static_cast<int>(value));
+      EXPECT_EQ(set, kOK) << b.name << " = " << value << "\n" << m->log();
+      EXPECT_EQ(m->exitInitialization(), kOK)
+          << b.name << " at its declared " << (side == 0 ? "min " : "max ") << value << " is refused:\n"
+          << m->log();
+    }
+  }
+}
+
 INSTANTIATE_TEST_SUITE_P(Fmi, FmuSemantics, ::testing::Values(2, 3), [](const ::testing::TestParamInfo<int>& param) {
   return "Fmi" + std::to_string(param.param);
 });
