@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "fmu/demo_move.hpp"
+#include "fmu/held_steps.hpp"
 #include "fmu/value_blocks.hpp"
 #include "fmu/variable_binding.hpp"
 #include "model/common/bits.hpp"
@@ -405,6 +406,8 @@ Status Instance::ensureReference(const char* function) {
     } else {
       for (int j = 0; j < table::kDof; ++j) velocity[j] = (q[j] - state_.last_q_desired[j]) / last;
     }
+    // A step of the inputs is held over the coming communication step, not extrapolated (held_steps.hpp).
+    holdSteppedJoints(state_, state_.time, *m.robot, q.data(), velocity.data(), acceleration.data());
   }
   const auto refused = [&](const char* what) {
     char text[400];
@@ -458,6 +461,7 @@ void Instance::ensureInitialized() {
   state_.time = state_.start_time;
   state_.has_last_step = false;
   state_.has_earlier_step = false;
+  state_.has_earliest_step = false;
   const double source = state_.values[role::reference];
   state_.demo = source == kReferenceDemo || (source == kReferenceAuto && !state_.desired_inputs_set);
   reference_valid_ = false;
@@ -568,6 +572,7 @@ Status Instance::exitInitializationMode(const char* function) {
   }
   state_.has_last_step = false;
   state_.has_earlier_step = false;
+  state_.has_earliest_step = false;
   state_.phase = kStepMode;
   return Status::OK;
 }
@@ -648,10 +653,13 @@ Status Instance::doStep(const char* function, double current_time, double step, 
   } catch (const PlantLimitError& error) {
     return discardStep(function, error.what(), last_successful_time);
   }
+  state_.has_earliest_step = state_.has_earlier_step;
+  state_.earliest_step_time = state_.earlier_step_time;
   state_.has_earlier_step = state_.has_last_step;
   state_.earlier_step_time = state_.last_step_time;
   state_.has_last_step = true;
   // Both vectors hold kDof values from the start (InstanceState::atStart, deserializeState).
+  copyJointValues(state_.earlier_q_desired.data(), state_.earliest_q_desired.data());
   copyJointValues(state_.last_q_desired.data(), state_.earlier_q_desired.data());
   copyJointValues(&state_.values[role::q_desired[0]], state_.last_q_desired.data());
   if (m.compensator_mode == kCompensationDynamic) state_.dynamic = dynamic_after_;  // this step's sample is done
@@ -1025,6 +1033,7 @@ Status Instance::getState(const char* function, Snapshot** state) {
   if (s.initialized) s.plant = models_->plant->saveState();
   if (!s.has_last_step) s.last_q_desired = JointVector::Zero(table::kDof);  // not used: written as zeros
   if (!s.has_earlier_step) s.earlier_q_desired = JointVector::Zero(table::kDof);
+  if (!s.has_earliest_step) s.earliest_q_desired = JointVector::Zero(table::kDof);
   *state = target;
   return Status::OK;
 }

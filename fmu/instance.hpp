@@ -8,7 +8,8 @@
 // Compensator directly, bit for bit):
 //   at time t (the importer's currentCommunicationPoint) with inputs q_desired, qd_desired, tool_wrench:
 //   1. v = qd_desired if use_velocity_inputs, else the slope at t of the parabola through q_desired at the
-//      last three communication points (after the first step the change over that step; 0 on the first);
+//      last three communication points (after the first step the change over that step; 0 on the first),
+//      and 0 (with the acceleration of step 2) for a joint whose q_desired stepped (held_steps.hpp);
 //   2. Q_ref = q_desired when compensation is none, else Compensator(nominal, mask).compensate() with
 //      ctx.q = q_desired, ctx.velocity = v, ctx.time = t, ctx.tool_wrench = tool_wrench if
 //      compensate_wrench else 0; mask = nominal.loadsAnd({"compliance"}) (mode 1, the paper's stiffness

@@ -31,6 +31,7 @@ InstanceState InstanceState::atStart() {
   for (int i = 0; i < table::kCount; ++i) state.values[i] = kVariables[i].start;
   state.last_q_desired.setZero(table::kDof);
   state.earlier_q_desired.setZero(table::kDof);
+  state.earliest_q_desired.setZero(table::kDof);
   OnlineDynamicState& d = state.dynamic;
   for (JointVector* v : {&d.correction, &d.demand_at_start, &d.demand, &d.delta, &d.integral}) v->setZero(table::kDof);
   return state;
@@ -42,8 +43,8 @@ namespace {
 
 constexpr char kMagic[8] = {'J', 'C', 'F', 'M', 'U', 'S', 'T', 'A'};
 // 2: with the reference source (demo move); 3: the plant's reference blend, the step before the last and
-// the dynamic mode's drive filter
-constexpr std::uint32_t kStateFormat = 3;
+// the dynamic mode's drive filter; 4: the step before those (steps of the inputs are held, not extrapolated)
+constexpr std::uint32_t kStateFormat = 4;
 
 std::uint64_t fnv1a(const unsigned char* bytes, std::size_t size) {
   std::uint64_t hash = 1469598103934665603ULL;
@@ -153,6 +154,9 @@ void writeState(const InstanceState& s, Writer& w) {
   w.put(static_cast<std::uint8_t>(s.has_earlier_step));
   w.put(s.earlier_q_desired);
   w.put(s.earlier_step_time);
+  w.put(static_cast<std::uint8_t>(s.has_earliest_step));
+  w.put(s.earliest_q_desired);
+  w.put(s.earliest_step_time);
   w.put(static_cast<std::uint8_t>(s.dynamic.started));
   w.put(s.dynamic.time);
   for (const JointVector* v :
@@ -245,6 +249,9 @@ InstanceState deserializeState(const unsigned char bytes[], std::size_t size) {
   s->has_earlier_step = r.flag("the earlier-step flag");
   r.vector(s->earlier_q_desired, table::kDof, "the earlier desired positions");
   s->earlier_step_time = r.finite("the earlier step time");
+  s->has_earliest_step = r.flag("the earliest-step flag");
+  r.vector(s->earliest_q_desired, table::kDof, "the earliest desired positions");
+  s->earliest_step_time = r.finite("the earliest step time");
   s->dynamic.started = r.flag("the dynamic compensation's start flag");
   s->dynamic.time = r.finite("the dynamic compensation's time");
   r.vector(s->dynamic.correction, table::kDof, "the dynamic compensation's correction");

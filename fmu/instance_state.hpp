@@ -40,6 +40,9 @@ struct InstanceState {
   bool has_earlier_step = false;  // and a step before that one: the velocity is estimated to second order
   JointVector earlier_q_desired;  // q_desired and time of that earlier step
   double earlier_step_time = 0.0;
+  bool has_earliest_step = false;  // and one before that: a step of the inputs shows against the three before
+  JointVector earliest_q_desired;  // q_desired and time of that earliest step
+  double earliest_step_time = 0.0;
   // compensation = dynamic: the drive inverse filter after the samples of the steps done (not the current one)
   OnlineDynamicState dynamic;
   Vector6 applied_wrench = Vector6::Zero();  // what the plant was last given

@@ -252,6 +252,73 @@ TEST_P(FmuSemantics, EveryDeclaredBoundOfAParameterInitialises) {
   }
 }
 
+// ---- A step of q_desired -----------------------------------------------------------------------------
+
+struct StepResponse {
+  int status = 0;              // of the first step that was not OK, else OK
+  std::string log;             // the FMU's messages then
+  std::vector<double> link;    // joint 2's link position after each step
+  double highest_link = -1e9;  // rad, after the step
+};
+
+// Joint 2 held at 0 rad, then stepped by `size` (compensation none: the reference is q_desired), at
+// communication steps of h for `duration`; with velocity_inputs, the master says qd_desired = 0 (a held
+// step by construction), else the FMU estimates the velocities from q_desired.
+StepResponse stepOfJoint2(int version, double size, double h, double duration, double envelope, bool velocity_inputs) {
+  StepResponse r;
+  auto m = makeMaster(version);
+  EXPECT_TRUE(m->instantiate()) << m->log();
+  EXPECT_EQ(m->enterInitialization(), kOK) << m->log();
+  EXPECT_EQ(m->setEnumeration(m->vr("compensation"), 0), kOK) << m->log();
+  EXPECT_EQ(m->setBoolean(m->vr("use_velocity_inputs"), velocity_inputs), kOK) << m->log();
+  EXPECT_EQ(m->setReals({m->vr("watchdog.tracking_envelope")}, {envelope}), kOK) << m->log();
+  const auto q = m->vrs("q_desired_", kDof);
+  std::vector<double> desired = {0.0, 0.0, 0.5, 0.0, 0.5, 0.0};
+  EXPECT_EQ(m->setReals(q, desired), kOK) << m->log();
+  EXPECT_EQ(m->exitInitialization(), kOK) << m->log();
+  std::vector<double> link;
+  const int steps = static_cast<int>(std::lround(duration / h));
+  for (int k = 0; k < steps; ++k) {
+    if (k == 5) desired[1] += size;
+    EXPECT_EQ(m->setReals(q, desired), kOK) << m->log();
+    r.status = m->doStep(k * h, h);
+    if (r.status != kOK) {
+      r.log = m->log();
+      return r;
+    }
+    EXPECT_EQ(m->getReals({m->vr("q_link_2")}, link), kOK);
+    r.link.push_back(link[0]);
+    if (k >= 5) r.highest_link = std::max(r.highest_link, link[0]);
+  }
+  return r;
+}
+
+// A step of q_desired is held over the communication steps after it, not extrapolated to 3.25 times its
+// size: the run is the one in which the master says the velocity is zero (a held step by construction), a
+// 0.07 rad step stays inside the 0.2 rad tracking envelope, and a 1.5 rad step (the envelope widened)
+// stays inside the joint's 2.4 rad limit instead of asking for 4.87 rad.
+TEST_P(FmuSemantics, AStepOfQDesiredIsHeldNotExtrapolated) {
+  for (double h : {0.01, 0.001}) {
+    for (double size : {0.07, 1.5}) {
+      SCOPED_TRACE("a step of " + std::to_string(size) + " rad at communication steps of " + std::to_string(h) + " s");
+      const double envelope = size < 0.1 ? 0.2 : 5.0;
+      const StepResponse held = stepOfJoint2(GetParam(), size, h, 2.0, envelope, true);
+      ASSERT_EQ(held.status, kOK) << held.log;
+      const StepResponse r = stepOfJoint2(GetParam(), size, h, 2.0, envelope, false);
+      ASSERT_EQ(r.status, kOK) << r.log;
+      ASSERT_EQ(r.link.size(), held.link.size());
+      double largest = 0.0;
+      for (std::size_t k = 0; k < r.link.size(); ++k) largest = std::max(largest, std::abs(r.link[k] - held.link[k]));
+      std::printf(
+          "step of %g rad at h = %g s: link off the held step's run by %.3g rad at most; the link's own "
+          "overshoot (the controller's) %.3g rad\n",
+          size, h, largest, r.highest_link - size);
+      EXPECT_LT(largest, 2e-5 * size);  // the integrator's tolerance (the velocity estimate's rounding moves it)
+      EXPECT_LT(r.highest_link, 2.4);
+    }
+  }
+}
+
 INSTANTIATE_TEST_SUITE_P(Fmi, FmuSemantics, ::testing::Values(2, 3), [](const ::testing::TestParamInfo<int>& param) {
   return "Fmi" + std::to_string(param.param);
 });
