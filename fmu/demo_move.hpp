@@ -1,8 +1,10 @@
 // The FMU's built-in demo move (reference = demo, or auto with no input set): what a plain run in any
 // importer shows. Every joint swings from the middle of its range (zero where the range allows) towards
-// the side with more room and back, (1 - cos) shaped, one cycle per kDemoPeriod: smooth (every derivative
-// continuous), at rest at t = 0, within the joint limits of any robot, and with gravity loads that change
-// along the way, so that the joints' deflection and its compensation show.
+// the side with more room and back, shaped sin^4(pi t / T), one cycle per kDemoPeriod: smooth (every
+// derivative continuous), within the joint limits of any robot, and with gravity loads that change along
+// the way, so that the joints' deflection and its compensation show. At t = 0 it starts from rest with its
+// velocity, acceleration and jerk all zero, so that it continues the robot at rest before it without a
+// jump in any of them (a (1 - cos) shape starts with a jump of its acceleration, issue 39).
 #pragma once
 
 #include <algorithm>
@@ -32,8 +34,11 @@ inline void demoMove(const Robot& robot, double t, JointVector& q, JointVector& 
       amplitude = std::min(kDemoAmplitude, std::max(room_up, room_down));
       if (room_down > room_up) amplitude = -amplitude;
     }
-    q[j] = centre + amplitude * 0.5 * (1.0 - std::cos(omega * t));
-    qd[j] = amplitude * 0.5 * omega * std::sin(omega * t);
+    // s = sin^4(x) with x = omega t / 2: s' = 2 omega sin^3(x) cos(x).
+    const double sine = std::sin(0.5 * omega * t), cosine = std::cos(0.5 * omega * t);
+    const double sine2 = sine * sine;
+    q[j] = centre + amplitude * sine2 * sine2;
+    qd[j] = amplitude * 2.0 * omega * sine2 * sine * cosine;
   }
 }
 

@@ -319,6 +319,41 @@ TEST_P(FmuSemantics, AStepOfQDesiredIsHeldNotExtrapolated) {
   }
 }
 
+// ---- The demo move ------------------------------------------------------------------------------------
+
+// The demo move starts from rest with no jump of its acceleration (before: 0.069 rad/s^2 at once), so the
+// links start without a transient of their own.
+TEST_P(FmuSemantics, TheDemoMoveStartsAtRestWithContinuousDerivatives) {
+  auto m = makeMaster(GetParam());
+  ASSERT_TRUE(m->instantiate()) << m->log();
+  ASSERT_EQ(m->enterInitialization(), kOK) << m->log();
+  ASSERT_EQ(m->setEnumeration(m->vr("reference"), 2), kOK) << m->log();  // demo
+  ASSERT_EQ(m->exitInitialization(), kOK) << m->log();
+  const auto planned = m->vrs("q_planned_", kDof), link = m->vrs("q_link_", kDof);
+  std::vector<std::vector<double>> q;
+  std::vector<double> values, links;
+  double worst_acceleration = 0.0, worst_transient = 0.0;
+  const double h = 0.001;
+  for (int k = 0; k <= 500; ++k) {
+    ASSERT_EQ(m->getReals(planned, values), kOK) << m->log();
+    ASSERT_EQ(m->getReals(link, links), kOK) << m->log();
+    q.push_back(values);
+    for (int j = 0; j < kDof; ++j) worst_transient = std::max(worst_transient, std::abs(links[j] - values[j]));
+    if (k < 500) {
+      ASSERT_EQ(m->doStep(k * h, h), kOK) << m->log();
+    }
+  }
+  for (int j = 0; j < kDof; ++j) {
+    worst_acceleration = std::max(worst_acceleration, std::abs(q[2][j] - 2.0 * q[1][j] + q[0][j]) / (h * h));
+  }
+  std::printf(
+      "demo start: acceleration over the first 2 ms %.3g rad/s^2, links off the plan by %.3g rad at most "
+      "in the first 0.5 s\n",
+      worst_acceleration, worst_transient);
+  EXPECT_LT(worst_acceleration, 1e-4) << "rad/s^2 over the first 2 ms";
+  EXPECT_LT(worst_transient, 3e-5) << "rad: the links' start-up transient (6.7e-5 rad before)";
+}
+
 INSTANTIATE_TEST_SUITE_P(Fmi, FmuSemantics, ::testing::Values(2, 3), [](const ::testing::TestParamInfo<int>& param) {
   return "Fmi" + std::to_string(param.param);
 });
