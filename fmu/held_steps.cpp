@@ -4,29 +4,28 @@
 
 namespace jointcomp::fmu {
 
-namespace {
-
-// What the FMU extrapolated q_desired of joint j to `time` from the samples before it (Newton's form).
-double extrapolated(const InstanceState& s, int j, double time) {
-  const double last = s.last_q_desired[j];
-  if (!s.has_earlier_step || !(s.last_step_time > s.earlier_step_time)) return last;  // the first step: held
-  const double slope = (last - s.earlier_q_desired[j]) / (s.last_step_time - s.earlier_step_time);
-  const double line = last + slope * (time - s.last_step_time);
-  if (!s.has_earliest_step || !(s.earlier_step_time > s.earliest_step_time)) return line;
-  const double earlier_slope =
-      (s.earlier_q_desired[j] - s.earliest_q_desired[j]) / (s.earlier_step_time - s.earliest_step_time);
-  const double curvature = (slope - earlier_slope) / (s.last_step_time - s.earliest_step_time);
-  return line + curvature * (time - s.last_step_time) * (time - s.earlier_step_time);
-}
-
-}  // namespace
-
 void holdSteppedJoints(const InstanceState& s, double time, const Robot& robot, const double q[], double velocity[],
                        double acceleration[]) {
+  // What the FMU extrapolated q_desired to `time` from the samples before it, in Newton's form
+  // last + (last - earlier) * line + ((last - earlier) / (t2 - t1) - (earlier - earliest) / (t1 - t0)) * bend,
+  // with the time factors worked out once: held after the first step (both 0), a line after the second
+  // (bend 0), the parabola after that. A sample time that does not advance falls back to the lower order.
   const double interval = time - s.last_step_time;
+  double line = 0.0, bend = 0.0, over_last = 0.0, over_earlier = 0.0;
+  if (s.has_earlier_step && s.last_step_time > s.earlier_step_time) {
+    over_last = 1.0 / (s.last_step_time - s.earlier_step_time);
+    line = interval * over_last;
+    if (s.has_earliest_step && s.earlier_step_time > s.earliest_step_time) {
+      over_earlier = 1.0 / (s.earlier_step_time - s.earliest_step_time);
+      bend = interval * (time - s.earlier_step_time) / (s.last_step_time - s.earliest_step_time);
+    }
+  }
   for (int j = 0; j < robot.dof(); ++j) {
-    const double departure = std::abs(q[j] - extrapolated(s, j, time));
-    const bool stepped = departure > kHeldStepTolerance + 0.5 * std::abs(q[j] - s.last_q_desired[j]);
+    const double last = s.last_q_desired[j], change = last - s.earlier_q_desired[j];
+    const double earlier_change = s.earlier_q_desired[j] - s.earliest_q_desired[j];
+    const double extrapolated = last + change * line + (change * over_last - earlier_change * over_earlier) * bend;
+    const double departure = std::abs(q[j] - extrapolated);
+    const bool stepped = departure > kHeldStepTolerance + 0.5 * std::abs(q[j] - last);
     const double ahead = q[j] + velocity[j] * interval;
     const Joint& joint = robot.joints[j];
     if (stepped || ahead < joint.lower || ahead > joint.upper) {
