@@ -26,4 +26,12 @@ inline constexpr double kHeldStepTolerance = 1e-5;  // rad
 void holdSteppedJoints(const InstanceState& s, double time, const Robot& robot, const double q[], double velocity[],
                        double acceleration[]);
 
+// The velocity and acceleration of q_desired at `time` that the FMU extrapolates with when
+// use_velocity_inputs is false (instance.hpp, step 1): the slope (and, with_acceleration, the curvature)
+// of the parabola through q at `time` and the last two samples of `s`, the difference quotient after the
+// first step, then holdSteppedJoints. `s` has a last step before `time`; velocity and acceleration come in
+// zeroed.
+void estimateDesiredMotion(const InstanceState& s, double time, const Robot& robot, const double q[],
+                           bool with_acceleration, double velocity[], double acceleration[]);
+
 }  // namespace jointcomp::fmu

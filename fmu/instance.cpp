@@ -378,36 +378,8 @@ Status Instance::ensureReference(const char* function) {
       acceleration[j] = state_.values[role::qdd_desired[j]];
     }
   } else if (estimated) {
-    // Joint by joint in scalars: the same arithmetic as the vector expressions it replaces, without their
-    // temporaries.
-    const double last = state_.time - state_.last_step_time;
-    if (state_.has_earlier_step && state_.last_step_time > state_.earlier_step_time) {
-      // The slope now of the parabola through the last three communication points: the extrapolation
-      // then misses the next input by the path's third-order term, where the difference quotient (the
-      // velocity half a step ago) misses it by its second-order one; at 10 ms steps the plant's CVODE
-      // took about 1.5 times fewer steps on the spiral (bench/fmu_bench). Its curvature is the
-      // acceleration the dynamic mode needs.
-      const double earlier = state_.last_step_time - state_.earlier_step_time;
-      const double both = last + earlier;
-      const double now_weight = (2.0 * last + earlier) / (last * both);
-      const double last_weight = both / (last * earlier);
-      const double earlier_weight = last / (earlier * both);
-      const double curvature = 2.0 / both;
-      for (int j = 0; j < table::kDof; ++j) {
-        const double now_q = q[j], last_q = state_.last_q_desired[j], earlier_q = state_.earlier_q_desired[j];
-        velocity[j] = now_q * now_weight - last_q * last_weight + earlier_q * earlier_weight;
-      }
-      if (m.compensator_mode == kCompensationDynamic) {  // the only reader of the acceleration
-        for (int j = 0; j < table::kDof; ++j) {
-          const double now_q = q[j], last_q = state_.last_q_desired[j], earlier_q = state_.earlier_q_desired[j];
-          acceleration[j] = ((now_q - last_q) / last - (last_q - earlier_q) / earlier) * curvature;
-        }
-      }
-    } else {
-      for (int j = 0; j < table::kDof; ++j) velocity[j] = (q[j] - state_.last_q_desired[j]) / last;
-    }
-    // A step of the inputs is held over the coming communication step, not extrapolated (held_steps.hpp).
-    holdSteppedJoints(state_, state_.time, *m.robot, q.data(), velocity.data(), acceleration.data());
+    estimateDesiredMotion(state_, state_.time, *m.robot, q.data(), m.compensator_mode == kCompensationDynamic,
+                          velocity.data(), acceleration.data());
   }
   const auto refused = [&](const char* what) {
     char text[400];
