@@ -38,11 +38,14 @@ int __wrap_pthread_once(pthread_once_t* once, void (*routine)()) {
   return jointcomp_baseline_pthread_once(once, routine);
 }
 
-// stat, lstat and fstat64 became functions in GLIBC 2.33; before, they were inline calls of these.
+// stat, lstat, fstat and fstat64 became functions in GLIBC 2.33; before, they were inline calls of these.
 constexpr int kStatVersion = 1;  // _STAT_VER of x86_64
 int __wrap_stat(const char* path, struct stat* info) { return jointcomp_baseline_xstat64(kStatVersion, path, info); }
 int __wrap_lstat(const char* path, struct stat* info) { return jointcomp_baseline_lxstat64(kStatVersion, path, info); }
 int __wrap_fstat64(int descriptor, struct stat* info) {
+  return jointcomp_baseline_fxstat64(kStatVersion, descriptor, info);
+}
+int __wrap_fstat(int descriptor, struct stat* info) {  // x86_64: struct stat is struct stat64
   return jointcomp_baseline_fxstat64(kStatVersion, descriptor, info);
 }
 

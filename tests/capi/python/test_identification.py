@@ -137,7 +137,7 @@ def test_discovery_names_the_missing_offset_and_is_deterministic(tmp_path):
         held = jointcomp.simulate_campaign(truth, tmp_path / "held.csv", protocol="random", seed=32, count=60)
         runs = []
         for _ in range(2):
-            extended, report = jointcomp.discover(nominal, [fit], [held], types=["offset", "harmonic"],
+            extended, report = jointcomp.discover(nominal, [fit], [held], base="frame", types=["offset", "harmonic"],
                                                   max_steps=3)
             with extended:
                 runs.append((extended.parameters_json(), report))
@@ -148,6 +148,10 @@ def test_discovery_names_the_missing_offset_and_is_deterministic(tmp_path):
         final = report["final"]["held_out"][0]["rms_mm"]
         assert final < 0.5 * report["initial"]["held_out"][0]["rms_mm"]
         assert report["noise_floor"]["final_over_floor"] < 1.3
+        # Without base, discovery starts from the textbook calibration, as `jointcomp discover` does.
+        extended, default = jointcomp.discover(nominal, [fit], [held], types=["offset"], max_steps=1)
+        with extended:
+            assert default["selection"]["base"] == "textbook"
 
 
 def test_bad_options_and_files_raise_named_errors(robot, tmp_path):
