@@ -20,12 +20,14 @@ void holdSteppedJoints(const InstanceState& s, double time, const Robot& robot, 
       bend = interval * (time - s.earlier_step_time) / (s.last_step_time - s.earliest_step_time);
     }
   }
-  for (int j = 0; j < robot.dof(); ++j) {
-    const double last = s.last_q_desired[j], change = last - s.earlier_q_desired[j];
-    const double earlier_change = s.earlier_q_desired[j] - s.earliest_q_desired[j];
+  const int n = robot.dof();
+  const double* __restrict last_q = s.last_q_desired.data();
+  const double* __restrict earlier_q = s.earlier_q_desired.data();
+  const double* __restrict earliest_q = s.earliest_q_desired.data();
+  for (int j = 0; j < n; ++j) {
+    const double last = last_q[j], change = last - earlier_q[j], earlier_change = earlier_q[j] - earliest_q[j];
     const double extrapolated = last + change * line + (change * over_last - earlier_change * over_earlier) * bend;
-    const double departure = std::abs(q[j] - extrapolated);
-    const bool stepped = departure > kHeldStepTolerance + 0.5 * std::abs(q[j] - last);
+    const bool stepped = std::abs(q[j] - extrapolated) > kHeldStepTolerance + 0.5 * std::abs(q[j] - last);
     const double ahead = q[j] + velocity[j] * interval;
     const Joint& joint = robot.joints[j];
     if (stepped || ahead < joint.lower || ahead > joint.upper) {
