@@ -206,6 +206,34 @@ nlohmann::ordered_json discoveryReportJson(const DiscoveryResult& result, const 
   return report;
 }
 
+namespace {
+
+// The discovered effects' parameters as the last refit left them (the steps above print each at its step).
+std::string finalParameters(const DiscoveryResult& result) {
+  std::ostringstream out;
+  char line[256];
+  for (int e = 0; e < result.model.effectCount(); ++e) {
+    const Effect& effect = result.model.effect(e);
+    if (effect.estimate_note != "found by jointcomp discover") continue;
+    const std::vector<std::string> names = effect.parameterNames();
+    const std::vector<double> values = effect.parameters();
+    if (out.tellp() == 0) out << "final values of the discovered effects (after the last refit):\n";
+    if (values.size() > 12) {
+      std::snprintf(line, sizeof(line), "    %s: %zu coefficients (parameters.json)\n", effect.type().c_str(),
+                    values.size());
+      out << line;
+      continue;
+    }
+    for (std::size_t k = 0; k < values.size() && k < names.size(); ++k) {
+      std::snprintf(line, sizeof(line), "    %-48s %.6g\n", names[k].c_str(), values[k]);
+      out << line;
+    }
+  }
+  return out.str();
+}
+
+}  // namespace
+
 std::string discoverySummary(const DiscoveryResult& result, const DiscoveryOptions& options,
                              const DiscoverySources& sources) {
   std::ostringstream summary;
@@ -267,6 +295,7 @@ std::string discoverySummary(const DiscoveryResult& result, const DiscoveryOptio
                 result.noise_floor > 0.0 ? "" : " (not known: give the noise floor)");
   summary << line;
   if (!result.rejected_at_stop.empty()) summary << "rejected, does not transfer: " << result.rejected_at_stop << "\n";
+  summary << finalParameters(result);
   if (result.unexplained.above_floor || !result.unexplained.floor_known) summary << result.unexplained.summary << "\n";
   // Paths: Ra and Rz of the Z error, base model -> final model.
   for (std::size_t k = 0; k < result.final_state.paths.size() && k < result.initial.paths.size(); ++k) {

@@ -189,6 +189,12 @@ TEST(Discovery, FindsBacklash) {
   EXPECT_EQ(r.steps[0].joint, 1);
   EXPECT_NEAR(r.steps[0].parameters.at(0).value, 0.012 * kDegree, 0.2 * 0.012 * kDegree);
   EXPECT_LT(r.final_state.heldout[0].rms, 1.3 * r.noise_floor);
+  // The summary gives the discovered width as the last refit left it, as parameters.json has it.
+  const std::string summary = discoverySummary(r, DiscoveryOptions(), DiscoverySources{});
+  const std::string width = r.model.robot().joints[1].name + ".backlash_width_rad";
+  const std::size_t final_section = summary.find("final values of the discovered effects");
+  ASSERT_NE(final_section, std::string::npos) << summary;
+  EXPECT_NE(summary.find(width, final_section), std::string::npos) << summary;
 }
 
 TEST(Discovery, FindsExtraHarmonic) {
