@@ -1,4 +1,4 @@
-"""What the UR10's residual is not: the checks behind the README's statements on the IPA data.
+"""What the UR10's residual is not: the checks behind docs/ur10-study.md on the IPA data.
 
 1. Harmonics of one joint's output angle: each order is fitted alone on Series A's first session (the rows
    before the first pause of more than an hour) and scored on that session, on A's later sessions and on

@@ -152,7 +152,7 @@ SpiralExperimentSpec tenTimesThePapersSpeedWithTheDynamicRun(const ParameterSet&
 }
 
 // The fourth run at ten times the paper's speed, on the plant with model != truth: the dynamic correction
-// removes what the static one leaves of the drives' lag and the links' inertia (README's table).
+// removes what the static one leaves of the drives' lag and the links' inertia (docs/dynamic-correction.md's table).
 TEST(SpiralExperiment, TheDynamicCorrectionFollowsTheSpiralAtTenTimesThePapersSpeed) {
   const ParameterSet set = loadParameterSet(std::string(JOINTCOMP_DATA_DIR) + "/params/rx170.json", rx170());
   const SpiralExperimentSpec spec = tenTimesThePapersSpeedWithTheDynamicRun(set);

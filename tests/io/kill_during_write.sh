@@ -5,7 +5,7 @@
 #   kill_during_write.sh <jointcomp binary> <model folder (robots/, params/)>
 # Runs `jointcomp paper --quasi-static` (writes out/paper/spiral_runs.csv, summary.json and out/paper/fmu/*.fmu)
 # and `jointcomp simulate --perturb` (a campaign and its perturbed truth). The plots are left out
-# (--no-plot): matplotlib writes the PNG in place (see the README's Tests section). The campaign has 20,000
+# (--no-plot): matplotlib writes the PNG in place (see docs/testing.md). The campaign has 20,000
 # poses (about 0.25 s, 3.5 MB): with the default 200 it took 30 ms, less than starting the processes that time
 # the kills on a loaded machine, and then no kill landed before it ended.
 set -euo pipefail
