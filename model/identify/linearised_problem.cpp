@@ -152,8 +152,8 @@ SparseFeatures sparseFeatures(const Eigen::MatrixXd& features) {
 
 void accumulateBase(LinearisedProblem& problem) {
   const int m = static_cast<int>(problem.base.cols());
-  problem.base_joint.assign(static_cast<std::size_t>(problem.dof), Eigen::MatrixXd(m, problem.rows));
-  for (int i = 0; i < problem.rows; ++i) {
+  problem.base_joint.assign(static_cast<std::size_t>(problem.dof), Eigen::MatrixXd::Zero(m, problem.rows));
+  for (int i = 0; i < problem.rows && m > 0; ++i) {
     const Eigen::MatrixXd products =
         problem.base.middleRows(3 * i, 3).transpose() * problem.joint_column.middleRows(3 * i, 3);
     for (int j = 0; j < problem.dof; ++j) problem.base_joint[static_cast<std::size_t>(j)].col(i) = products.col(j);
@@ -202,6 +202,7 @@ BlockSums crossWithBase(const LinearisedProblem& problem, const ColumnPiece& pie
   const int m = static_cast<int>(problem.base.cols());
   const int kd = piece.denseColumns();
   BlockSums sums = zeroSums(g.blocks(), m, piece.columns(), false);
+  if (m == 0) return sums;  // no base columns: nothing to cross (and no data to take rows of)
   const SparseFeatures* f = piece.features;
   for (int i = 0; i < problem.rows; ++i) {
     Eigen::MatrixXd& gram = sums.gram[static_cast<std::size_t>(g.block_of_row[static_cast<std::size_t>(i)])];
@@ -241,15 +242,16 @@ BlockSums crossPieces(const LinearisedProblem& problem, const ColumnPiece& a, co
         a.features ? Eigen::Vector3d(problem.joint_column.block(3 * i, a.joint, 3, 1)) : Eigen::Vector3d::Zero();
     const Eigen::Vector3d jb =
         b.features ? Eigen::Vector3d(problem.joint_column.block(3 * i, b.joint, 3, 1)) : Eigen::Vector3d::Zero();
-    const auto da = a.dense.middleRows(3 * i, 3);
-    const auto db = b.dense.middleRows(3 * i, 3);
-    if (kda > 0 && kdb > 0) gram.topLeftCorner(kda, kdb).noalias() += da.transpose() * db;
+    // A piece without dense columns holds no data: its rows are never formed (an offset from null).
+    auto da = [&] { return a.dense.middleRows(3 * i, 3); };
+    auto db = [&] { return b.dense.middleRows(3 * i, 3); };
+    if (kda > 0 && kdb > 0) gram.topLeftCorner(kda, kdb).noalias() += da().transpose() * db();
     if (kda > 0 && !cb.empty()) {
-      const Eigen::VectorXd u = da.transpose() * jb;
+      const Eigen::VectorXd u = da().transpose() * jb;
       for (std::size_t k = 0; k < cb.size(); ++k) gram.block(0, kdb + cb[k], kda, 1) += vb[k] * u;
     }
     if (kdb > 0 && !ca.empty()) {
-      const Eigen::RowVectorXd u = ja.transpose() * db;
+      const Eigen::RowVectorXd u = ja.transpose() * db();
       for (std::size_t k = 0; k < ca.size(); ++k) gram.block(kda + ca[k], 0, 1, kdb) += va[k] * u;
     }
     if (!ca.empty() && !cb.empty()) {
@@ -258,7 +260,7 @@ BlockSums crossPieces(const LinearisedProblem& problem, const ColumnPiece& a, co
         for (std::size_t q = 0; q < cb.size(); ++q) gram(kda + ca[p], kdb + cb[q]) += va[p] * vb[q] * dot;
     }
     if (!with_residual) continue;
-    if (kda > 0) sums.xr[block].head(kda).noalias() += da.transpose() * r;
+    if (kda > 0) sums.xr[block].head(kda).noalias() += da().transpose() * r;
     const double jr = ja.dot(r);
     for (std::size_t k = 0; k < ca.size(); ++k) sums.xr[block][kda + ca[k]] += va[k] * jr;
     sums.rr[block] += r.squaredNorm();
