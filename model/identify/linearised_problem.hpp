@@ -79,7 +79,6 @@ struct LinearisedProblem {
   // 0: time blocks, 1: joint-space parts, 2 + j: joint j's angle ranges, last: time blocks whole (refits)
   std::vector<RowGrouping> groupings;
   std::vector<BlockSums> base_sums;  // per grouping: base x base, base . r, r . r
-  int timeGrouping() const { return 0; }
   int angleGrouping(int joint) const { return 2 + joint; }
   int refitGrouping() const { return static_cast<int>(groupings.size()) - 1; }
 };
