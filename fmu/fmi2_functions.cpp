@@ -178,10 +178,7 @@ FMI2_EXPORT fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuT
   };
   if (!instanceName || blank(instanceName)) return refuse("instanceName must be a non-empty string");
   if (fmuType != fmi2CoSimulation) return refuse(kCoSimulationOnly);
-  if (!fmuGUID || std::strcmp(fmuGUID, jointcomp::fmu::table::kInstantiationToken) != 0) {
-    return refuse(std::string("GUID '") + (fmuGUID ? fmuGUID : "(null)") + "' is not this FMU's " +
-                  jointcomp::fmu::table::kInstantiationToken + " (modelDescription.xml from another build?)");
-  }
+  if (!fmuGUID) return refuse("fmuGUID is null; it is the guid of modelDescription.xml");
   if (!fmuResourceLocation) return refuse("fmuResourceLocation is null; the FMU needs its resources/ folder");
   std::string path, why;
   if (!pathFromUri(fmuResourceLocation, path, why)) {
@@ -192,7 +189,7 @@ FMI2_EXPORT fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuT
     component->callbacks = *functions;
     component->name = instanceName;
     component->instance =
-        std::make_unique<Instance>(instanceName, path, logToImporter, component.get(), loggingOn != 0);
+        std::make_unique<Instance>(instanceName, path, fmuGUID, logToImporter, component.get(), loggingOn != 0);
     return component.release();
   } catch (const std::exception& error) {
     return refuse(error.what());

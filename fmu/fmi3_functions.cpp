@@ -165,11 +165,9 @@ fmi3InstantiateCoSimulation(fmi3String instanceName, fmi3String instantiationTok
   if (!instanceName || blank(instanceName)) {
     return refuse(instanceEnvironment, logMessage, function, "instanceName must be a non-empty string");
   }
-  if (!instantiationToken || std::strcmp(instantiationToken, fmu::table::kInstantiationToken) != 0) {
+  if (!instantiationToken) {
     return refuse(instanceEnvironment, logMessage, function,
-                  std::string("instantiationToken '") + (instantiationToken ? instantiationToken : "(null)") +
-                      "' is not this FMU's " + fmu::table::kInstantiationToken +
-                      " (modelDescription.xml from another build?)");
+                  "instantiationToken is null; it is the instantiationToken of modelDescription.xml");
   }
   if (!resourcePath) {
     return refuse(instanceEnvironment, logMessage, function,
@@ -179,8 +177,8 @@ fmi3InstantiateCoSimulation(fmi3String instanceName, fmi3String instantiationTok
     auto component = std::make_unique<Component>();
     component->environment = instanceEnvironment;
     component->log = logMessage;
-    component->instance =
-        std::make_unique<Instance>(instanceName, resourcePath, logToImporter, component.get(), loggingOn);
+    component->instance = std::make_unique<Instance>(instanceName, resourcePath, instantiationToken, logToImporter,
+                                                     component.get(), loggingOn);
     Instance& self = *component->instance;
     // Declined, gracefully: the instance works without them.
     if (eventModeUsed) {

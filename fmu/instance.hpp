@@ -35,8 +35,9 @@
 #include <string>
 #include <vector>
 
+#include "fmu/description/variable_table.hpp"
 #include "fmu/instance_state.hpp"
-#include "jointcomp_fmu_variables.hpp"
+#include "fmu/variable_flags.hpp"
 #include "model/compensation/compensator.hpp"
 #include "model/plant/flexible_joint_plant.hpp"
 
@@ -45,23 +46,17 @@ namespace jointcomp::fmu {
 // The status values of FMI 2 and FMI 3 agree for these five.
 enum class Status : int { OK = 0, Warning = 1, Discard = 2, Error = 3, Fatal = 4 };
 
-// Accepted variable types for a typed get or set, as bits.
-enum TypeMask : unsigned {
-  kReal = 1u << 0,
-  kInteger = 1u << 1,
-  kBoolean = 1u << 2,
-  kEnumeration = 1u << 3,
-};
-
 // The log channel to the importer: the FMI glue turns these into its logger's calls.
 using LogSink = void (*)(void* context, Status status, const char* category, const char* message);
 
 class Instance {
 public:
-  // Loads <resource_dir>/robot.json and <resource_dir>/parameters.json. Throws jointcomp::Error with a
-  // message naming the file at fault (missing resources, a robot other than the one the variable table
-  // was generated for, a parameter file without the table's parameters).
-  Instance(std::string name, const std::string& resource_dir, LogSink sink, void* sink_context, bool logging_on);
+  // Loads <resource_dir>/robot.json and <resource_dir>/parameters.json and builds the robot's variable table
+  // from them (fmu/description). Throws jointcomp::Error with a message naming what is at fault: missing or
+  // malformed resources, resources that are not those `instantiation_token` was made for (another export's
+  // modelDescription.xml), a robot the FMU cannot represent.
+  Instance(std::string name, const std::string& resource_dir, const std::string& instantiation_token, LogSink sink,
+           void* sink_context, bool logging_on);
   ~Instance();
   Instance(const Instance&) = delete;
   Instance& operator=(const Instance&) = delete;
@@ -117,8 +112,9 @@ public:
   template <typename T>
   Status set(const char* function, unsigned types, const std::uint32_t vrs[], std::size_t count,
              const T values[]) noexcept;
-  // Index into table::kVariables of a value reference, -1 if unknown.
-  static int indexOf(std::uint32_t vr);
+  // Index into the table of a value reference, -1 if unknown (value references are the table's indices).
+  int indexOf(std::uint32_t vr) const { return vr < count_ ? static_cast<int>(vr) : -1; }
+  const VariableTable& table() const { return *table_; }
 
   // FMU state. Snapshots belong to the instance that made them (or deserialised them); a pointer that
   // is not one of this instance's live snapshots is refused without being dereferenced.
@@ -149,16 +145,7 @@ private:
   // internalError for the exception being handled (called in a catch (...) block).
   Status internalErrorOfCurrentException(const char* function) noexcept;
   enum LogCategory { kLogWarning, kLogDiscard, kLogError, kLogCalls, kLogCategoryCount };
-  // Groups of outputs computed together, lazily, as bits (a get computes only the groups it reads).
-  enum OutputGroup : unsigned {
-    kLinkOutputs = 1u,
-    kToolOutputs = 2u,
-    kPredictedOutputs = 4u,
-    kReferenceOutputs = 8u,
-    kMotorOutputs = 16u,
-    kLinkVelocityOutputs = 32u,
-  };
-  struct Models;
+  struct RobotModels;
 
   bool ownsState(const Snapshot* state) const;
   // Builds the models, the plant and the compensator from the fixed parameters when they changed since
@@ -187,7 +174,7 @@ private:
     unsigned key = 0;
     unsigned computed = 0;  // get: the packed flags of its computed variables, or-ed (which outputs to update)
     std::uint32_t vrs[kCapacity];
-    std::int16_t index[kCapacity];  // into table::kVariables and the instance's values
+    std::int16_t index[kCapacity];  // into the table and the instance's values
     int first = -1;                 // set: index[0] when the indices are consecutive (one block), else -1
     // set: each variable's range as finite bounds, so that one pair of compares also refuses NaN and infinity.
     double lowest[kCapacity], highest[kCapacity];
@@ -200,20 +187,26 @@ private:
   void storeReals(const double values[], std::size_t count);
 
   std::string name_;
+  std::shared_ptr<const VariableTable> table_;  // the robot's variables, from the resources
+  const Variable* variables_ = nullptr;         // table_->variables.data()
+  const Roles* roles_ = nullptr;                // &table_->roles
+  std::uint32_t count_ = 0;                     // variables
+  int dof_ = 0;                                 // joints
+  std::unique_ptr<VariableFlags> flags_;
   LogSink sink_;
   void* sink_context_;
   bool logging_[kLogCategoryCount];
 
-  InstanceState state_;             // everything an FMU state carries
-  std::unique_ptr<Models> models_;  // the loaded robot and parameter set, and what is built from them
+  InstanceState state_;                  // everything an FMU state carries
+  std::unique_ptr<RobotModels> models_;  // the loaded robot and parameter set, and what is built from them
   // Derived from state_, cached:
   bool reference_valid_ = false;
-  unsigned outputs_valid_ = 0;                           // OutputGroup bits
-  JointVector reference_;                                // Q_ref for the current inputs
-  JointVector reference_velocity_;                       // v for the current inputs
-  JointVector planned_{JointVector::Zero(table::kDof)};  // Q_theo: the q_desired inputs, or the demo move
-  OnlineDynamicState dynamic_after_;                     // compensation = dynamic: the filter with the current sample
-  ValuePlan get_plan_, set_plan_;                        // the last lists of get and of set (of reals)
+  unsigned outputs_valid_ = 0;        // OutputGroup bits
+  JointVector reference_;             // Q_ref for the current inputs
+  JointVector reference_velocity_;    // v for the current inputs
+  JointVector planned_;               // Q_theo: the q_desired inputs, or the demo move
+  OnlineDynamicState dynamic_after_;  // compensation = dynamic: the filter with the current sample
+  ValuePlan get_plan_, set_plan_;     // the last lists of get and of set (of reals)
 
   std::vector<std::unique_ptr<Snapshot>> states_;
 };

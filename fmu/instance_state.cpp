@@ -6,12 +6,9 @@
 #include <string>
 
 #include "fmu/variable_binding.hpp"
-#include "jointcomp_fmu_variables.hpp"
 #include "model/common/errors.hpp"
 
 namespace jointcomp::fmu {
-
-using table::kVariables;
 
 const char* phaseName(unsigned phase) {
   switch (phase) {
@@ -25,15 +22,15 @@ const char* phaseName(unsigned phase) {
   }
 }
 
-InstanceState InstanceState::atStart() {
+InstanceState InstanceState::atStart(const VariableTable& table) {
   InstanceState state;
-  state.values.assign(table::kCount, 0.0);
-  for (int i = 0; i < table::kCount; ++i) state.values[i] = kVariables[i].start;
-  state.last_q_desired.setZero(table::kDof);
-  state.earlier_q_desired.setZero(table::kDof);
-  state.earliest_q_desired.setZero(table::kDof);
+  state.values.reserve(table.variables.size());
+  for (const Variable& v : table.variables) state.values.push_back(v.start);
+  state.last_q_desired.setZero(table.dof());
+  state.earlier_q_desired.setZero(table.dof());
+  state.earliest_q_desired.setZero(table.dof());
   OnlineDynamicState& d = state.dynamic;
-  for (JointVector* v : {&d.correction, &d.demand_at_start, &d.demand, &d.delta, &d.integral}) v->setZero(table::kDof);
+  for (JointVector* v : {&d.correction, &d.demand_at_start, &d.demand, &d.delta, &d.integral}) v->setZero(table.dof());
   return state;
 }
 
@@ -112,15 +109,15 @@ private:
   std::size_t offset_ = 0;
 };
 
-void writeState(const InstanceState& s, Writer& w) {
+void writeState(const InstanceState& s, const VariableTable& table, Writer& w) {
   w.bytes.insert(w.bytes.end(), kMagic, kMagic + sizeof kMagic);
   w.put(kStateFormat);
   w.put(std::uint64_t(0));  // total size, patched below
-  const std::uint32_t token_length = static_cast<std::uint32_t>(std::strlen(table::kInstantiationToken));
-  w.put(token_length);
-  w.bytes.insert(w.bytes.end(), table::kInstantiationToken, table::kInstantiationToken + token_length);
-  w.put(static_cast<std::uint32_t>(table::kCount));
-  w.put(static_cast<std::uint32_t>(table::kDof));
+  const std::string& token = table.instantiation_token;
+  w.put(static_cast<std::uint32_t>(token.size()));
+  w.bytes.insert(w.bytes.end(), token.begin(), token.end());
+  w.put(static_cast<std::uint32_t>(table.size()));
+  w.put(static_cast<std::uint32_t>(table.dof()));
   w.put(static_cast<std::uint32_t>(s.phase));
   w.put(s.values);
   w.put(s.time);
@@ -172,13 +169,14 @@ void writeState(const InstanceState& s, Writer& w) {
 
 }  // namespace
 
-std::vector<unsigned char> serializeState(const InstanceState& state) {
+std::vector<unsigned char> serializeState(const InstanceState& state, const VariableTable& table) {
   Writer writer;
-  writeState(state, writer);
+  writeState(state, table, writer);
   return std::move(writer.bytes);
 }
 
-InstanceState deserializeState(const unsigned char bytes[], std::size_t size) {
+InstanceState deserializeState(const unsigned char bytes[], std::size_t size, const VariableTable& table) {
+  const auto dof = static_cast<std::uint32_t>(table.dof());
   InstanceState state;
   InstanceState* s = &state;
   Reader r(bytes, size);
@@ -197,14 +195,14 @@ InstanceState deserializeState(const unsigned char bytes[], std::size_t size) {
     throw Error("the checksum does not match: the bytes were changed or truncated");
   }
   const auto token_length = r.get<std::uint32_t>("the header");
-  if (token_length != std::strlen(table::kInstantiationToken))
+  if (token_length != table.instantiation_token.size())
     throw Error("the state is from another FMU (instantiation token)");
   std::string token;
   for (std::uint32_t i = 0; i < token_length; ++i) token += r.get<char>("the header");
-  if (token != table::kInstantiationToken)
+  if (token != table.instantiation_token)
     throw Error("the state is from another FMU (instantiation token " + token + ")");
-  if (r.get<std::uint32_t>("the header") != static_cast<std::uint32_t>(table::kCount) ||
-      r.get<std::uint32_t>("the header") != static_cast<std::uint32_t>(table::kDof)) {
+  if (r.get<std::uint32_t>("the header") != static_cast<std::uint32_t>(table.size()) ||
+      r.get<std::uint32_t>("the header") != dof) {
     throw Error("the state has another variable table");
   }
   s->phase = r.get<std::uint32_t>("the phase");
@@ -212,7 +210,7 @@ InstanceState deserializeState(const unsigned char bytes[], std::size_t size) {
       s->phase != kStepDiscarded && s->phase != kTerminated) {
     throw Error("the state's phase is not one a state can be taken in");
   }
-  r.vector(s->values, table::kCount, "the variable values");
+  r.vector(s->values, static_cast<std::uint32_t>(table.size()), "the variable values");
   s->time = r.finite("the time");
   s->start_time = r.finite("the start time");
   s->stop_time_defined = r.flag("the stop-time flag");
@@ -223,7 +221,7 @@ InstanceState deserializeState(const unsigned char bytes[], std::size_t size) {
   }
   if (s->initialized) {
     PlantState& p = s->plant;
-    const std::uint32_t n = table::kDof;
+    const std::uint32_t n = dof;
     p.time = r.finite("the plant's time");
     r.vector(p.y, 5 * n, "the plant's state vector");
     r.vector(p.reference, n, "the plant's reference");
@@ -244,32 +242,32 @@ InstanceState deserializeState(const unsigned char bytes[], std::size_t size) {
     for (int k = 0; k < 3; ++k) p.payload_com[k] = r.finite("the plant's payload centre");
   }
   s->has_last_step = r.flag("the last-step flag");
-  r.vector(s->last_q_desired, table::kDof, "the last desired positions");
+  r.vector(s->last_q_desired, dof, "the last desired positions");
   s->last_step_time = r.finite("the last step time");
   s->has_earlier_step = r.flag("the earlier-step flag");
-  r.vector(s->earlier_q_desired, table::kDof, "the earlier desired positions");
+  r.vector(s->earlier_q_desired, dof, "the earlier desired positions");
   s->earlier_step_time = r.finite("the earlier step time");
   s->has_earliest_step = r.flag("the earliest-step flag");
-  r.vector(s->earliest_q_desired, table::kDof, "the earliest desired positions");
+  r.vector(s->earliest_q_desired, dof, "the earliest desired positions");
   s->earliest_step_time = r.finite("the earliest step time");
   s->dynamic.started = r.flag("the dynamic compensation's start flag");
   s->dynamic.time = r.finite("the dynamic compensation's time");
-  r.vector(s->dynamic.correction, table::kDof, "the dynamic compensation's correction");
-  r.vector(s->dynamic.demand_at_start, table::kDof, "the dynamic compensation's initial demand");
-  r.vector(s->dynamic.demand, table::kDof, "the dynamic compensation's demand");
-  r.vector(s->dynamic.delta, table::kDof, "the dynamic compensation's drive offset");
-  r.vector(s->dynamic.integral, table::kDof, "the dynamic compensation's drive integral");
+  r.vector(s->dynamic.correction, dof, "the dynamic compensation's correction");
+  r.vector(s->dynamic.demand_at_start, dof, "the dynamic compensation's initial demand");
+  r.vector(s->dynamic.demand, dof, "the dynamic compensation's demand");
+  r.vector(s->dynamic.delta, dof, "the dynamic compensation's drive offset");
+  r.vector(s->dynamic.integral, dof, "the dynamic compensation's drive integral");
   for (int k = 0; k < 6; ++k) s->applied_wrench[k] = r.finite("the applied wrench");
   s->desired_inputs_set = r.flag("the desired-inputs flag");
   s->demo = r.flag("the demo flag");
   if (r.offset() + sizeof(std::uint64_t) != size) throw Error("the state has bytes after its end");
-  for (int i = 0; i < table::kCount; ++i) {
-    const table::Causality c = kVariables[i].causality;
-    if ((c == table::Causality::Parameter || c == table::Causality::Input) &&
-        (s->values[i] < kVariables[i].min || s->values[i] > kVariables[i].max ||
-         (kVariables[i].type != table::Type::Real && s->values[i] != std::floor(s->values[i])) ||
-         (kVariables[i].type == table::Type::Boolean && s->values[i] != 0.0 && s->values[i] != 1.0))) {
-      throw Error("the value of " + describeVariable(i) + " is out of its range");
+  for (int i = 0; i < table.size(); ++i) {
+    const Variable& v = table.variables[static_cast<std::size_t>(i)];
+    const double x = s->values[static_cast<std::size_t>(i)];
+    if ((v.causality == Causality::Parameter || v.causality == Causality::Input) &&
+        (x < v.min || x > v.max || (v.type != VariableType::Real && x != std::floor(x)) ||
+         (v.type == VariableType::Boolean && x != 0.0 && x != 1.0))) {
+      throw Error("the value of " + describeVariable(table, i) + " is out of its range");
     }
   }
   return state;

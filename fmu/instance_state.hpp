@@ -7,6 +7,7 @@
 #include <cstddef>
 #include <vector>
 
+#include "fmu/description/variable_table.hpp"
 #include "model/common/types.hpp"
 #include "model/plant/dynamic_compensation.hpp"
 #include "model/plant/flexible_joint_plant.hpp"
@@ -50,7 +51,7 @@ struct InstanceState {
   bool demo = false;                         // the robot follows the built-in demo move (decided at initialisation)
 
   // An instance as instantiated: the table's start values, time 0.
-  static InstanceState atStart();
+  static InstanceState atStart(const VariableTable& table);
 };
 
 // An FMU state (fmi2FMUstate, fmi3FMUState) is one InstanceState.
@@ -60,9 +61,9 @@ struct Snapshot {
 
 // The bytes of a state: magic, format, size, the instantiation token and the table's size, the fields,
 // and an FNV-1a checksum of everything before it.
-std::vector<unsigned char> serializeState(const InstanceState& state);
+std::vector<unsigned char> serializeState(const InstanceState& state, const VariableTable& table);
 // Throws jointcomp::Error saying what is wrong: not a jointcomp state, another FMU or format, a wrong
 // size or checksum, a value that is not finite or out of its variable's range, bytes after the end.
-InstanceState deserializeState(const unsigned char bytes[], std::size_t size);
+InstanceState deserializeState(const unsigned char bytes[], std::size_t size, const VariableTable& table);
 
 }  // namespace jointcomp::fmu

@@ -4,28 +4,24 @@
 #include <cstdio>
 
 #include "fmu/fmu_plant_options.hpp"
-#include "jointcomp_fmu_variables.hpp"
 #include "model/common/errors.hpp"
 
 namespace jointcomp::fmu {
 
-using table::kVariables;
-
-std::string describeVariable(int index) {
-  char text[64];
-  std::snprintf(text, sizeof text, "vr %u (", kVariables[index].vr);
-  return text + std::string(kVariables[index].name) + ")";
-}
-
-VariableBinding::VariableBinding(const ParameterSet& base, const Robot& robot, const std::string& parameter_path)
-    : effect_slot_(table::kCount), drive_slot_(table::kCount, -1), option_(table::kCount, nullptr) {
+VariableBinding::VariableBinding(const ParameterSet& base, const Robot& robot, const VariableTable& table)
+    : binding_(table.variables.size(), Binding::None),
+      effect_slot_(table.variables.size()),
+      drive_slot_(table.variables.size(), -1),
+      option_(table.variables.size(), nullptr) {
+  const std::string parameter_path = "the FMU's parameter file";
   const std::vector<std::string> drive_names = driveParameterNames(robot);
-  for (int i = 0; i < table::kCount; ++i) {
-    const table::Variable& v = kVariables[i];
+  for (std::size_t i = 0; i < table.variables.size(); ++i) {
+    const Variable& v = table.variables[i];
+    binding_[i] = v.binding;
     switch (v.binding) {
-      case table::Binding::None: break;
-      case table::Binding::Plant:
-      case table::Binding::Compensator: {
+      case Binding::None: break;
+      case Binding::Plant:
+      case Binding::Compensator: {
         EffectSlot& slot = effect_slot_[static_cast<std::size_t>(i)];
         for (int e = 0; e < base.model.effectCount() && slot.effect < 0; ++e) {
           const std::vector<std::string> names = base.model.effect(e).parameterNames();
@@ -38,7 +34,7 @@ VariableBinding::VariableBinding(const ParameterSet& base, const Robot& robot, c
         }
         break;
       }
-      case table::Binding::Drive: {
+      case Binding::Drive: {
         const auto found = std::find(drive_names.begin(), drive_names.end(), v.key);
         if (found == drive_names.end() || !base.hasDrives()) {
           throw ParameterError(parameter_path + ": no drive parameter '" + v.key + "' (FMU variable '" + v.name + "')");
@@ -46,7 +42,7 @@ VariableBinding::VariableBinding(const ParameterSet& base, const Robot& robot, c
         drive_slot_[static_cast<std::size_t>(i)] = static_cast<int>(found - drive_names.begin());
         break;
       }
-      case table::Binding::Integrator:
+      case Binding::Integrator:
         option_[static_cast<std::size_t>(i)] = findPlantOption(v.key);
         if (!option_[static_cast<std::size_t>(i)]) {
           throw Error(std::string("no integrator option '") + v.key + "' (FMU variable '" + v.name + "')");
@@ -56,18 +52,18 @@ VariableBinding::VariableBinding(const ParameterSet& base, const Robot& robot, c
   }
 }
 
-VariableBinding::Models VariableBinding::apply(const ParameterSet& base, const Robot& robot,
-                                               const std::vector<double>& values) const {
-  Models built{base.model, base.model, base.drives, fmuPlantOptions()};
+VariableBinding::BoundModels VariableBinding::apply(const ParameterSet& base, const Robot& robot,
+                                                    const std::vector<double>& values) const {
+  BoundModels built{base.model, base.model, base.drives, fmuPlantOptions()};
   for (int e = 0; e < base.model.effectCount(); ++e) {
     std::vector<double> truth_values = built.truth.effect(e).parameters();
     std::vector<double> nominal_values = built.nominal.effect(e).parameters();
     bool touched = false;
-    for (int i = 0; i < table::kCount; ++i) {
-      const EffectSlot& slot = effect_slot_[static_cast<std::size_t>(i)];
+    for (std::size_t i = 0; i < effect_slot_.size(); ++i) {
+      const EffectSlot& slot = effect_slot_[i];
       if (slot.effect != e) continue;
       touched = true;
-      auto& target = kVariables[i].binding == table::Binding::Plant ? truth_values : nominal_values;
+      auto& target = binding_[i] == Binding::Plant ? truth_values : nominal_values;
       target[static_cast<std::size_t>(slot.parameter)] = values[static_cast<std::size_t>(i)];
     }
     if (!touched) continue;
@@ -83,8 +79,8 @@ VariableBinding::Models VariableBinding::apply(const ParameterSet& base, const R
     }
   }
   std::vector<double> drive_values = driveParameters(base.drives);
-  for (int i = 0; i < table::kCount; ++i) {
-    const int slot = drive_slot_[static_cast<std::size_t>(i)];
+  for (std::size_t i = 0; i < drive_slot_.size(); ++i) {
+    const int slot = drive_slot_[i];
     if (slot >= 0) drive_values[static_cast<std::size_t>(slot)] = values[static_cast<std::size_t>(i)];
   }
   try {
@@ -92,7 +88,7 @@ VariableBinding::Models VariableBinding::apply(const ParameterSet& base, const R
   } catch (const Error& error) {
     throw ParameterError(std::string("controller parameters: ") + error.what());
   }
-  for (int i = 0; i < table::kCount; ++i) {
+  for (int i = 0; i < static_cast<int>(option_.size()); ++i) {
     if (const PlantOptionByName* o = option(i)) o->set(built.options, values[static_cast<std::size_t>(i)]);
   }
   return built;

@@ -9,6 +9,8 @@
 
 #include <array>
 #include <cstdint>
+#include <limits>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -29,10 +31,11 @@ struct Variable {
   VariableType type = VariableType::Real;
   Causality causality = Causality::Parameter;
   Variability variability = Variability::Fixed;
-  bool has_start = false;   // parameters and inputs have one, outputs and the time do not
-  double start = 0.0;       // 0 when there is none; Booleans 0 or 1
+  bool has_start = false;                 // parameters and inputs have one, outputs and the time do not
+  double start = 0.0;                     // 0 when there is none; Booleans 0 or 1
   bool has_min = false, has_max = false;  // declared in modelDescription.xml
-  double min = 0.0, max = 0.0;            // when declared; an enumeration's are its items' range
+  // What set accepts: the declared bounds, -inf / +inf where none is declared, an enumeration's items' range.
+  double min = -std::numeric_limits<double>::infinity(), max = std::numeric_limits<double>::infinity();
   Binding binding = Binding::None;
   std::string key;          // the bound parameter's name in the model ("joint_1.stiffness_nm_per_rad"), "" else
   std::string unit;         // one of VariableTable::units, "" for none
@@ -111,6 +114,16 @@ inline constexpr int kMaxFmuJoints = 64;
 // the FMU declares (a stiffness below what its plant accepts, ...), a non-finite value.
 VariableTable buildVariableTable(const Robot& robot, const ParameterSet& parameters, const ModelAttributes& model,
                                  const std::string& instantiation_token);
+
+// An FMU's resources as its binary reads them: <resource_dir>/robot.json and <resource_dir>/parameters.json
+// (each at most 64 MB), and the variable table built from them with the token of their bytes and `version`.
+// Throws jointcomp::Error naming the file at fault or what the FMU cannot represent.
+struct FmuResources {
+  std::shared_ptr<const Robot> robot;
+  ParameterSet parameters;
+  VariableTable table;
+};
+FmuResources loadFmuResources(const std::string& resource_dir, const std::string& version);
 
 // The token of an FMU whose resources are these bytes (robot.json, parameters.json) for this version of
 // jointcomp: export-fmu writes it into modelDescription.xml, the binary computes it from its resources and

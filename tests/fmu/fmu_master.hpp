@@ -4,6 +4,7 @@
 // the step semantics (test_fmu_step_semantics.cpp).
 #pragma once
 
+#include <algorithm>
 #include <dlfcn.h>
 
 #include <cctype>
@@ -128,9 +129,18 @@ public:
     if (found == md.vr.end()) throw std::runtime_error("no variable " + name);
     return found->second;
   }
-  std::vector<std::uint32_t> vrs(const std::string& prefix, int count) const {
+  // The variables of a per-joint role ("q_desired" or "q_desired_": q_desired.<joint> for every joint), in the
+  // order of their value references, which is the chain's joint order.
+  std::vector<std::uint32_t> vrs(std::string role, int count) const {
+    if (!role.empty() && role.back() == '_') role.pop_back();
     std::vector<std::uint32_t> list;
-    for (int j = 1; j <= count; ++j) list.push_back(vr(prefix + std::to_string(j)));
+    for (const auto& [name, reference] : md.vr) {
+      if (name.rfind(role + ".", 0) == 0) list.push_back(reference);
+    }
+    std::sort(list.begin(), list.end());
+    if (static_cast<int>(list.size()) != count) {
+      throw std::runtime_error(role + ": " + std::to_string(list.size()) + " variables, expected " + std::to_string(count));
+    }
     return list;
   }
   bool logged(const std::string& fragment) const {

@@ -684,7 +684,7 @@ TEST_P(FmuTest, CallsOutOfOrderAreRefusedAndLogged) {
   EXPECT_EQ(m->exitInitialization(), kError);
   EXPECT_EQ(m->terminate(), kError);
   std::vector<double> out;
-  EXPECT_EQ(m->getReals({m->vr("q_link_1")}, out), kError);  // FMI 2: no get before init; FMI 3: not computed yet
+  EXPECT_EQ(m->getReals({m->vr("q_link.joint_1")}, out), kError);  // FMI 2: no get before init; FMI 3: not computed yet
   ASSERT_EQ(m->enterInitialization(), kOK);
   EXPECT_EQ(m->enterInitialization(), kError);
   EXPECT_EQ(m->doStep(0.0, 0.001), kError);
@@ -696,8 +696,8 @@ TEST_P(FmuTest, CallsOutOfOrderAreRefusedAndLogged) {
   m->messages.clear();
   EXPECT_EQ(m->doStep(0.001, 0.001), kError);
   EXPECT_TRUE(m->logged("not allowed in state Terminated")) << m->log();
-  EXPECT_EQ(m->setReals({m->vr("q_desired_1")}, {0.1}), kError);
-  EXPECT_EQ(m->getReals({m->vr("q_link_1")}, out), kOK);  // the final values can be read
+  EXPECT_EQ(m->setReals({m->vr("q_desired.joint_1")}, {0.1}), kError);
+  EXPECT_EQ(m->getReals({m->vr("q_link.joint_1")}, out), kOK);  // the final values can be read
   ASSERT_EQ(m->reset(), kOK);
   ASSERT_EQ(m->enterInitialization(), kOK);
   ASSERT_EQ(m->exitInitialization(), kOK);
@@ -757,7 +757,7 @@ TEST_P(FmuTest, BooleansRoundTripThroughTheirOwnFunctions) {
   std::vector<double> real;
   EXPECT_EQ(m->getReals({flag}, real), kError);
   EXPECT_EQ(m->setReals({flag}, {0.0}), kError);
-  EXPECT_EQ(m->getBoolean(m->vr("q_desired_1"), value), kError);
+  EXPECT_EQ(m->getBoolean(m->vr("q_desired.joint_1"), value), kError);
   ASSERT_EQ(m->setBoolean(flag, false), kOK);
   ASSERT_EQ(m->getBoolean(flag, value), kOK);
   EXPECT_FALSE(value);
@@ -766,7 +766,7 @@ TEST_P(FmuTest, BooleansRoundTripThroughTheirOwnFunctions) {
 TEST_P(FmuTest, BadValuesAreRefusedAndChangeNothing) {
   auto m = makeMaster(GetParam());
   start(*m, 2);
-  const std::uint32_t q1 = m->vr("q_desired_1");
+  const std::uint32_t q1 = m->vr("q_desired.joint_1");
   std::vector<double> before, after;
   ASSERT_EQ(m->getReals({q1}, before), kOK);
   m->messages.clear();
@@ -774,8 +774,8 @@ TEST_P(FmuTest, BadValuesAreRefusedAndChangeNothing) {
   EXPECT_TRUE(m->logged("is not finite")) << m->log();
   EXPECT_EQ(m->setReals({q1}, {std::numeric_limits<double>::infinity()}), kError);
   // A refused call sets none of its values, even the good ones before the bad one.
-  EXPECT_EQ(m->setReals({m->vr("q_desired_2"), q1}, {0.123, std::nan("")}), kError);
-  ASSERT_EQ(m->getReals({q1, m->vr("q_desired_2")}, after), kOK);
+  EXPECT_EQ(m->setReals({m->vr("q_desired.joint_2"), q1}, {0.123, std::nan("")}), kError);
+  ASSERT_EQ(m->getReals({q1, m->vr("q_desired.joint_2")}, after), kOK);
   EXPECT_EQ(after[0], before[0]);
   EXPECT_NE(after[1], 0.123);
   // Unknown value references, wrong types, outputs, fixed parameters after initialisation.
@@ -784,13 +784,13 @@ TEST_P(FmuTest, BadValuesAreRefusedAndChangeNothing) {
   EXPECT_EQ(m->getReals({99999}, after), kError);
   EXPECT_TRUE(m->logged("vr 99999 is not a variable of this FMU")) << m->log();
   EXPECT_EQ(m->setReals({m->vr("compensation")}, {1.0}), kError);  // an enumeration, not a real
-  EXPECT_EQ(m->setReals({m->vr("q_link_1")}, {1.0}), kError);
+  EXPECT_EQ(m->setReals({m->vr("q_link.joint_1")}, {1.0}), kError);
   EXPECT_TRUE(m->logged("is an output")) << m->log();
   EXPECT_EQ(m->setReals({m->vr("time")}, {1.0}), kError);
   EXPECT_EQ(m->setReals({m->vr("plant.joint_2.stiffness")}, {1e6}), kError);
   EXPECT_TRUE(m->logged("fixed parameter")) << m->log();
   EXPECT_EQ(m->setEnumeration(m->vr("compensation"), 7), kError);  // not an item
-  EXPECT_EQ(m->setEnumeration(m->vr("q_desired_1"), 1), kError);
+  EXPECT_EQ(m->setEnumeration(m->vr("q_desired.joint_1"), 1), kError);
   // Null arrays with values to transfer; none with nothing to transfer is fine.
   if (GetParam() == 2) {
     const fmi2ValueReference vr = q1;
@@ -825,10 +825,10 @@ TEST_P(FmuTest, BadValuesAreRefusedAndChangeNothing) {
   EXPECT_EQ(m->setReals({m->vr("plant.joint_2.stiffness")}, {-5.0}), kDiscard);
   EXPECT_EQ(m->setInteger(m->vr("integrator.max_order"), 9), kDiscard);
   // A desired position beyond the joint's limits (the URDF's, declared as min and max) is refused too.
-  EXPECT_EQ(m->setReals({m->vr("q_desired_2")}, {2.5}), kDiscard);
+  EXPECT_EQ(m->setReals({m->vr("q_desired.joint_2")}, {2.5}), kDiscard);
   EXPECT_TRUE(m->logged("is outside")) << m->log();
-  EXPECT_EQ(m->setReals({m->vr("q_desired_2")}, {-2.3}), kOK);
-  EXPECT_EQ(m->setReals({m->vr("q_desired_2")}, {0.0}), kOK);
+  EXPECT_EQ(m->setReals({m->vr("q_desired.joint_2")}, {-2.3}), kOK);
+  EXPECT_EQ(m->setReals({m->vr("q_desired.joint_2")}, {0.0}), kOK);
   // The instance still works.
   ASSERT_EQ(m->enterInitialization(), kOK);
   ASSERT_EQ(m->exitInitialization(), kOK);
@@ -876,7 +876,7 @@ TEST_P(FmuTest, AListSeenBeforeIsCheckedAsAFreshOne) {
   }
   // The same length, another list: an output in its last place is refused.
   std::vector<std::uint32_t> with_output = q_desired;
-  with_output.back() = m->vr("q_link_6");
+  with_output.back() = m->vr("q_link.joint_6");
   m->messages.clear();
   EXPECT_EQ(m->setReals(with_output, moved), kError);
   EXPECT_TRUE(m->logged("is an output")) << m->log();
@@ -969,11 +969,11 @@ TEST_P(FmuTest, AFailingIntegrationIsDiscardedWithTheReason) {
   ASSERT_TRUE(m->instantiate());
   ASSERT_EQ(m->enterInitialization(), kOK);
   ASSERT_EQ(m->setInteger(m->vr("integrator.max_steps"), 1), kOK);
-  ASSERT_EQ(m->setReals({m->vr("q_desired_2"), m->vr("q_desired_3")}, {1.0, 1.0}), kOK);
+  ASSERT_EQ(m->setReals({m->vr("q_desired.joint_2"), m->vr("q_desired.joint_3")}, {1.0, 1.0}), kOK);
   ASSERT_EQ(m->exitInitialization(), kOK) << m->log();
   void* before = nullptr;
   ASSERT_EQ(m->getState(&before), kOK);
-  ASSERT_EQ(m->setReals({m->vr("q_desired_2")}, {1.2}), kOK);
+  ASSERT_EQ(m->setReals({m->vr("q_desired.joint_2")}, {1.2}), kOK);
   EXPECT_EQ(m->doStep(0.0, 0.01), kDiscard);
   EXPECT_TRUE(m->logged("logStatusDiscard")) << m->log();
   EXPECT_TRUE(m->logged("CVODE")) << m->log();
@@ -1002,8 +1002,8 @@ TEST_P(FmuTest, APlainRunMovesTheRobotAndShowsTheCompensation) {
     ASSERT_EQ(m->enterInitialization(), kOK);
     ASSERT_EQ(m->setEnumeration(m->vr("compensation"), mode), kOK);
     ASSERT_EQ(m->exitInitialization(), kOK) << m->log();
-    const std::vector<std::uint32_t> vrs = {m->vr("q_planned_2"), m->vr("q_planned_3"), m->vr("q_link_2"),
-                                            m->vr("q_link_3"), m->vr("q_desired_2")};
+    const std::vector<std::uint32_t> vrs = {m->vr("q_planned.joint_2"), m->vr("q_planned.joint_3"), m->vr("q_link.joint_2"),
+                                            m->vr("q_link.joint_3"), m->vr("q_desired.joint_2")};
     std::vector<double> values;
     double lowest = 1e9, highest = -1e9, t = 0.0;
     for (int k = 0; k < 600; ++k, t += 0.01) {
@@ -1019,7 +1019,7 @@ TEST_P(FmuTest, APlainRunMovesTheRobotAndShowsTheCompensation) {
     }
     EXPECT_GT(highest - lowest, 0.3) << "the demo move swings joint 2 by 0.35 rad in 5 s";
     // After initialisation, a desired input is refused with the way out, not silently ignored.
-    EXPECT_EQ(m->setReals({m->vr("q_desired_1")}, {0.1}), kError);
+    EXPECT_EQ(m->setReals({m->vr("q_desired.joint_1")}, {0.1}), kError);
     EXPECT_TRUE(m->logged("reference = inputs")) << m->log();
     EXPECT_EQ(m->terminate(), kOK);
   }
@@ -1186,19 +1186,19 @@ TEST_P(FmuTest, TheReferenceFollowsTheInputsOnceOneIsSetOrTheDemoWhenAsked) {
     ASSERT_TRUE(m->instantiate());
     ASSERT_EQ(m->enterInitialization(), kOK);
     ASSERT_EQ(m->setEnumeration(m->vr("reference"), source), kOK);
-    ASSERT_EQ(m->setReals({m->vr("q_desired_2")}, {0.2}), kOK);
+    ASSERT_EQ(m->setReals({m->vr("q_desired.joint_2")}, {0.2}), kOK);
     ASSERT_EQ(m->exitInitialization(), kOK) << m->log();
     std::vector<double> planned;
     for (double t = 0.0; t < 2.0 - 1e-9; t += 0.01) ASSERT_EQ(m->doStep(t, 0.01), kOK) << m->log();
-    ASSERT_EQ(m->getReals({m->vr("q_planned_2")}, planned), kOK);
+    ASSERT_EQ(m->getReals({m->vr("q_planned.joint_2")}, planned), kOK);
     if (source == 0) {
       EXPECT_EQ(planned[0], 0.2);
-      EXPECT_EQ(m->setReals({m->vr("q_desired_2")}, {0.25}), kOK);
+      EXPECT_EQ(m->setReals({m->vr("q_desired.joint_2")}, {0.25}), kOK);
     } else {
       EXPECT_NE(planned[0], 0.2);  // the demo at t = 2 s
-      EXPECT_EQ(m->setReals({m->vr("q_desired_2")}, {0.25}), kError);
+      EXPECT_EQ(m->setReals({m->vr("q_desired.joint_2")}, {0.25}), kError);
       EXPECT_TRUE(m->logged("reference = demo")) << m->log();
-      EXPECT_EQ(m->setReals({m->vr("qd_desired_6")}, {0.1}), kError);
+      EXPECT_EQ(m->setReals({m->vr("qd_desired.joint_6")}, {0.1}), kError);
       // The inputs that are not desired ones still take values while the robot follows the demo.
       EXPECT_EQ(m->setReals({m->vr("tool_wrench.force_z")}, {-10.0}), kOK) << m->log();
     }
@@ -1214,7 +1214,7 @@ TEST_P(FmuTest, ARunawayIsDiscardedAndASaturatingStepSettles) {
   ASSERT_EQ(m->exitInitialization(), kOK) << m->log();
   void* before = nullptr;
   ASSERT_EQ(m->getState(&before), kOK);
-  ASSERT_EQ(m->setReals({m->vr("q_desired_1")}, {-0.5}), kOK);
+  ASSERT_EQ(m->setReals({m->vr("q_desired.joint_1")}, {-0.5}), kOK);
   EXPECT_EQ(m->doStep(0.0, 0.01), kDiscard);
   EXPECT_TRUE(m->logged("logStatusDiscard")) << m->log();
   EXPECT_TRUE(m->logged("joint_1")) << m->log();
@@ -1229,13 +1229,13 @@ TEST_P(FmuTest, ARunawayIsDiscardedAndASaturatingStepSettles) {
   ASSERT_TRUE(wide->instantiate());
   ASSERT_EQ(wide->enterInitialization(), kOK);
   ASSERT_EQ(wide->setReals({wide->vr("watchdog.tracking_envelope")}, {1.0}), kOK);
-  ASSERT_EQ(wide->setReals({wide->vr("q_desired_1")}, {0.0}), kOK);  // reference = auto: the inputs
+  ASSERT_EQ(wide->setReals({wide->vr("q_desired.joint_1")}, {0.0}), kOK);  // reference = auto: the inputs
   ASSERT_EQ(wide->exitInitialization(), kOK) << wide->log();
-  ASSERT_EQ(wide->setReals({wide->vr("q_desired_1")}, {-0.5}), kOK);
+  ASSERT_EQ(wide->setReals({wide->vr("q_desired.joint_1")}, {-0.5}), kOK);
   std::vector<double> link;
   double t = 0.0;
   for (int k = 0; k < 800; ++k, t += 0.01) ASSERT_EQ(wide->doStep(t, 0.01), kOK) << "t = " << t << wide->log();
-  ASSERT_EQ(wide->getReals({wide->vr("q_link_1")}, link), kOK);
+  ASSERT_EQ(wide->getReals({wide->vr("q_link.joint_1")}, link), kOK);
   EXPECT_NEAR(link[0], -0.5, 1e-3);
 }
 
@@ -1362,7 +1362,7 @@ TEST(FmuMisuse2, FunctionsNotProvidedReturnAnError) {
   start(m, 2);
   const Fmi2Api& api = m.api;
   fmi2Component c = m.c;
-  fmi2ValueReference vr = m.vr("q_link_1");
+  fmi2ValueReference vr = m.vr("q_link.joint_1");
   double d = 0.0;
   int i = 0;
   fmi2Status status = fmi2OK;
@@ -1410,7 +1410,7 @@ TEST(FmuMisuse3, EventModeAndEarlyReturnAreDeclinedGracefully) {
   const ModelDescription md = readModelDescription(3);
   const std::string resources = unzipped(3) + "/resources/";
   Master3 m;
-  const fmi3ValueReference wanted[] = {m.vr("q_link_1")};
+  const fmi3ValueReference wanted[] = {m.vr("q_link.joint_1")};
   m.c = api.fmi3InstantiateCoSimulation("events", md.token.c_str(), resources.c_str(), false, true, true, true, wanted,
                                         1, &m, fmi3Logger, nullptr);
   ASSERT_NE(m.c, nullptr) << m.log();
@@ -1433,7 +1433,7 @@ TEST(FmuMisuse3, EventModeAndEarlyReturnAreDeclinedGracefully) {
   EXPECT_EQ(api.fmi3EnterContinuousTimeMode(m.c), kError);
   std::size_t n = 0;
   EXPECT_EQ(api.fmi3GetNumberOfContinuousStates(m.c, &n), kError);
-  const fmi3ValueReference vr = m.vr("q_link_1");
+  const fmi3ValueReference vr = m.vr("q_link.joint_1");
   const std::int32_t order = 1;
   EXPECT_EQ(api.fmi3GetOutputDerivatives(m.c, &vr, 1, &order, &d, 1), kError);
   EXPECT_EQ(api.fmi3GetDirectionalDerivative(m.c, &vr, 1, &vr, 1, &d, 1, &d, 1), kError);
@@ -1488,23 +1488,23 @@ TEST(FmuMisuse3, VariableDependenciesFollowTheModelStructure) {
   ASSERT_TRUE(m.instantiate());
   const Fmi3Api& api = m.api;
   std::size_t n = 99;
-  ASSERT_EQ(api.fmi3GetNumberOfVariableDependencies(m.c, m.vr("q_ref_1"), &n), kOK);
+  ASSERT_EQ(api.fmi3GetNumberOfVariableDependencies(m.c, m.vr("q_ref.joint_1"), &n), kOK);
   EXPECT_EQ(n, 24u);  // q_desired, qd_desired, the tool wrench and qdd_desired (compensation = dynamic)
   std::vector<std::size_t> dependent(n), element(n);
   std::vector<fmi3ValueReference> independents(n);
   std::vector<fmi3DependencyKind> kinds(n);
-  ASSERT_EQ(api.fmi3GetVariableDependencies(m.c, m.vr("q_ref_1"), dependent.data(), independents.data(), element.data(),
+  ASSERT_EQ(api.fmi3GetVariableDependencies(m.c, m.vr("q_ref.joint_1"), dependent.data(), independents.data(), element.data(),
                                             kinds.data(), n),
             kOK);
-  EXPECT_EQ(independents.front(), m.vr("q_desired_1"));
-  EXPECT_EQ(independents.back(), m.vr("qdd_desired_6"));
-  EXPECT_EQ(api.fmi3GetVariableDependencies(m.c, m.vr("q_ref_1"), dependent.data(), independents.data(), element.data(),
+  EXPECT_EQ(independents.front(), m.vr("q_desired.joint_1"));
+  EXPECT_EQ(independents.back(), m.vr("qdd_desired.joint_6"));
+  EXPECT_EQ(api.fmi3GetVariableDependencies(m.c, m.vr("q_ref.joint_1"), dependent.data(), independents.data(), element.data(),
                                             kinds.data(), 3),
             kError);
-  ASSERT_EQ(api.fmi3GetNumberOfVariableDependencies(m.c, m.vr("q_link_1"), &n), kOK);
+  ASSERT_EQ(api.fmi3GetNumberOfVariableDependencies(m.c, m.vr("q_link.joint_1"), &n), kOK);
   EXPECT_EQ(n, 0u);
   EXPECT_EQ(api.fmi3GetNumberOfVariableDependencies(m.c, 99999, &n), kError);
-  EXPECT_EQ(api.fmi3GetNumberOfVariableDependencies(m.c, m.vr("q_ref_1"), nullptr), kError);
+  EXPECT_EQ(api.fmi3GetNumberOfVariableDependencies(m.c, m.vr("q_ref.joint_1"), nullptr), kError);
 }
 
 INSTANTIATE_TEST_SUITE_P(Fmi, FmuTest, ::testing::Values(2, 3), [](const ::testing::TestParamInfo<int>& param) {

@@ -184,8 +184,8 @@ TEST_P(FmuSemantics, TheModelStructureDeclaresEveryDirectDependencyAProbeFinds) 
   // The finding of issue 39 itself.
   bool q_ref_2_on_qdd_2 = false;
   for (const auto& [vr, name] : declared.name) {
-    if (name != "q_ref_2") continue;
-    for (std::uint32_t input : found[vr]) q_ref_2_on_qdd_2 |= declared.name.at(input) == "qdd_desired_2";
+    if (name != "q_ref.joint_2") continue;
+    for (std::uint32_t input : found[vr]) q_ref_2_on_qdd_2 |= declared.name.at(input) == "qdd_desired.joint_2";
   }
   EXPECT_TRUE(q_ref_2_on_qdd_2);
 }
@@ -203,7 +203,7 @@ TEST_P(FmuSemantics, ADiscardTellsItsReasonWithoutDebugLoggingAndTerminateFollow
   ASSERT_EQ(m->exitInitialization(), kOK) << m->log();
   ASSERT_EQ(m->doStep(0.0, 0.01), kOK) << m->log();
   EXPECT_FALSE(m->terminateRequested());
-  ASSERT_EQ(m->setReals({m->vr("q_desired_1")}, {-0.5}), kOK);  // 0.5 rad beyond the 0.2 rad envelope
+  ASSERT_EQ(m->setReals({m->vr("q_desired.joint_1")}, {-0.5}), kOK);  // 0.5 rad beyond the 0.2 rad envelope
   m->messages.clear();
   EXPECT_EQ(m->doStep(0.01, 0.01), kDiscard);
   EXPECT_TRUE(m->logged("logStatusDiscard")) << m->log();
@@ -221,8 +221,8 @@ TEST_P(FmuSemantics, ADiscardTellsItsReasonWithoutDebugLoggingAndTerminateFollow
 TEST_P(FmuSemantics, RefusalsTellTheirReasonWithoutDebugLogging) {
   auto m = makeMaster(GetParam());
   ASSERT_TRUE(m->instantiate("robot", "", "", false));
-  EXPECT_EQ(m->setReals({m->vr("q_desired_2")}, {100.0}), kDiscard);
-  EXPECT_TRUE(m->logged("q_desired_2")) << m->log();
+  EXPECT_EQ(m->setReals({m->vr("q_desired.joint_2")}, {100.0}), kDiscard);
+  EXPECT_TRUE(m->logged("q_desired.joint_2")) << m->log();
   m->messages.clear();
   EXPECT_EQ(m->doStep(0.0, 0.001), kError);
   EXPECT_TRUE(m->logged("not allowed in state Instantiated")) << m->log();
@@ -286,7 +286,7 @@ StepResponse stepOfJoint2(int version, double size, double h, double duration, d
       r.log = m->log();
       return r;
     }
-    EXPECT_EQ(m->getReals({m->vr("q_link_2")}, link), kOK);
+    EXPECT_EQ(m->getReals({m->vr("q_link.joint_2")}, link), kOK);
     r.link.push_back(link[0]);
     if (k >= 5) r.highest_link = std::max(r.highest_link, link[0]);
   }
