@@ -20,6 +20,7 @@
 
 #include <benchmark/benchmark.h>
 
+#include "fmu/description/variable_table.hpp"
 #include "fmu/fmi2_api.hpp"
 #include "fmu/fmi3_api.hpp"
 #include "model/compensation/compensator.hpp"
@@ -79,17 +80,35 @@ const Spiral& spiral(int step_ms = 1) {
   return step_ms == 10 ? every_10_ms : every_ms;
 }
 
-// Value references, as in modelDescription/variables.csv.
-constexpr std::uint32_t kCompensation = 1;
-constexpr std::uint32_t kStepPastUpdates = 4012;  // integrator.step_past_updates
-const std::uint32_t kQDesired[kDof] = {100, 101, 102, 103, 104, 105};
-const std::uint32_t kReadBack[kDof + 3] = {220, 221, 222, 223, 224, 225, 240, 241, 242};  // q_link, tool
+// Value references from the FMU's variable table, as its binary builds it from its resources.
+const jointcomp::fmu::VariableTable& fmuTable() {
+  static const jointcomp::fmu::VariableTable table =
+      jointcomp::fmu::loadFmuResources(fmuDir(2) + "/resources", JOINTCOMP_FMU_VERSION).table;
+  return table;
+}
+std::uint32_t vrOf(const char* name) {
+  const int index = fmuTable().indexOfName(name);
+  if (index < 0) throw std::runtime_error(std::string("the FMU has no variable ") + name);
+  return static_cast<std::uint32_t>(index);
+}
+const std::uint32_t kCompensation = vrOf("compensation");
+const std::uint32_t kStepPastUpdates = vrOf("integrator.step_past_updates");
+const std::vector<std::uint32_t> kQDesiredList(fmuTable().roles.q_desired.begin(), fmuTable().roles.q_desired.end());
+const std::uint32_t* const kQDesired = kQDesiredList.data();
+const std::vector<std::uint32_t> kReadBackList = [] {  // q_link, tool
+  const jointcomp::fmu::Roles& r = fmuTable().roles;
+  std::vector<std::uint32_t> vrs(r.q_link.begin(), r.q_link.end());
+  vrs.insert(vrs.end(), r.tool_position.begin(), r.tool_position.end());
+  return vrs;
+}();
+const std::uint32_t* const kReadBack = kReadBackList.data();
 std::vector<std::uint32_t> allOutputs() {
+  const jointcomp::fmu::Roles& r = fmuTable().roles;
   std::vector<std::uint32_t> vrs;
-  for (std::uint32_t base : {200u, 210u, 220u, 230u, 250u, 260u, 270u}) {
-    for (std::uint32_t j = 0; j < kDof; ++j) vrs.push_back(base + j);
+  for (const std::vector<int>* role : {&r.q_motor, &r.qd_motor, &r.q_link, &r.qd_link, &r.dq_predicted, &r.dq_actual, &r.q_ref}) {
+    vrs.insert(vrs.end(), role->begin(), role->end());
   }
-  for (std::uint32_t k = 0; k < 3; ++k) vrs.push_back(240 + k);
+  vrs.insert(vrs.end(), r.tool_position.begin(), r.tool_position.end());
   return vrs;
 }
 

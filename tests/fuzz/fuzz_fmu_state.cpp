@@ -19,7 +19,7 @@
 
 #include "fmu/fmi2_api.hpp"
 #include "fmu/fmi3_api.hpp"
-#include "jointcomp_fmu_variables.hpp"
+#include "fmu/description/variable_table.hpp"
 
 namespace {
 
@@ -52,12 +52,18 @@ std::uint64_t fnv1a(const unsigned char* bytes, std::size_t size) {
 // seconds in a release build, minutes instrumented) before the step is discarded. So that each input
 // costs little, the repaired copy lowers the state's integrator.max_steps to this.
 constexpr double kFuzzMaxSteps = 500.0;
-constexpr std::uint32_t kMaxStepsVr = 4004;  // integrator.max_steps (modelDescription/variables.csv)
+
+// The FMU's variable table, as its binary builds it from the same resources.
+const jointcomp::fmu::VariableTable& fmuTable() {
+  static const jointcomp::fmu::VariableTable table =
+      jointcomp::fmu::loadFmuResources(kResourceDir, JOINTCOMP_FMU_VERSION).table;
+  return table;
+}
 
 // Where the value of variable `index` lies in a serialised state whose token has the FMU's length
 // (header, token, variable count, dof, phase, value count, then the values), 0 if it does not.
 std::size_t valueOffset(const std::vector<unsigned char>& bytes, int index) {
-  const std::size_t token_length = std::strlen(table::kInstantiationToken);
+  const std::size_t token_length = fmuTable().instantiation_token.size();
   std::uint32_t stored_length = 0;
   if (bytes.size() < kHeaderSize + sizeof stored_length) return 0;
   std::memcpy(&stored_length, bytes.data() + kHeaderSize, sizeof stored_length);
@@ -66,18 +72,12 @@ std::size_t valueOffset(const std::vector<unsigned char>& bytes, int index) {
   return offset + 8 + kChecksumSize <= bytes.size() ? offset : 0;
 }
 
-int indexOfVr(std::uint32_t vr) {
-  for (int i = 0; i < table::kCount; ++i) {
-    if (table::kVariables[i].vr == vr) return i;
-  }
-  die("no variable with that value reference");
-}
 
 // The input with its size field and checksum made consistent (when it is long enough to have both).
 std::vector<unsigned char> repaired(const std::uint8_t* data, std::size_t size) {
   std::vector<unsigned char> bytes(data, data + size);
   if (size < kHeaderSize + kChecksumSize) return bytes;
-  static const int max_steps_index = indexOfVr(kMaxStepsVr);
+  static const int max_steps_index = fmuTable().indexOfName("integrator.max_steps");
   if (const std::size_t at = valueOffset(bytes, max_steps_index)) {
     std::memcpy(bytes.data() + at, &kFuzzMaxSteps, sizeof kFuzzMaxSteps);
   }
@@ -96,14 +96,14 @@ void ignoreFmi3Log(fmi3InstanceEnvironment, fmi3Status, fmi3String, fmi3String) 
 fmi2Component instantiateFmi2() {
   static const fmi2CallbackFunctions callbacks = {ignoreFmi2Log, nullptr, nullptr, nullptr, nullptr};
   const std::string uri = std::string("file://") + kResourceDir;
-  fmi2Component c = fmi2Instantiate("fuzz2", fmi2CoSimulation, table::kInstantiationToken, uri.c_str(), &callbacks,
+  fmi2Component c = fmi2Instantiate("fuzz2", fmi2CoSimulation, fmuTable().instantiation_token.c_str(), uri.c_str(), &callbacks,
                                     kFmi2False, kFmi2False);
   if (!c) die("fmi2Instantiate failed (are the FMU resources built?)");
   return c;
 }
 
 fmi3Instance instantiateFmi3() {
-  fmi3Instance instance = fmi3InstantiateCoSimulation("fuzz3", table::kInstantiationToken, kResourceDir, false, false,
+  fmi3Instance instance = fmi3InstantiateCoSimulation("fuzz3", fmuTable().instantiation_token.c_str(), kResourceDir, false, false,
                                                       false, false, nullptr, 0, nullptr, ignoreFmi3Log, nullptr);
   if (!instance) die("fmi3InstantiateCoSimulation failed (are the FMU resources built?)");
   return instance;
@@ -150,7 +150,7 @@ void tryFmi3(fmi3Instance instance, const std::vector<unsigned char>& bytes) {
       [&](unsigned char* out, std::size_t size) { return fmi3SerializeFMUState(instance, state, out, size); });
   if (fmi3SetFMUState(instance, state) == fmi3OK) {
     fmi3Float64 time = 0.0;
-    const fmi3ValueReference time_vr = 0;  // the independent variable "time" (modelDescription/variables.csv)
+    const auto time_vr = static_cast<fmi3ValueReference>(fmuTable().roles.time);  // the independent variable
     if (fmi3GetFloat64(instance, &time_vr, 1, &time, 1) == fmi3OK) {
       fmi3Boolean event = false, terminate = false, early = false;
       fmi3Float64 last = 0.0;
@@ -198,8 +198,8 @@ void writeSeeds(const std::string& dir) {
   for (int k = 0; k < 25; ++k) {
     std::vector<fmi2ValueReference> vrs;
     std::vector<fmi2Real> q;
-    for (int j = 0; j < table::kDof; ++j) {
-      vrs.push_back(table::kVariables[table::role::q_desired[j]].vr);
+    for (int j = 0; j < fmuTable().dof(); ++j) {
+      vrs.push_back(static_cast<fmi2ValueReference>(fmuTable().roles.q_desired[j]));
       q.push_back(0.002 * (j + 1) * k);
     }
     if (fmi2SetReal(c, vrs.data(), vrs.size(), q.data()) != fmi2OK || fmi2DoStep(c, k * h, h, kFmi2True) != fmi2OK) {

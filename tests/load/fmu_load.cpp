@@ -17,11 +17,10 @@
 
 #include "fmu/fmi2_api.hpp"
 #include "fmu/fmi3_api.hpp"
-#include "jointcomp_fmu_variables.hpp"
+#include "fmu/description/variable_table.hpp"
 
 namespace {
 
-namespace table = jointcomp::fmu::table;
 
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kStep = 0.01;  // communication step, s
@@ -45,9 +44,9 @@ long residentKiB() {
 
 // The desired joint positions at time t: every joint moves on a slow sine of its own period around a
 // working posture, so that the compensator and the plant work on every step.
-void desired(double t, double q[table::kDof]) {
+void desired(double t, double q[], int dof) {
   static const double posture[6] = {0.0, -0.3, 0.5, 0.0, 0.6, 0.0};
-  for (int j = 0; j < table::kDof; ++j) {
+  for (int j = 0; j < dof; ++j) {
     q[j] = posture[j % 6] + 0.2 * std::sin(2.0 * kPi * t / (7.0 + 3.0 * j));
   }
 }
@@ -73,29 +72,29 @@ F symbol(void* library, const char* name) {
 }
 #define FMI(library, name) symbol<decltype(&name)>(library, #name)
 
-std::vector<std::uint32_t> references(const int (&roles)[table::kDof]) {
-  std::vector<std::uint32_t> vrs;
-  for (int index : roles) vrs.push_back(table::kVariables[index].vr);
-  return vrs;
+// The FMU's variable table, as its binary builds it from its resources (value references are indices).
+jointcomp::fmu::VariableTable tableOf(const std::string& folder) {
+  return jointcomp::fmu::loadFmuResources(folder + "/resources", JOINTCOMP_FMU_VERSION).table;
 }
+std::vector<std::uint32_t> references(const std::vector<int>& roles) { return {roles.begin(), roles.end()}; }
 
 void logNothing(fmi2ComponentEnvironment, fmi2String, fmi2Status, fmi2String, fmi2String, ...) {}
 void logNothing3(fmi3InstanceEnvironment, fmi3Status, fmi3String, fmi3String) {}
 
 // Steps an instance for `seconds`, through `step(t, q_desired, outputs)`, sampling the memory.
 template <typename Step>
-Run simulate(double seconds, Step step) {
+Run simulate(double seconds, int dof, Step step) {
   Run run;
   run.rss_start_kib = residentKiB();
   const auto started = std::chrono::steady_clock::now();
   const long steps = std::lround(seconds / kStep);
   const long steps_per_minute = std::lround(kMinute / kStep);
-  double q[table::kDof], outputs[2 * table::kDof];
+  std::vector<double> q(static_cast<std::size_t>(dof)), outputs(2 * static_cast<std::size_t>(dof));
   for (long k = 0; k < steps; ++k) {
     const double t = k * kStep;
-    desired(t, q);
-    step(t, q, outputs);
-    run.hash(outputs, 2 * table::kDof);
+    desired(t, q.data(), dof);
+    step(t, q.data(), outputs.data());
+    run.hash(outputs.data(), outputs.size());
     if ((k + 1) % steps_per_minute == 0) {
       const long rss = residentKiB();
       if (t + kStep <= kWarmUp) {
@@ -111,26 +110,28 @@ Run simulate(double seconds, Step step) {
 }
 
 Run runFmi2(void* library, const std::string& folder, double seconds) {
+  const jointcomp::fmu::VariableTable table = tableOf(folder);
+  const int dof = table.dof();
   const std::string uri = "file://" + folder + "/resources";
   static const fmi2CallbackFunctions callbacks = {logNothing, nullptr, nullptr, nullptr, nullptr};
-  fmi2Component c = FMI(library, fmi2Instantiate)("load", fmi2CoSimulation, table::kInstantiationToken, uri.c_str(),
+  fmi2Component c = FMI(library, fmi2Instantiate)("load", fmi2CoSimulation, table.instantiation_token.c_str(), uri.c_str(),
                                                   &callbacks, 0, 0);
   if (!c) die("fmi2Instantiate failed");
   const auto set = FMI(library, fmi2SetReal);
   const auto get = FMI(library, fmi2GetReal);
   const auto do_step = FMI(library, fmi2DoStep);
-  const std::vector<std::uint32_t> q_desired = references(table::role::q_desired);
-  std::vector<std::uint32_t> observed = references(table::role::q_link);
-  for (std::uint32_t vr : references(table::role::q_ref)) observed.push_back(vr);
-  double q0[table::kDof];
-  desired(0.0, q0);
+  const std::vector<std::uint32_t> q_desired = references(table.roles.q_desired);
+  std::vector<std::uint32_t> observed = references(table.roles.q_link);
+  for (std::uint32_t vr : references(table.roles.q_ref)) observed.push_back(vr);
+  std::vector<double> q0(static_cast<std::size_t>(dof));
+  desired(0.0, q0.data(), dof);
   if (FMI(library, fmi2SetupExperiment)(c, 0, 0.0, 0.0, 0, 0.0) != fmi2OK ||
-      FMI(library, fmi2EnterInitializationMode)(c) != fmi2OK || set(c, q_desired.data(), table::kDof, q0) != fmi2OK ||
+      FMI(library, fmi2EnterInitializationMode)(c) != fmi2OK || set(c, q_desired.data(), q_desired.size(), q0.data()) != fmi2OK ||
       FMI(library, fmi2ExitInitializationMode)(c) != fmi2OK) {
     die("FMI 2 initialisation failed");
   }
-  const Run run = simulate(seconds, [&](double t, const double* q, double* outputs) {
-    if (set(c, q_desired.data(), table::kDof, q) != fmi2OK || do_step(c, t, kStep, 1) != fmi2OK ||
+  const Run run = simulate(seconds, dof, [&](double t, const double* q, double* outputs) {
+    if (set(c, q_desired.data(), q_desired.size(), q) != fmi2OK || do_step(c, t, kStep, 1) != fmi2OK ||
         get(c, observed.data(), observed.size(), outputs) != fmi2OK) {
       die("FMI 2 step failed at t = " + std::to_string(t));
     }
@@ -141,28 +142,30 @@ Run runFmi2(void* library, const std::string& folder, double seconds) {
 }
 
 Run runFmi3(void* library, const std::string& folder, double seconds) {
+  const jointcomp::fmu::VariableTable table = tableOf(folder);
+  const int dof = table.dof();
   const std::string resources = folder + "/resources/";
   fmi3Instance instance =
-      FMI(library, fmi3InstantiateCoSimulation)("load", table::kInstantiationToken, resources.c_str(), false, false,
+      FMI(library, fmi3InstantiateCoSimulation)("load", table.instantiation_token.c_str(), resources.c_str(), false, false,
                                                 false, false, nullptr, 0, nullptr, logNothing3, nullptr);
   if (!instance) die("fmi3InstantiateCoSimulation failed");
   const auto set = FMI(library, fmi3SetFloat64);
   const auto get = FMI(library, fmi3GetFloat64);
   const auto do_step = FMI(library, fmi3DoStep);
-  const std::vector<std::uint32_t> q_desired = references(table::role::q_desired);
-  std::vector<std::uint32_t> observed = references(table::role::q_link);
-  for (std::uint32_t vr : references(table::role::q_ref)) observed.push_back(vr);
-  double q0[table::kDof];
-  desired(0.0, q0);
+  const std::vector<std::uint32_t> q_desired = references(table.roles.q_desired);
+  std::vector<std::uint32_t> observed = references(table.roles.q_link);
+  for (std::uint32_t vr : references(table.roles.q_ref)) observed.push_back(vr);
+  std::vector<double> q0(static_cast<std::size_t>(dof));
+  desired(0.0, q0.data(), dof);
   if (FMI(library, fmi3EnterInitializationMode)(instance, false, 0.0, 0.0, false, 0.0) != fmi3OK ||
-      set(instance, q_desired.data(), table::kDof, q0, table::kDof) != fmi3OK ||
+      set(instance, q_desired.data(), q_desired.size(), q0.data(), q0.size()) != fmi3OK ||
       FMI(library, fmi3ExitInitializationMode)(instance) != fmi3OK) {
     die("FMI 3 initialisation failed");
   }
-  const Run run = simulate(seconds, [&](double t, const double* q, double* outputs) {
+  const Run run = simulate(seconds, dof, [&](double t, const double* q, double* outputs) {
     fmi3Boolean event = false, terminate = false, early = false;
     fmi3Float64 last = 0.0;
-    if (set(instance, q_desired.data(), table::kDof, q, table::kDof) != fmi3OK ||
+    if (set(instance, q_desired.data(), q_desired.size(), q, q_desired.size()) != fmi3OK ||
         do_step(instance, t, kStep, true, &event, &terminate, &early, &last) != fmi3OK ||
         get(instance, observed.data(), observed.size(), outputs, observed.size()) != fmi3OK) {
       die("FMI 3 step failed at t = " + std::to_string(t));
