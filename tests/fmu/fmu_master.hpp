@@ -53,8 +53,8 @@ inline std::string attribute(const std::string& xml, std::size_t begin, std::siz
   return xml.substr(value, xml.find('"', value) - value);
 }
 
-inline ModelDescription readModelDescription(int version) {
-  const std::string xml = readFile(unzipped(version) + "/modelDescription.xml");
+inline ModelDescription readModelDescription(int version, const std::string& folder) {
+  const std::string xml = readFile(folder + "/modelDescription.xml");
   ModelDescription md;
   md.token =
       attribute(xml, 0, xml.find('>', xml.find("<fmiModelDescription")), version == 2 ? "guid" : "instantiationToken");
@@ -131,16 +131,21 @@ public:
   }
   // The variables of a per-joint role ("q_desired" or "q_desired_": q_desired.<joint> for every joint), in the
   // order of their value references, which is the chain's joint order.
-  std::vector<std::uint32_t> vrs(std::string role, int count) const {
+  std::vector<std::uint32_t> vrs(const std::string& role, int count) const {
+    const std::vector<std::uint32_t> list = roleVrs(role);
+    if (static_cast<int>(list.size()) != count) {
+      throw std::runtime_error(role + ": " + std::to_string(list.size()) + " variables, expected " + std::to_string(count));
+    }
+    return list;
+  }
+  // Every variable of a per-joint role, whatever the number of joints.
+  std::vector<std::uint32_t> roleVrs(std::string role) const {
     if (!role.empty() && role.back() == '_') role.pop_back();
     std::vector<std::uint32_t> list;
     for (const auto& [name, reference] : md.vr) {
       if (name.rfind(role + ".", 0) == 0) list.push_back(reference);
     }
     std::sort(list.begin(), list.end());
-    if (static_cast<int>(list.size()) != count) {
-      throw std::runtime_error(role + ": " + std::to_string(list.size()) + " variables, expected " + std::to_string(count));
-    }
     return list;
   }
   bool logged(const std::string& fragment) const {
@@ -396,13 +401,16 @@ inline void fmi3Logger(fmi3InstanceEnvironment environment, fmi3Status status, f
 
 class Master2 : public Master {
 public:
-  Master2() : api(fmi2()) { md = readModelDescription(2); }
+  // folder: an unzipped FMU (by default the shipped one); every FMU has the same binary, loaded once.
+  explicit Master2(std::string unzipped_fmu = unzipped(2)) : api(fmi2()), folder(std::move(unzipped_fmu)) {
+    md = readModelDescription(2, folder);
+  }
   ~Master2() override { freeInstance(); }
   int version() const override { return 2; }
   bool instantiateAs(const std::string& name, const std::string& resources, const std::string& token,
                      bool logging) override {
     callbacks = {fmi2Logger, nullptr, nullptr, nullptr, this};
-    const std::string uri = resources.empty() ? "file://" + percentEncoded(unzipped(2) + "/resources/") : resources;
+    const std::string uri = resources.empty() ? "file://" + percentEncoded(folder + "/resources/") : resources;
     c = api.fmi2Instantiate(name.c_str(), fmi2CoSimulation, token.empty() ? md.token.c_str() : token.c_str(),
                             uri.c_str(), &callbacks, 0, logging ? 1 : 0);
     return c != nullptr;
@@ -477,17 +485,20 @@ public:
 
   const Fmi2Api& api;
   fmi2CallbackFunctions callbacks{};
+  std::string folder;
   fmi2Component c = nullptr;
 };
 
 class Master3 : public Master {
 public:
-  Master3() : api(fmi3()) { md = readModelDescription(3); }
+  explicit Master3(std::string unzipped_fmu = unzipped(3)) : api(fmi3()), folder(std::move(unzipped_fmu)) {
+    md = readModelDescription(3, folder);
+  }
   ~Master3() override { freeInstance(); }
   int version() const override { return 3; }
   bool instantiateAs(const std::string& name, const std::string& resources, const std::string& token,
                      bool logging) override {
-    const std::string path = resources.empty() ? unzipped(3) + "/resources/" : resources;
+    const std::string path = resources.empty() ? folder + "/resources/" : resources;
     c = api.fmi3InstantiateCoSimulation(name.c_str(), token.empty() ? md.token.c_str() : token.c_str(), path.c_str(),
                                         false, logging, false, false, nullptr, 0, this, fmi3Logger, nullptr);
     return c != nullptr;
@@ -554,6 +565,7 @@ public:
   void* handle() const override { return c; }
 
   const Fmi3Api& api;
+  std::string folder;
   fmi3Instance c = nullptr;
   double last_successful_time = std::nan("");
   bool terminate_requested = false;
@@ -562,6 +574,11 @@ public:
 inline std::unique_ptr<Master> makeMaster(int version) {
   if (version == 2) return std::make_unique<Master2>();
   return std::make_unique<Master3>();
+}
+// A master of another unzipped FMU (export-fmu's of another robot).
+inline std::unique_ptr<Master> makeMaster(int version, const std::string& unzipped_fmu) {
+  if (version == 2) return std::make_unique<Master2>(unzipped_fmu);
+  return std::make_unique<Master3>(unzipped_fmu);
 }
 
 }  // namespace jointcomp::fmutest

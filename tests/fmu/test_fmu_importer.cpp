@@ -265,7 +265,7 @@ TEST_P(FmuTest, DescribesItselfAndExportsTheStandardVersion) {
   } else {
     EXPECT_STREQ(fmi3().fmi3GetVersion(), "3.0");
   }
-  const ModelDescription md = readModelDescription(GetParam());
+  const ModelDescription md = readModelDescription(GetParam(), unzipped(GetParam()));
   EXPECT_EQ(md.outputs.size(), 51u);
   EXPECT_EQ(md.vr.size(), 152u);
   EXPECT_FALSE(md.token.empty());
@@ -1342,7 +1342,7 @@ TEST(FmuMisuse2, NullAndForeignPointersNeverCrash) {
   api.fmi2FreeInstance(buffer);
   // Instantiation with missing pieces.
   fmi2CallbackFunctions callbacks{};
-  const ModelDescription md = readModelDescription(2);
+  const ModelDescription md = readModelDescription(2, unzipped(2));
   const std::string uri = "file://" + percentEncoded(unzipped(2) + "/resources/");
   EXPECT_EQ(api.fmi2Instantiate("x", fmi2CoSimulation, md.token.c_str(), uri.c_str(), nullptr, 0, 0), nullptr);
   EXPECT_EQ(api.fmi2Instantiate(nullptr, fmi2CoSimulation, md.token.c_str(), uri.c_str(), &callbacks, 0, 0), nullptr);
@@ -1407,7 +1407,7 @@ TEST(FmuMisuse2, FunctionsNotProvidedReturnAnError) {
 
 TEST(FmuMisuse3, EventModeAndEarlyReturnAreDeclinedGracefully) {
   const Fmi3Api& api = fmi3();
-  const ModelDescription md = readModelDescription(3);
+  const ModelDescription md = readModelDescription(3, unzipped(3));
   const std::string resources = unzipped(3) + "/resources/";
   Master3 m;
   const fmi3ValueReference wanted[] = {m.vr("q_link.joint_1")};
@@ -1452,7 +1452,7 @@ TEST(FmuMisuse3, EventModeAndEarlyReturnAreDeclinedGracefully) {
 
 TEST(FmuMisuse3, NoLoggerAndNullPointersNeverCrash) {
   const Fmi3Api& api = fmi3();
-  const ModelDescription md = readModelDescription(3);
+  const ModelDescription md = readModelDescription(3, unzipped(3));
   const std::string resources = unzipped(3) + "/resources/";
   // logMessage may be null.
   fmi3Instance c = api.fmi3InstantiateCoSimulation("quiet", md.token.c_str(), resources.c_str(), false, true, false,
