@@ -165,8 +165,10 @@ TEST(FmuOfAnyRobot, TheShippedRx170) {
 }
 
 TEST(FmuOfAnyRobot, ASevenJointArm) {
-  expectAWorkingFmu("arm7", {"--urdf", testData("arm7/arm7.urdf"), "--params", testData("arm7/arm7_true.json")}, 7,
-                    {"joint_1", "joint_7"});
+  expectAWorkingFmu("arm7",
+                    {"--urdf", testData("arm7/arm7.urdf"), "--params", testData("arm7/arm7_truth.json"), "--drives",
+                     testData("fmu/arm7_drives.json")},
+                    7, {"joint_1", "joint_7"});
 }
 
 // The UR10 as `calibrate` and `discover` leave it from the IPA Series A, with drives from a file of its own.
