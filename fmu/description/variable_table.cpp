@@ -322,13 +322,13 @@ FmuResources loadFmuResources(const std::string& resource_dir, const std::string
   const std::string robot_text = readInputFile(dir + "robot.json", "the FMU's robot", kMaxResourceBytes);
   const std::string parameter_path = dir + "parameters.json";
   const std::string parameter_text = readInputFile(parameter_path, "the FMU's parameter file", kMaxResourceBytes);
-  FmuResources resources;
-  resources.robot = std::make_shared<const Robot>(robotFromJson(robot_text, dir + "robot.json"));
-  resources.parameters = parseParameterSet(parameter_text, parameter_path, resources.robot, EffectRegistry::builtin());
-  resources.table = buildVariableTable(*resources.robot, resources.parameters, ModelAttributes{},
-                                       instantiationToken(robot_text, parameter_text, version));
-  resources.table.model.version = version;
-  return resources;
+  auto robot = std::make_shared<const Robot>(robotFromJson(robot_text, dir + "robot.json"));
+  ParameterSet parameters = parseParameterSet(parameter_text, parameter_path, robot, EffectRegistry::builtin());
+  ModelAttributes model;
+  model.version = version;
+  VariableTable table =
+      buildVariableTable(*robot, parameters, model, instantiationToken(robot_text, parameter_text, version));
+  return FmuResources{std::move(robot), std::move(parameters), std::move(table)};
 }
 
 namespace {
