@@ -49,6 +49,91 @@ double tableValue(const Variable* variables, int index, T value) {
 }  // namespace
 
 // ------------------------------------------------------------------------------------------------
+// Logging and the state machine.
+
+void Instance::log(Status status, const char* format, ...) {
+  LogCategory category = kLogCalls;
+  switch (status) {
+    case Status::OK: category = kLogCalls; break;
+    case Status::Warning: category = kLogWarning; break;
+    case Status::Discard: category = kLogDiscard; break;
+    case Status::Error:
+    case Status::Fatal: category = kLogError; break;
+  }
+  const bool always = status == Status::Error || status == Status::Fatal;
+  if (!sink_ || (!always && !logging_[category])) return;
+  char buffer[1024];
+  va_list args;
+  va_start(args, format);
+  const int length = std::vsnprintf(buffer, sizeof buffer, format, args);
+  va_end(args);
+  std::string message;
+  if (length >= 0 && static_cast<std::size_t>(length) >= sizeof buffer) {
+    message.resize(static_cast<std::size_t>(length) + 1);
+    va_start(args, format);
+    std::vsnprintf(message.data(), message.size(), format, args);
+    va_end(args);
+    message.pop_back();
+  } else {
+    message = length >= 0 ? buffer : "(message could not be formatted)";
+  }
+  sink_(sink_context_, status, kCategoryNames[category], message.c_str());
+}
+
+void Instance::refuse(const char* function, unsigned phases) {
+  std::string list;
+  for (unsigned bit = 1; bit < kAnyPhase; bit <<= 1) {
+    if (phases & bit) list += std::string(list.empty() ? "" : ", ") + phaseName(bit);
+  }
+  log(Status::Error, "%s: not allowed in state %s (allowed in: %s)", function, phaseName(state_.phase),
+      list.empty() ? "no state of this FMU" : list.c_str());
+}
+
+Status Instance::fail(Status status, const char* function, const std::string& what) {
+  log(status, "%s: %s", function, what.c_str());
+  return status;
+}
+
+Status Instance::nullArgument(const char* function, const char* argument) {
+  return fail(Status::Error, function, std::string("argument ") + argument + " is a null pointer");
+}
+
+Status Instance::internalError(const char* function, const char* what) {
+  state_.phase = kErrorState;
+  return fail(Status::Error, function, std::string("failed: ") + what + " (the instance must be reset or freed)");
+}
+
+Status Instance::unsupported(const char* function, const char* why) { return fail(Status::Error, function, why); }
+
+Status Instance::badArgument(const char* function, const char* why) { return fail(Status::Error, function, why); }
+
+Status Instance::setDebugLogging(const char* function, bool on, std::size_t count, const char* const categories[]) {
+  if (count == 0) {
+    for (bool& flag : logging_) flag = on;
+    return Status::OK;
+  }
+  if (!categories) return nullArgument(function, "categories");
+  bool chosen[kLogCategoryCount] = {};
+  for (std::size_t i = 0; i < count; ++i) {
+    if (!categories[i]) return nullArgument(function, "categories[i]");
+    int found = -1;
+    for (int c = 0; c < kLogCategoryCount; ++c) {
+      if (std::strcmp(categories[i], kCategoryNames[c]) == 0) found = c;
+    }
+    if (found < 0) {
+      return fail(Status::Error, function,
+                  std::string("unknown log category '") + categories[i] +
+                      "' (known: logStatusWarning, logStatusDiscard, logStatusError, logCalls)");
+    }
+    chosen[found] = true;
+  }
+  for (int c = 0; c < kLogCategoryCount; ++c) {
+    if (chosen[c]) logging_[c] = on;
+  }
+  return Status::OK;
+}
+
+// ------------------------------------------------------------------------------------------------
 // Lifecycle.
 
 Status Instance::setupExperiment(const char* function, bool tolerance_defined, double tolerance, double start_time,
@@ -62,7 +147,7 @@ Status Instance::setupExperiment(const char* function, bool tolerance_defined, d
       return fail(Status::Error, function, "the tolerance must be positive and finite");
     }
     // The importer's tolerance becomes the integrator's relative tolerance (and its parameter's value).
-    for (int i = 0; i < count_; ++i) {
+    for (int i = 0; i < static_cast<int>(count_); ++i) {
       const PlantOptionByName* option = models_->binding.option(i);
       if (option && std::strcmp(option->name, "relative_tolerance") == 0) state_.values[i] = tolerance;
     }

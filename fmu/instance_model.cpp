@@ -57,7 +57,7 @@ Instance::~Instance() = default;
 bool Instance::fixedParametersDiffer(const std::vector<double>& values) const {
   const RobotModels& m = *models_;
   if (!m.built) return true;
-  for (int i = 0; i < count_; ++i) {
+  for (int i = 0; i < static_cast<int>(count_); ++i) {
     if (flags_->fixed_parameter[i] && !sameBits(values[i], m.built_values[i])) return true;
   }
   return false;

@@ -43,7 +43,7 @@ VariableBinding::VariableBinding(const ParameterSet& base, const Robot& robot, c
         break;
       }
       case Binding::Integrator:
-        option_[static_cast<std::size_t>(i)] = findPlantOption(v.key);
+        option_[static_cast<std::size_t>(i)] = findPlantOption(v.key.c_str());
         if (!option_[static_cast<std::size_t>(i)]) {
           throw Error(std::string("no integrator option '") + v.key + "' (FMU variable '" + v.name + "')");
         }
