@@ -105,7 +105,8 @@ const std::uint32_t* const kReadBack = kReadBackList.data();
 std::vector<std::uint32_t> allOutputs() {
   const jointcomp::fmu::Roles& r = fmuTable().roles;
   std::vector<std::uint32_t> vrs;
-  for (const std::vector<int>* role : {&r.q_motor, &r.qd_motor, &r.q_link, &r.qd_link, &r.dq_predicted, &r.dq_actual, &r.q_ref}) {
+  for (const std::vector<int>* role :
+       {&r.q_motor, &r.qd_motor, &r.q_link, &r.qd_link, &r.dq_predicted, &r.dq_actual, &r.q_ref}) {
     vrs.insert(vrs.end(), role->begin(), role->end());
   }
   vrs.insert(vrs.end(), r.tool_position.begin(), r.tool_position.end());

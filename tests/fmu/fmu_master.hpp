@@ -4,8 +4,8 @@
 // the step semantics (test_fmu_step_semantics.cpp).
 #pragma once
 
-#include <algorithm>
 #include <dlfcn.h>
+#include <algorithm>
 
 #include <cctype>
 #include <cmath>
@@ -134,7 +134,8 @@ public:
   std::vector<std::uint32_t> vrs(const std::string& role, int count) const {
     const std::vector<std::uint32_t> list = roleVrs(role);
     if (static_cast<int>(list.size()) != count) {
-      throw std::runtime_error(role + ": " + std::to_string(list.size()) + " variables, expected " + std::to_string(count));
+      throw std::runtime_error(role + ": " + std::to_string(list.size()) + " variables, expected " +
+                               std::to_string(count));
     }
     return list;
   }

@@ -28,13 +28,13 @@ namespace {
 
 namespace fs = std::filesystem;
 
-struct Run {
+struct ProgramRun {
   int status = -1;     // the exit status, -1 if it did not exit
   std::string output;  // stdout and stderr
 };
 
 // Runs a program from an argument vector (no shell), its output into a file read back.
-Run runProgram(const std::vector<std::string>& arguments, const std::string& scratch) {
+ProgramRun runProgram(const std::vector<std::string>& arguments, const std::string& scratch) {
   const std::string log = scratch + "/run.log";
   posix_spawn_file_actions_t actions;
   posix_spawn_file_actions_init(&actions);
@@ -44,7 +44,7 @@ Run runProgram(const std::vector<std::string>& arguments, const std::string& scr
   for (const std::string& a : arguments) argv.push_back(const_cast<char*>(a.c_str()));
   argv.push_back(nullptr);
   pid_t pid = 0;
-  Run run;
+  ProgramRun run;
   if (posix_spawn(&pid, argv[0], &actions, nullptr, argv.data(), environ) == 0) {
     int status = 0;
     waitpid(pid, &status, 0);
@@ -68,12 +68,13 @@ std::string exportFmu(const std::string& name, int version, const std::vector<st
   std::vector<std::string> arguments = {JOINTCOMP_CLI, "export-fmu"};
   arguments.insert(arguments.end(), robot_options.begin(), robot_options.end());
   arguments.insert(arguments.end(), {"--fmi", std::to_string(version), "--out", scratch + "/" + name + ".fmu"});
-  const Run exported = runProgram(arguments, scratch);
+  const ProgramRun exported = runProgram(arguments, scratch);
   EXPECT_EQ(exported.status, 0) << exported.output;
   if (exported.status != 0) return "";
   const std::string unzipped_fmu = scratch + "/unzipped";
   fs::create_directories(unzipped_fmu);
-  const Run unzipped_run = runProgram({"/usr/bin/unzip", "-q", scratch + "/" + name + ".fmu", "-d", unzipped_fmu}, scratch);
+  const ProgramRun unzipped_run =
+      runProgram({"/usr/bin/unzip", "-q", scratch + "/" + name + ".fmu", "-d", unzipped_fmu}, scratch);
   EXPECT_EQ(unzipped_run.status, 0) << unzipped_run.output;
   return unzipped_fmu;
 }
@@ -136,7 +137,7 @@ void expectAWorkingFmu(const std::string& name, const std::vector<std::string>& 
     ASSERT_FALSE(folder.empty());
     const std::string schema = test::sharedFile("fmi-schema");
     if (!schema.empty() && fs::exists(schema)) {
-      const Run valid = runProgram({"/usr/bin/bash", std::string(JOINTCOMP_TESTS_DIR) + "/fmu/check_schema.sh",
+      const ProgramRun valid = runProgram({"/usr/bin/bash", std::string(JOINTCOMP_TESTS_DIR) + "/fmu/check_schema.sh",
                                     std::to_string(version), folder + "/modelDescription.xml"},
                                    folder);
       EXPECT_EQ(valid.status, 0) << valid.output;
@@ -147,8 +148,8 @@ void expectAWorkingFmu(const std::string& name, const std::vector<std::string>& 
     const double error_without = demoMoveError(*without, 0, 4.0);
     auto with = makeMaster(version, folder);
     const double error_with = demoMoveError(*with, 2, 4.0);
-    std::printf("%s FMI %d: demo move, largest link error %.3g rad without, %.3g rad with compensation\n",
-                name.c_str(), version, error_without, error_with);
+    std::printf("%s FMI %d: demo move, largest link error %.3g rad without, %.3g rad with compensation\n", name.c_str(),
+                version, error_without, error_with);
     EXPECT_GT(error_without, 1e-7) << "the robot's joints deflect on the demo move";
     EXPECT_LT(error_with, 0.5 * error_without);
     auto again = makeMaster(version, folder);
@@ -179,20 +180,21 @@ protected:
     scratch_ = scratchFolder("ur10_campaign");
     campaign_ = scratch_ + "/A.csv";
     const std::string series = test::sharedFile("data/ipa-ur10/Series_A");
-    const Run imported = runProgram({JOINTCOMP_CLI, "import-ipa", "--in", series + "/measurements_grid.csv", "--trafo",
+    const ProgramRun imported = runProgram({JOINTCOMP_CLI, "import-ipa", "--in", series + "/measurements_grid.csv", "--trafo",
                                      series + "/Trafo_TM_F_init.txt", "--out", campaign_},
                                     scratch_);
     ASSERT_EQ(imported.status, 0) << imported.output;
   }
   void expectExported(const std::string& command, const std::vector<std::string>& options) {
     const std::string out = scratch_ + "/" + command;
-    std::vector<std::string> arguments = {JOINTCOMP_CLI, command, "--urdf", dataFile("robots/ur10.urdf"),
-                                          "--campaign", campaign_, "--out", out, "--no-plot"};
+    std::vector<std::string> arguments = {JOINTCOMP_CLI, command,   "--urdf", dataFile("robots/ur10.urdf"),
+                                          "--campaign",  campaign_, "--out",  out,
+                                          "--no-plot"};
     arguments.insert(arguments.end(), options.begin(), options.end());
-    const Run fitted = runProgram(arguments, scratch_);
+    const ProgramRun fitted = runProgram(arguments, scratch_);
     ASSERT_EQ(fitted.status, 0) << fitted.output;
     EXPECT_NE(fitted.output.find("export-fmu"), std::string::npos) << "the command that exports the result\n"
-                                                                  << fitted.output;
+                                                                   << fitted.output;
     expectAWorkingFmu("ur10_" + command,
                       {"--urdf", dataFile("robots/ur10.urdf"), "--params", out + "/parameters.json", "--drives",
                        testData("fmu/ur10_drives.json")},
@@ -220,7 +222,7 @@ TEST(FmuOfAnyRobot, ARobotTheFmuCannotRepresentIsRefusedWithTheReason) {
     std::vector<std::string> arguments = {JOINTCOMP_CLI, "export-fmu"};
     arguments.insert(arguments.end(), c.options.begin(), c.options.end());
     arguments.insert(arguments.end(), {"--out", scratch + "/refused.fmu"});
-    const Run run = runProgram(arguments, scratch);
+    const ProgramRun run = runProgram(arguments, scratch);
     EXPECT_NE(run.status, 0) << run.output;
     EXPECT_NE(run.output.find(c.reason), std::string::npos) << run.output;
     EXPECT_FALSE(fs::exists(scratch + "/refused.fmu"));

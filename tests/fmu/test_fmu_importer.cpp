@@ -1002,8 +1002,9 @@ TEST_P(FmuTest, APlainRunMovesTheRobotAndShowsTheCompensation) {
     ASSERT_EQ(m->enterInitialization(), kOK);
     ASSERT_EQ(m->setEnumeration(m->vr("compensation"), mode), kOK);
     ASSERT_EQ(m->exitInitialization(), kOK) << m->log();
-    const std::vector<std::uint32_t> vrs = {m->vr("q_planned.joint_2"), m->vr("q_planned.joint_3"), m->vr("q_link.joint_2"),
-                                            m->vr("q_link.joint_3"), m->vr("q_desired.joint_2")};
+    const std::vector<std::uint32_t> vrs = {m->vr("q_planned.joint_2"), m->vr("q_planned.joint_3"),
+                                            m->vr("q_link.joint_2"), m->vr("q_link.joint_3"),
+                                            m->vr("q_desired.joint_2")};
     std::vector<double> values;
     double lowest = 1e9, highest = -1e9, t = 0.0;
     for (int k = 0; k < 600; ++k, t += 0.01) {
@@ -1493,13 +1494,13 @@ TEST(FmuMisuse3, VariableDependenciesFollowTheModelStructure) {
   std::vector<std::size_t> dependent(n), element(n);
   std::vector<fmi3ValueReference> independents(n);
   std::vector<fmi3DependencyKind> kinds(n);
-  ASSERT_EQ(api.fmi3GetVariableDependencies(m.c, m.vr("q_ref.joint_1"), dependent.data(), independents.data(), element.data(),
-                                            kinds.data(), n),
+  ASSERT_EQ(api.fmi3GetVariableDependencies(m.c, m.vr("q_ref.joint_1"), dependent.data(), independents.data(),
+                                            element.data(), kinds.data(), n),
             kOK);
   EXPECT_EQ(independents.front(), m.vr("q_desired.joint_1"));
   EXPECT_EQ(independents.back(), m.vr("qdd_desired.joint_6"));
-  EXPECT_EQ(api.fmi3GetVariableDependencies(m.c, m.vr("q_ref.joint_1"), dependent.data(), independents.data(), element.data(),
-                                            kinds.data(), 3),
+  EXPECT_EQ(api.fmi3GetVariableDependencies(m.c, m.vr("q_ref.joint_1"), dependent.data(), independents.data(),
+                                            element.data(), kinds.data(), 3),
             kError);
   ASSERT_EQ(api.fmi3GetNumberOfVariableDependencies(m.c, m.vr("q_link.joint_1"), &n), kOK);
   EXPECT_EQ(n, 0u);

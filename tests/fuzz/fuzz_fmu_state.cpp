@@ -17,9 +17,9 @@
 #include <string>
 #include <vector>
 
+#include "fmu/description/variable_table.hpp"
 #include "fmu/fmi2_api.hpp"
 #include "fmu/fmi3_api.hpp"
-#include "fmu/description/variable_table.hpp"
 
 namespace {
 
@@ -72,7 +72,6 @@ std::size_t valueOffset(const std::vector<unsigned char>& bytes, int index) {
   return offset + 8 + kChecksumSize <= bytes.size() ? offset : 0;
 }
 
-
 // The input with its size field and checksum made consistent (when it is long enough to have both).
 std::vector<unsigned char> repaired(const std::uint8_t* data, std::size_t size) {
   std::vector<unsigned char> bytes(data, data + size);
@@ -96,15 +95,16 @@ void ignoreFmi3Log(fmi3InstanceEnvironment, fmi3Status, fmi3String, fmi3String) 
 fmi2Component instantiateFmi2() {
   static const fmi2CallbackFunctions callbacks = {ignoreFmi2Log, nullptr, nullptr, nullptr, nullptr};
   const std::string uri = std::string("file://") + kResourceDir;
-  fmi2Component c = fmi2Instantiate("fuzz2", fmi2CoSimulation, fmuTable().instantiation_token.c_str(), uri.c_str(), &callbacks,
-                                    kFmi2False, kFmi2False);
+  fmi2Component c = fmi2Instantiate("fuzz2", fmi2CoSimulation, fmuTable().instantiation_token.c_str(), uri.c_str(),
+                                    &callbacks, kFmi2False, kFmi2False);
   if (!c) die("fmi2Instantiate failed (are the FMU resources built?)");
   return c;
 }
 
 fmi3Instance instantiateFmi3() {
-  fmi3Instance instance = fmi3InstantiateCoSimulation("fuzz3", fmuTable().instantiation_token.c_str(), kResourceDir, false, false,
-                                                      false, false, nullptr, 0, nullptr, ignoreFmi3Log, nullptr);
+  fmi3Instance instance =
+      fmi3InstantiateCoSimulation("fuzz3", fmuTable().instantiation_token.c_str(), kResourceDir, false, false, false,
+                                  false, nullptr, 0, nullptr, ignoreFmi3Log, nullptr);
   if (!instance) die("fmi3InstantiateCoSimulation failed (are the FMU resources built?)");
   return instance;
 }

@@ -15,12 +15,11 @@
 #include <string>
 #include <vector>
 
+#include "fmu/description/variable_table.hpp"
 #include "fmu/fmi2_api.hpp"
 #include "fmu/fmi3_api.hpp"
-#include "fmu/description/variable_table.hpp"
 
 namespace {
-
 
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kStep = 0.01;  // communication step, s
@@ -114,8 +113,8 @@ Run runFmi2(void* library, const std::string& folder, double seconds) {
   const int dof = table.dof();
   const std::string uri = "file://" + folder + "/resources";
   static const fmi2CallbackFunctions callbacks = {logNothing, nullptr, nullptr, nullptr, nullptr};
-  fmi2Component c = FMI(library, fmi2Instantiate)("load", fmi2CoSimulation, table.instantiation_token.c_str(), uri.c_str(),
-                                                  &callbacks, 0, 0);
+  fmi2Component c = FMI(library, fmi2Instantiate)("load", fmi2CoSimulation, table.instantiation_token.c_str(),
+                                                  uri.c_str(), &callbacks, 0, 0);
   if (!c) die("fmi2Instantiate failed");
   const auto set = FMI(library, fmi2SetReal);
   const auto get = FMI(library, fmi2GetReal);
@@ -126,7 +125,8 @@ Run runFmi2(void* library, const std::string& folder, double seconds) {
   std::vector<double> q0(static_cast<std::size_t>(dof));
   desired(0.0, q0.data(), dof);
   if (FMI(library, fmi2SetupExperiment)(c, 0, 0.0, 0.0, 0, 0.0) != fmi2OK ||
-      FMI(library, fmi2EnterInitializationMode)(c) != fmi2OK || set(c, q_desired.data(), q_desired.size(), q0.data()) != fmi2OK ||
+      FMI(library, fmi2EnterInitializationMode)(c) != fmi2OK ||
+      set(c, q_desired.data(), q_desired.size(), q0.data()) != fmi2OK ||
       FMI(library, fmi2ExitInitializationMode)(c) != fmi2OK) {
     die("FMI 2 initialisation failed");
   }
@@ -146,8 +146,8 @@ Run runFmi3(void* library, const std::string& folder, double seconds) {
   const int dof = table.dof();
   const std::string resources = folder + "/resources/";
   fmi3Instance instance =
-      FMI(library, fmi3InstantiateCoSimulation)("load", table.instantiation_token.c_str(), resources.c_str(), false, false,
-                                                false, false, nullptr, 0, nullptr, logNothing3, nullptr);
+      FMI(library, fmi3InstantiateCoSimulation)("load", table.instantiation_token.c_str(), resources.c_str(), false,
+                                                false, false, false, nullptr, 0, nullptr, logNothing3, nullptr);
   if (!instance) die("fmi3InstantiateCoSimulation failed");
   const auto set = FMI(library, fmi3SetFloat64);
   const auto get = FMI(library, fmi3GetFloat64);
