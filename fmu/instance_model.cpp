@@ -31,12 +31,9 @@ Instance::Instance(std::string name, const std::string& resource_dir, const std:
   for (bool& on : logging_) on = true;
   logging_[kLogCalls] = false;
   (void)logging_on;
-  FmuResources resources = loadFmuResources(resource_dir, JOINTCOMP_FMU_VERSION);
-  if (instantiation_token != resources.table.instantiation_token) {
-    throw Error("the instantiation token '" + instantiation_token + "' is not that of the resources in " +
-                resource_dir + " (" + resources.table.instantiation_token +
-                "): modelDescription.xml and resources/ come from different exports");
-  }
+  // An empty token would skip the check: it is never that of any resources.
+  if (instantiation_token.empty()) throw Error("the instantiation token is empty");
+  FmuResources resources = loadFmuResources(resource_dir, JOINTCOMP_FMU_VERSION, instantiation_token);
   table_ = std::make_shared<const VariableTable>(std::move(resources.table));
   variables_ = table_->variables.data();
   roles_ = &table_->roles;

@@ -315,19 +315,25 @@ VariableTable buildVariableTable(const Robot& robot, const ParameterSet& paramet
   return table;
 }
 
-FmuResources loadFmuResources(const std::string& resource_dir, const std::string& version) {
+FmuResources loadFmuResources(const std::string& resource_dir, const std::string& version,
+                              const std::string& expected_token) {
   std::string dir = resource_dir;
   if (!dir.empty() && dir.back() != '/') dir += '/';
   constexpr std::uintmax_t kMaxResourceBytes = std::uintmax_t{64} << 20;
-  const std::string robot_text = readInputFile(dir + "robot.json", "the FMU's robot", kMaxResourceBytes);
+  const std::string robot_text = readInputFile(dir + "robot.json", "FMU's robot", kMaxResourceBytes);
   const std::string parameter_path = dir + "parameters.json";
-  const std::string parameter_text = readInputFile(parameter_path, "the FMU's parameter file", kMaxResourceBytes);
+  const std::string parameter_text = readInputFile(parameter_path, "FMU's parameter file", kMaxResourceBytes);
+  const std::string token = instantiationToken(robot_text, parameter_text, version);
+  if (!expected_token.empty() && expected_token != token) {
+    throw Error("the instantiation token '" + expected_token + "' is not that of the resources in " + dir + " (" +
+                token + "): modelDescription.xml and resources/ come from different exports");
+  }
   auto robot = std::make_shared<const Robot>(robotFromJson(robot_text, dir + "robot.json"));
   ParameterSet parameters = parseParameterSet(parameter_text, parameter_path, robot, EffectRegistry::builtin());
   ModelAttributes model;
   model.version = version;
   VariableTable table =
-      buildVariableTable(*robot, parameters, model, instantiationToken(robot_text, parameter_text, version));
+      buildVariableTable(*robot, parameters, model, token);
   return FmuResources{std::move(robot), std::move(parameters), std::move(table)};
 }
 

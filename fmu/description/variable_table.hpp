@@ -117,13 +117,15 @@ VariableTable buildVariableTable(const Robot& robot, const ParameterSet& paramet
 
 // An FMU's resources as its binary reads them: <resource_dir>/robot.json and <resource_dir>/parameters.json
 // (each at most 64 MB), and the variable table built from them with the token of their bytes and `version`.
-// Throws jointcomp::Error naming the file at fault or what the FMU cannot represent.
+// Throws jointcomp::Error naming the file at fault or what the FMU cannot represent, and, first of all, when
+// `expected_token` is given and is not the token of the resources' bytes (they are another FMU's).
 struct FmuResources {
   std::shared_ptr<const Robot> robot;
   ParameterSet parameters;
   VariableTable table;
 };
-FmuResources loadFmuResources(const std::string& resource_dir, const std::string& version);
+FmuResources loadFmuResources(const std::string& resource_dir, const std::string& version,
+                              const std::string& expected_token = "");
 
 // The token of an FMU whose resources are these bytes (robot.json, parameters.json) for this version of
 // jointcomp: export-fmu writes it into modelDescription.xml, the binary computes it from its resources and

@@ -197,8 +197,8 @@ protected:
                                                                    << fitted.output;
     expectAWorkingFmu("ur10_" + command,
                       {"--urdf", dataFile("robots/ur10.urdf"), "--params", out + "/parameters.json", "--drives",
-                       testData("fmu/ur10_drives.json")},
-                      6, {"shoulder_pan_joint", "wrist_3_joint"});
+                       testData("params/ur10_drives.json")},
+                      6, {"joint_1", "joint_6"});
   }
   std::string scratch_, campaign_;
 };
