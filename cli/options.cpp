@@ -89,6 +89,10 @@ const char* optionHelp(const std::string& name) {
       {"decimal", "the export's decimal mark: . or , (default: detected)"},
       {"robot", "the robot's name in the campaign's metadata"},
       {"frame", "the export's frame: base or instrument"},
+      {"fmi", "FMI version of the FMU: 2 (default) or 3"},
+      {"drives",
+       "parameter file whose \"plant\" object (drives and controller gains) the FMU takes when --params has none "
+       "(default: the shipped parameter file of the robot's name, if any)"},
   };
   const auto found = help.find(name);
   return found == help.end() ? "" : found->second;
