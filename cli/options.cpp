@@ -17,7 +17,7 @@ const char* optionHelp(const std::string& name) {
       {"tip-link", "last link of the chain (default: the end of the longest moving chain, e.g. tool0)"},
       {"params", "parameter file (joint-error effects, gears, drives)"},
       {"truth", "parameter file of the simulated robot as it really is"},
-      {"out", "output folder (a file for simulate and the importers); checked before any work"},
+      {"out", "output folder (a file for simulate, the importers and export-fmu); checked before any work"},
       {"campaign", "measurement campaign(s) to fit (docs/measurement-campaign.md), comma-separated or repeated"},
       {"holdout", "held-out campaign(s), evaluated with only their instrument frame refitted; repeatable"},
       {"seed", "random seed, 0 to 2^62"},

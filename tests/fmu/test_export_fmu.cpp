@@ -238,6 +238,65 @@ TEST(ExportFmuDrives, DefaultToTheShippedParameterFileOfTheRobot) {
   EXPECT_EQ(packed["effects"], rx170["effects"]);
 }
 
+// The words of a printed command line as a shell splits them (plain words and '...' quoting, which is all
+// the hint uses).
+std::vector<std::string> shellWords(const std::string& line) {
+  std::vector<std::string> words;
+  std::string word;
+  bool quoted = false, any = false;
+  for (const char c : line) {
+    if (c == '\'') {
+      quoted = !quoted;
+      any = true;
+    } else if (c == ' ' && !quoted) {
+      if (any) words.push_back(word);
+      word.clear();
+      any = false;
+    } else {
+      word += c;
+      any = true;
+    }
+  }
+  if (any) words.push_back(word);
+  return words;
+}
+
+// calibrate and discover print the export-fmu command of their result; run as printed (with the drives
+// file the note asks for), it exports. The seven-joint test arm, whose parameter file has no drives.
+class ExportFmuHint : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(ExportFmuHint, RunAsPrintedItExportsTheResult) {
+  const std::string command = GetParam();
+  const std::string folder = scratch("hint_" + command) + "/out dir";  // a space, so the command quotes
+  std::vector<std::string> arguments = {JOINTCOMP_CLI, command,
+                                        "--urdf",      kTestData + "/arm7/arm7.urdf",
+                                        "--params",    kTestData + "/arm7/arm7.json",
+                                        "--campaign",  kTestData + "/arm7/campaign_fit.csv",
+                                        "--out",       folder,
+                                        "--no-plot",   "--quiet"};
+  if (command == "discover") arguments.insert(arguments.end(), {"--max-steps", "1"});
+  const ChildResult fitted = runChild(arguments, 240);
+  ASSERT_EQ(fitted.exit_code, 0) << fitted.why << fitted.output;
+  const std::string marker = "as an FMU: ";
+  const std::size_t at = fitted.output.find(marker);
+  ASSERT_NE(at, std::string::npos) << fitted.output;
+  const std::size_t end = fitted.output.find('\n', at);
+  std::vector<std::string> words = shellWords(fitted.output.substr(at + marker.size(), end - at - marker.size()));
+  ASSERT_GE(words.size(), 2u);
+  ASSERT_EQ(words[0], "jointcomp");
+  ASSERT_EQ(words[1], "export-fmu");
+  EXPECT_NE(fitted.output.find("no drives", end), std::string::npos) << "the note on the missing drives";
+  words[0] = JOINTCOMP_CLI;
+  for (std::string& word : words) {
+    if (word == "DRIVES.json") word = kTestData + "/fmu/arm7_drives.json";
+  }
+  const ChildResult exported = runChild(words, 120);
+  EXPECT_EQ(exported.exit_code, 0) << exported.why << exported.output;
+  EXPECT_TRUE(fs::exists(folder + "/arm7.fmu")) << exported.output;
+}
+
+INSTANTIATE_TEST_SUITE_P(Commands, ExportFmuHint, ::testing::Values("calibrate", "discover"));
+
 // What the FMU cannot represent is refused with the reason, exit status 1 (2 for a command line), no file.
 TEST(ExportFmuRefuses, WhatTheFmuCannotRepresentWithTheReason) {
   const std::string folder = scratch("refused");
