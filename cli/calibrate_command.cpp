@@ -106,6 +106,9 @@ int runCalibrate(int argc, char** argv) {
   std::fputs(summary.c_str(), stdout);
 
   if (!options.has("no-plot")) drawPlot("plot_calibration.py", out + "/residuals.csv", out + "/calibration.png");
+  std::printf("as an FMU: %s\n", exportFmuCommand(urdf_out, params_out, setup.parameters.hasDrives(), robot->name,
+                                                  out + "/" + plainFileName(robot->name) + ".fmu")
+                                     .c_str());
 
   std::printf("done in %.2f s\n", std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count());
   return 0;

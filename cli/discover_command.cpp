@@ -92,6 +92,9 @@ void writeDiscoveryOutputs(const DiscoveryResult& result, const DiscoveryOptions
   writeFileAtomically(out + "/summary.txt", summary);
   std::fputs(summary.c_str(), stdout);
   if (plot) drawPlot("plot_discovery.py", out + "/steps.csv", out + "/discovery.png");
+  std::printf("as an FMU: %s\n", exportFmuCommand(urdf_out, params_out, setup.parameters.hasDrives(), robot->name,
+                                                  out + "/" + plainFileName(robot->name) + ".fmu")
+                                     .c_str());
 }
 
 // Every option of the discovery itself, read whole and range-checked.

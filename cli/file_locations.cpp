@@ -49,4 +49,19 @@ const FileLocations& fileLocations() {
 std::string robotFile(const std::string& name) { return fileLocations().data + "/robots/" + name + ".urdf"; }
 std::string parameterFile(const std::string& name) { return fileLocations().data + "/params/" + name + ".json"; }
 
+FmuParts fmuParts(int fmi_version) {
+  const FileLocations& files = fileLocations();
+  FmuParts parts;
+  parts.platform = fmi_version == 2 ? "linux64" : "x86_64-linux";
+  parts.binary = files.fmus + "/binaries/" + parts.platform + "/jointcomp.so";
+  if (files.installed) {
+    parts.documentation = files.fmus + "/documentation/index.html";
+    parts.license = files.fmus + "/documentation/licenses/LICENSE.txt";
+  } else {
+    parts.documentation = std::string(JOINTCOMP_SOURCE_DIR) + "/fmu/documentation/index.html";
+    parts.license = std::string(JOINTCOMP_SOURCE_DIR) + "/LICENSE";
+  }
+  return parts;
+}
+
 }  // namespace jointcomp::cli

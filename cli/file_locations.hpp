@@ -21,4 +21,16 @@ const FileLocations& fileLocations();
 std::string robotFile(const std::string& name);
 std::string parameterFile(const std::string& name);
 
+// What `export-fmu` packs besides the robot, for FMI 2 or 3: the FMU binary that serves every robot and
+// the documentation. Installed: <prefix>/share/jointcomp/fmu/binaries/<platform>/jointcomp.so and
+// .../fmu/documentation/; in the build tree, the binary CMake builds (<build>/fmu/binaries/<platform>/) and
+// the source tree's documentation and LICENSE. The paths are where they should be; the caller checks.
+struct FmuParts {
+  std::string platform;       // the binaries/ folder: linux64 (FMI 2), x86_64-linux (FMI 3)
+  std::string binary;         // jointcomp.so
+  std::string documentation;  // index.html
+  std::string license;        // the project's LICENSE
+};
+FmuParts fmuParts(int fmi_version);
+
 }  // namespace jointcomp::cli

@@ -50,6 +50,10 @@ void printUsage() {
       "                             a transfer check), and writes the extended parameter file;\n"
       "                             types: offset, compliance, nonlinear_compliance, harmonic, backlash,\n"
       "                             hysteresis, thermal, geometric, payload, periodic, instrument_scale\n"
+      "  export-fmu --urdf FILE --params FILE --out ROBOT.fmu [--fmi 2|3] [--drives PARAMS.json]\n"
+      "                             an FMI 2.0 (default) or 3.0 co-simulation FMU of the robot: its flexible-joint\n"
+      "                             plant with the compensation in front, every effect of the parameter file;\n"
+      "                             --drives: a file whose \"plant\" object gives the drives if --params has none\n"
       "  montecarlo [--urdf FILE] [--params FILE] [--report REPORT.json | --distribution FILE] [--samples N]\n"
       "        [--seed N] [--plant] [--out DIR] [--scheduler tcp://HOST:8786] [--workers N] [--timeout S]\n"
       "                             the spiral's accuracy under parameter uncertainty (percentiles, 95 %% bounds,\n"
@@ -88,6 +92,7 @@ int main(int argc, char** argv) {
     if (command == "simulate") return jointcomp::cli::runSimulate(argc - 1, argv + 1);
     if (command == "identify") return jointcomp::cli::runIdentify(argc - 1, argv + 1);
     if (command == "discover") return jointcomp::cli::runDiscover(argc - 1, argv + 1);
+    if (command == "export-fmu") return jointcomp::cli::runExportFmu(argc - 1, argv + 1);
     if (command == "montecarlo") return jointcomp::cli::runMonteCarlo(argc - 1, argv + 1);
     if (command == "fleet") return jointcomp::cli::runFleet(argc - 1, argv + 1);
     std::fprintf(stderr, "jointcomp: unknown command '%s'\n", command.c_str());

@@ -17,7 +17,7 @@ const char* optionHelp(const std::string& name) {
       {"tip-link", "last link of the chain (default: the end of the longest moving chain, e.g. tool0)"},
       {"params", "parameter file (joint-error effects, gears, drives)"},
       {"truth", "parameter file of the simulated robot as it really is"},
-      {"out", "output folder (a file for simulate and the importers); checked before any work"},
+      {"out", "output folder (a file for simulate, the importers and export-fmu); checked before any work"},
       {"campaign", "measurement campaign(s) to fit (docs/measurement-campaign.md), comma-separated or repeated"},
       {"holdout", "held-out campaign(s), evaluated with only their instrument frame refitted; repeatable"},
       {"seed", "random seed, 0 to 2^62"},
@@ -89,6 +89,10 @@ const char* optionHelp(const std::string& name) {
       {"decimal", "the export's decimal mark: . or , (default: detected)"},
       {"robot", "the robot's name in the campaign's metadata"},
       {"frame", "the export's frame: base or instrument"},
+      {"fmi", "FMI version of the FMU: 2 (default) or 3"},
+      {"drives",
+       "parameter file whose \"plant\" object (drives and controller gains) the FMU takes when --params has none "
+       "(default: the shipped parameter file of the robot's name, if any)"},
   };
   const auto found = help.find(name);
   return found == help.end() ? "" : found->second;
