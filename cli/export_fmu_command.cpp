@@ -85,7 +85,54 @@ nlohmann::ordered_json readJsonObject(const std::string& path, const std::string
 struct FmuParameters {
   std::string text;  // resources/parameters.json
   std::string source;
+  std::string note = "";  // what export-fmu changed, for the user
 };
+
+// The FMU's plant is a flexible-joint model: every joint needs a finite spring. A joint the parameter file
+// calls rigid (a null stiffness, as calibrate writes for a compliance it could not see in the data, or no
+// compliance effect at all) gets --rigid-stiffness, by default ten times the file's stiffest joint (1e6
+// N m/rad when it has none): stiff enough that its deflection is negligible, soft enough for the
+// integrator. The file carried in the FMU says so, and so does the command.
+FmuParameters withRigidJointsStiffened(FmuParameters parameters, const Options& options, const Robot& robot) {
+  nlohmann::ordered_json json = nlohmann::ordered_json::parse(parameters.text);
+  nlohmann::ordered_json* compliance = nullptr;
+  for (auto& effect : json["effects"]) {
+    if (effect.is_object() && effect.value("type", "") == "compliance") compliance = &effect;
+  }
+  double stiffest = 0.0;
+  if (compliance) {
+    for (const auto& k : (*compliance)["stiffness_nm_per_rad"]) {
+      if (k.is_number()) stiffest = std::max(stiffest, k.get<double>());
+    }
+  }
+  const double fill = options.has("rigid-stiffness") ? options.number("rigid-stiffness", 0.0, {1000.0, 1e12})
+                                                     : (stiffest > 0.0 ? 10.0 * stiffest : 1e6);
+  std::vector<std::string> stiffened;
+  if (!compliance) {
+    json["effects"].push_back(
+        {{"type", "compliance"}, {"stiffness_nm_per_rad", std::vector<double>(robot.joints.size(), fill)}});
+    for (const Joint& joint : robot.joints) stiffened.push_back(joint.name);
+  } else {
+    auto& values = (*compliance)["stiffness_nm_per_rad"];
+    for (std::size_t j = 0; j < values.size() && j < robot.joints.size(); ++j) {
+      if (values[j].is_null()) {
+        values[j] = fill;
+        stiffened.push_back(robot.joints[j].name);
+      }
+    }
+  }
+  if (stiffened.empty()) return parameters;
+  std::string joints;
+  for (const std::string& name : stiffened) joints += (joints.empty() ? "" : ", ") + name;
+  char value[64];
+  std::snprintf(value, sizeof value, "%g N m/rad", fill);
+  parameters.note = "rigid in the parameter file, given the stiffness " + std::string(value) +
+                    " in the FMU (its plant needs a spring in every joint; --rigid-stiffness sets it): " + joints;
+  json["notes"] =
+      json.value("notes", std::string()) + (json.contains("notes") ? " " : "") + "export-fmu: " + parameters.note;
+  parameters.text = json.dump(2) + "\n";
+  return parameters;
+}
 
 FmuParameters fmuParameters(const Options& options, const std::shared_ptr<const Robot>& robot) {
   const std::string params = options.get("params", "");
@@ -184,7 +231,8 @@ std::string exportFmuCommand(const std::string& urdf, const std::string& paramet
 }
 
 int runExportFmu(int argc, char** argv) {
-  const Options options(argc, argv, {"urdf", "params", "drives", "base-link", "tip-link", "fmi", "out"}, {},
+  const Options options(argc, argv,
+                        {"urdf", "params", "drives", "base-link", "tip-link", "fmi", "out", "rigid-stiffness"}, {},
                         "export-fmu");
   if (!options.has("urdf") || !options.has("params") || !options.has("out"))
     throw UsageError("export-fmu needs --urdf FILE, --params FILE and --out ROBOT.fmu (and --fmi 2|3, --drives FILE)");
@@ -193,7 +241,7 @@ int runExportFmu(int argc, char** argv) {
 
   std::shared_ptr<const Robot> robot;
   const std::string robot_json = robotJson(options, robot);
-  const FmuParameters parameters = fmuParameters(options, robot);
+  const FmuParameters parameters = withRigidJointsStiffened(fmuParameters(options, robot), options, *robot);
   const ParameterSet set = parseParameterSet(parameters.text, parameters.source, robot, EffectRegistry::builtin());
   FlexibleJointPlant plant(set.model, set.drives, fmuPlantOptions());  // what the FMU builds must build
   const std::string token = fmu::instantiationToken(robot_json, parameters.text, JOINTCOMP_VERSION);
@@ -204,6 +252,7 @@ int runExportFmu(int argc, char** argv) {
 
   std::printf("jointcomp export-fmu: robot %s, %d joints (%s), parameters %s\n", robot->name.c_str(), robot->dof(),
               options.get("urdf", "").c_str(), parameters.source.c_str());
+  if (!parameters.note.empty()) std::printf("note: %s\n", parameters.note.c_str());
   std::printf("wrote %s: FMI %d.0 co-simulation, %d variables, instantiation token %s\n", out.c_str(), version,
               table.size(), token.c_str());
   for (const fmu::ArchiveEntry& entry : entries)

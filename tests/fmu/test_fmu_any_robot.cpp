@@ -197,7 +197,7 @@ protected:
                                                                    << fitted.output;
     expectAWorkingFmu("ur10_" + command,
                       {"--urdf", dataFile("robots/ur10.urdf"), "--params", out + "/parameters.json", "--drives",
-                       testData("params/ur10_drives.json")},
+                       testData("fmu/ur10_compliance_and_drives.json")},
                       6, {"joint_1", "joint_6"});
   }
   std::string scratch_, campaign_;
