@@ -6,6 +6,7 @@
 
 #include "model/common/errors.hpp"
 #include "model/common/random.hpp"
+#include "model/common/sin_cos.hpp"
 #include "model/robot/kinematics.hpp"
 
 namespace jointcomp {
@@ -105,10 +106,18 @@ namespace {
 FixedPointReport settleFrom(const JointErrorModel& model, EffectMask mask, JointErrorWorkspace& ws, JointContext& ctx,
                             const FixedPointOptions& options) {
   updateMotorAngles(model, ctx);
+  // Gravity alone needs no poses (the compensator's shortcut): the joints' sines and cosines are enough.
+  const bool joint_frames = loadsWithoutKinematics(loadsReadKinematics(model, mask), ctx);
+  double cosines[kMaxJoints], sines[kMaxJoints];
   FixedPointReport report;
   JointVector dq;
   for (report.iterations = 1; report.iterations <= options.max_iterations; ++report.iterations) {
-    computeLoadTorque(model, mask, ws, ctx);
+    if (joint_frames) {
+      sinCosBatch(ctx.q.data(), model.robot().dof(), sines, cosines);
+      loadTorqueInJointFrames(model, mask, ws, ctx, cosines, sines);
+    } else {
+      computeLoadTorque(model, mask, ws, ctx);
+    }
     dq.setZero(model.robot().dof());
     addSelectedJointErrors(model, mask, ctx, dq);
     const JointVector next = ctx.command + dq;
