@@ -6,6 +6,9 @@ runs (this process, no Dask) are the reference the cluster's results must equal 
 
 import json
 import math
+import os
+import pickle
+import signal
 
 import numpy as np
 import pytest
@@ -118,8 +121,11 @@ def test_a_summary_is_exact_counts_whatever_the_batching():
     merged = summaries.Summary(8)
     for part in reversed(parts):
         merged.merge(part)
+    travelled = pickle.loads(pickle.dumps(merged))  # as Dask ships it: the counts sparse
+    assert len(pickle.dumps(merged)) < 0.1 * sum(a.nbytes for a in merged.arrays().values())
     for key, value in whole.arrays().items():
         assert np.array_equal(value, merged.arrays()[key]), key
+        assert np.array_equal(value, travelled.arrays()[key]), key
     # A percentile read from the bins is the nearest-rank percentile of the draws within the bins' 0.05 %.
     values = np.array([d[0][2, 3] for d in draws])
     for p in (5, 50, 95):
@@ -192,6 +198,23 @@ def test_a_worker_without_the_library_is_left_out(serial_run, tmp_path, capsys):
                        batch_size=1)
     assert "worker %s left out" % worker in capsys.readouterr().out
     assert _bytes(tmp_path) == _bytes(serial_out)
+
+
+def test_a_worker_killed_mid_run_loses_no_draw(serial_run, tmp_path):
+    _, serial_out = serial_run
+    with jd.cluster(n_workers=2, start_timeout=120) as connected:
+        worker = sorted(connected.scheduler_info()["workers"])[0]
+        pid = connected.run(os.getpid, workers=[worker])[worker]
+        killed = []
+
+        def kill_a_worker_once(done, total, rate):
+            if not killed:
+                killed.append(worker)
+                os.kill(pid, signal.SIGKILL)
+        jd.monte_carlo(RX170_URDF, RX170_PARAMETERS, samples=SAMPLES, seed=7, client=connected, out=tmp_path,
+                       batch_size=1, progress=kill_a_worker_once)
+        assert worker not in connected.scheduler_info()["workers"]  # it died (its nanny started another)
+    assert killed and _bytes(tmp_path) == _bytes(serial_out)
 
 
 def test_a_scheduler_without_workers_is_named_within_seconds():

@@ -162,7 +162,7 @@ class _Run:
         checkpoint = self.out / CHECKPOINT
         if resume and checkpoint.exists():
             with np.load(checkpoint, allow_pickle=False) as stored:
-                if str(stored["fingerprint"]) != self.job["key"]:
+                if str(stored["fingerprint"]) != self.job["run"]:
                     raise DistributedError("--resume: %s is of another run (other inputs, seed or samples)" % checkpoint)
                 self.summary = Summary.from_arrays(stored, json.loads(str(stored["failed"])))
                 csv_bytes = int(stored["csv_bytes"])
@@ -199,7 +199,7 @@ class _Run:
             return
         self.csv.flush()
         os.fsync(self.csv.fileno())
-        arrays = dict(self.summary.arrays(), fingerprint=np.array(self.job["key"]),
+        arrays = dict(self.summary.arrays(), fingerprint=np.array(self.job["run"]),
                       failed=np.array(json.dumps(sorted(self.summary.failed.items()))),
                       csv_bytes=np.int64(self.csv.tell()))
         write_atomically(self.out / CHECKPOINT, lambda stream: np.savez(stream, **arrays))
@@ -278,7 +278,8 @@ def monte_carlo(urdf, parameters, *, samples=100, seed=DEFAULT_SEED, report=None
         out = prepare_output_folder(out, DistributedError, "out")
     job, not_propagated, seconds, band_time = _prepare_job(urdf, parameters, seed, report, distribution,
                                                            use_plant, band_points)
-    job["key"] = _fingerprint(job, samples)
+    job["key"] = _fingerprint(job, None)  # what the workers' prepared job depends on (not the number of draws)
+    job["run"] = _fingerprint(job, samples)  # what a checkpoint must match
     run = _Run(job, samples, out, resume, progress)
     workers = 1 if serial else max(1, n_workers or os.cpu_count() or 1)
     size = batch_size or max(1, min(1000, int(BATCH_SECONDS / max(seconds, 1e-4)),

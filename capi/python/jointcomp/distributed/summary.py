@@ -143,6 +143,25 @@ class Summary:
             out[:, i, :] = values[np.minimum(index, len(values) - 1)]
         return out
 
+    # ---- on the wire: a batch's counts are mostly zeros, so they travel as (shape, where, count) ----
+
+    _COUNTS = ("metrics", "band_norm", "band_z")
+
+    def __getstate__(self):
+        state = dict(self.__dict__)
+        for key in self._COUNTS:
+            where = np.flatnonzero(state[key])
+            state[key] = (state[key].shape, where, state[key].ravel()[where])
+        return state
+
+    def __setstate__(self, state):
+        for key in self._COUNTS:
+            shape, where, counts = state[key]
+            dense = np.zeros(shape, dtype=np.int64)
+            np.put(dense, where, counts)
+            state[key] = dense
+        self.__dict__.update(state)
+
     # ---- the checkpoint's form ----
 
     def arrays(self):
