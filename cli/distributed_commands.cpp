@@ -1,6 +1,6 @@
 // jointcomp montecarlo and jointcomp fleet: thin commands that check their options (CLI11: --help, usage and
 // exit 2 on bad ones) and hand the work to Python, `/usr/bin/python3 -m jointcomp.distributed <command>`
-// (capi/python/jointcomp/distributed.py), which spreads it over a Dask cluster. The child is started from an
+// (capi/python/jointcomp/distributed/), which spreads it over a Dask cluster. The child is started from an
 // argument vector (no shell), with PYTHONPATH and JOINTCOMP_LIBRARY naming this installation's (or build
 // tree's) package and library, and dies with its parent.
 #include <cerrno>
@@ -29,9 +29,10 @@ namespace jointcomp::cli {
 namespace {
 
 constexpr const char* kPython = "/usr/bin/python3";  // Debian's, with python3-distributed and numpy
-// The most draws of one Monte Carlo run: each keeps its error along the path (about 100 kB in Python); the
-// same as jointcomp.distributed.MAX_SAMPLES.
-constexpr long long kMaxSamples = 10000;
+// The most draws of one Monte Carlo run (jointcomp.distributed.MAX_SAMPLES): the draws are reduced on the
+// workers, so memory does not grow with them; the per-draw CSV then holds about 1.5 GB.
+constexpr long long kMaxSamples = 10000000;
+constexpr long long kMaxBatch = 1000000;
 constexpr long long kMaxWorkers = 1024;
 constexpr double kMaxTimeout = 1e7;  // s, about 4 months
 
@@ -78,8 +79,8 @@ std::vector<std::string> childEnvironment(const PythonSide& side) {
 // Runs python3 -m jointcomp.distributed with `arguments`; its exit status, or 1 when it could not run.
 int runPython(const std::vector<std::string>& arguments) {
   const PythonSide side = pythonSide();
-  if (!exists(side.package_root + "/jointcomp/distributed.py")) {
-    std::fprintf(stderr, "jointcomp: the Python package is not at %s (jointcomp/distributed.py)\n",
+  if (!exists(side.package_root + "/jointcomp/distributed/__main__.py")) {
+    std::fprintf(stderr, "jointcomp: the Python package is not at %s (jointcomp/distributed/__main__.py)\n",
                  side.package_root.c_str());
     return 1;
   }
@@ -157,6 +158,7 @@ std::string schedulerAddressProblem(const std::string& text) {
 
 struct ClusterOptions {
   std::string scheduler;
+  std::string dashboard;
   int workers = 0;
   double timeout = 3600.0;
 
@@ -170,10 +172,13 @@ struct ClusterOptions {
         ->check(integerCheck(1, kMaxWorkers));
     app.add_option("--timeout", timeout, "seconds for all tasks, then an error (at most 1e7)")
         ->check(numberCheck({0.0, kMaxTimeout, true}));
+    app.add_option("--dashboard", dashboard,
+                   "serve the local cluster's Dask dashboard at this address, e.g. 127.0.0.1:8787 (default: none)");
   }
   void append(std::vector<std::string>& arguments) const {
     if (!scheduler.empty()) arguments.insert(arguments.end(), {"--scheduler", scheduler});
     if (workers > 0) arguments.insert(arguments.end(), {"--workers", std::to_string(workers)});
+    if (!dashboard.empty()) arguments.insert(arguments.end(), {"--dashboard", dashboard});
     char text[64];
     std::snprintf(text, sizeof text, "%.17g", timeout);
     arguments.insert(arguments.end(), {"--timeout", text});
@@ -192,7 +197,8 @@ int runMonteCarlo(int argc, char** argv) {
   std::string urdf = robotFile("rx170"), params = parameterFile("rx170"), report, distribution, out = "out/montecarlo";
   int samples = 100;
   long long seed = 2019;
-  bool plant = false;
+  bool plant = false, resume = false;
+  long long batch = 0;
   app.add_option("--urdf", urdf, optionHelp("urdf"))->check(CLI::ExistingFile);
   app.add_option("--params", params, "the nominal (identified) parameter file")->check(CLI::ExistingFile);
   auto* report_option = app.add_option("--report", report,
@@ -208,6 +214,12 @@ int runMonteCarlo(int argc, char** argv) {
       ->check(integerCheck(0, kMaxSeed));
   app.add_flag("--plant", plant, "simulate the flexible-joint plant (needs drives) instead of the quasi-static robot");
   app.add_option("--out", out, "output folder");
+  app.add_flag("--resume", resume,
+               "continue the run stopped (Ctrl-C, a lost scheduler, a kill) whose checkpoint is in --out: the same "
+               "results as a run never stopped");
+  app.add_option("--batch", batch,
+                 "draws per task, 1 to " + std::to_string(kMaxBatch) + " (default: about 2 s of work)")
+      ->check(integerCheck(1, kMaxBatch));
   ClusterOptions cluster;
   cluster.add(app);
   parse(app, argc, argv);
@@ -218,6 +230,8 @@ int runMonteCarlo(int argc, char** argv) {
   if (!report.empty()) arguments.insert(arguments.end(), {"--report", report});
   if (!distribution.empty()) arguments.insert(arguments.end(), {"--distribution", distribution});
   if (plant) arguments.push_back("--plant");
+  if (resume) arguments.push_back("--resume");
+  if (batch > 0) arguments.insert(arguments.end(), {"--batch", std::to_string(batch)});
   cluster.append(arguments);
   return runPython(arguments);
 }

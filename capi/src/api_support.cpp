@@ -39,6 +39,7 @@ std::uint64_t magicOf(const void* handle) {
   if (magic == kRobotMagic) found = "a jc_robot";
   if (magic == kPlantMagic) found = "a jc_plant";
   if (magic == kReportMagic) found = "a jc_report";
+  if (magic == kSpiralJobMagic) found = "a jc_spiral_job";
   if (magic == kFreedMagic) found = "a handle that was already freed";
   throw ApiError(JC_ERROR_WRONG_HANDLE, std::string("expected a ") + expected + ", got " + found);
 }
@@ -64,6 +65,11 @@ jc_status fail(const char* function, jc_status status, const char* message) noex
     last_error.clear();
   }
   return status;
+}
+
+void requireHandleKind(const void* handle, std::uint64_t magic, const char* expected, const char* name) {
+  if (!handle) invalid(std::string(name) + " is NULL");
+  if (magicOf(handle) != magic) wrongHandle(handle, expected);
 }
 
 jc_robot& robotHandle(jc_robot* robot, const char* name) {

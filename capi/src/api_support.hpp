@@ -19,10 +19,11 @@
 
 // Every handle starts with a magic number naming its kind; free overwrites it, so that a handle of the
 // wrong kind or an already freed one is recognised as long as its memory has not been reused.
-constexpr std::uint64_t kRobotMagic = 0x6a63'726f'626f'7431ULL;   // "jcrobot1"
-constexpr std::uint64_t kPlantMagic = 0x6a63'706c'616e'7431ULL;   // "jcplant1"
-constexpr std::uint64_t kReportMagic = 0x6a63'7265'706f'7274ULL;  // "jcreport"
-constexpr std::uint64_t kFreedMagic = 0x6a63'6672'6565'6421ULL;   // "jcfreed!"
+constexpr std::uint64_t kRobotMagic = 0x6a63'726f'626f'7431ULL;      // "jcrobot1"
+constexpr std::uint64_t kPlantMagic = 0x6a63'706c'616e'7431ULL;      // "jcplant1"
+constexpr std::uint64_t kReportMagic = 0x6a63'7265'706f'7274ULL;     // "jcreport"
+constexpr std::uint64_t kSpiralJobMagic = 0x6a63'7370'6a6f'6231ULL;  // "jcspjob1"
+constexpr std::uint64_t kFreedMagic = 0x6a63'6672'6565'6421ULL;      // "jcfreed!"
 
 struct jc_robot {
   jc_robot(std::shared_ptr<const jointcomp::Robot> loaded, jointcomp::JointErrorModel nominal,
@@ -120,6 +121,8 @@ jc_status guarded(const char* function, Body&& body) noexcept {
 jc_robot& robotHandle(jc_robot* robot, const char* name = "robot");
 jc_plant& plantHandle(jc_plant* plant);
 jc_report& reportHandle(jc_report* report);
+// The magic number of a live handle at `handle` must be `magic`, else the error names what was found.
+void requireHandleKind(const void* handle, std::uint64_t magic, const char* expected, const char* name);
 
 // Argument checks; `name` is the parameter's name in the header.
 void requirePointer(const void* pointer, const char* name);

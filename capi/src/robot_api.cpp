@@ -59,6 +59,16 @@ jc_status jc_robot_load_json(const char* urdf_path, const char* parameters_json,
   });
 }
 
+jc_status jc_robot_load_text(const char* urdf_text, const char* parameters_json, jc_robot** robot) {
+  return CAPI_ENTRY({
+    requirePointer(robot, "robot");
+    const auto loaded =
+        std::make_shared<const Robot>(loadRobotFromUrdfString(requireText(urdf_text, "urdf_text"), "urdf_text"));
+    *robot = parameters_json ? robotFromParameters(loaded, parameters_json, "parameters_json")
+                             : new jc_robot(loaded, JointErrorModel(loaded, GearTrain::direct(loaded->dof()), {}), {});
+  });
+}
+
 jc_status jc_robot_load_chain(const char* urdf_path, const char* base_link, const char* tip_link,
                               const char* parameter_path, const char* parameters_json, jc_robot** robot) {
   return CAPI_ENTRY({
@@ -144,6 +154,33 @@ jc_status jc_forward_kinematics(jc_robot* robot, const double* q, int32_t q_len,
     const std::lock_guard<std::mutex> lock(handle.mutex);
     forwardKinematics(*handle.robot, handle.workspace.robot, joints);
     copyPose(handle.workspace.robot.tool_pose, pose);
+  });
+}
+
+jc_status jc_forward_kinematics_batch(jc_robot* robot, int32_t count, const double* q, int32_t q_len, double* poses,
+                                      int32_t poses_len) {
+  return CAPI_ENTRY({
+    jc_robot& handle = robotHandle(robot);
+    const int n = handle.robot->dof();
+    if (count < 0) invalid("count is " + std::to_string(count) + ", must be >= 0");
+    requireLength(q_len, std::int64_t{count} * n, "q", "count x the robot's number of joints");
+    if (std::int64_t{count} * 16 > INT32_MAX) {
+      invalid("count is " + std::to_string(count) + ": its 16 x count pose values exceed int32_t lengths");
+    }
+    if (count == 0) {  // an empty batch: nothing to read or write
+      requireLength(poses_len, 0, "poses", "count x 16 (4 x 4 transforms, row-major)");
+      return;
+    }
+    requireOutput(poses, poses_len, std::int64_t{count} * 16, "poses", "count x 16 (4 x 4 transforms, row-major)");
+    requirePointer(q, "q");
+    requireFinite(q, q_len, "q");
+    const std::lock_guard<std::mutex> lock(handle.mutex);
+    JointVector joints(n);
+    for (std::int32_t k = 0; k < count; ++k) {
+      for (int j = 0; j < n; ++j) joints[j] = q[std::int64_t{k} * n + j];
+      forwardKinematics(*handle.robot, handle.workspace.robot, joints);
+      copyPose(handle.workspace.robot.tool_pose, poses + std::int64_t{k} * 16);
+    }
   });
 }
 

@@ -25,13 +25,13 @@ jc_status jc_spiral_experiment_truth(jc_robot* nominal, jc_robot* truth, int32_t
     requireOutput(metrics, metrics_len, 15, "metrics", "3 runs x Ra, Rz, RMS, max, mean");
     SpiralExperimentSpec spec;
     if (use_plant) spec.drives = real.drives;
-    // Planned first so that the size of `errors` is checked before the (longer) simulation.
-    const JointTrajectory planned = planSpiralTrajectory(*model.robot, spec.spiral, spec.feed_rate, spec.seed_posture);
-    const std::int64_t m = static_cast<std::int64_t>(planned.size());
+    // Planned and compensated first so that the size of `errors` is checked before the (longer) simulation.
+    const PreparedSpiral prepared = prepareSpiralRuns(model.model, spec);
+    const std::int64_t m = static_cast<std::int64_t>(prepared.planned.size());
     if (m > INT32_MAX / 16) invalid("the spiral has too many samples for int32_t lengths");
     const bool want_errors = optionalOutput(errors, errors_len, 9 * m, "errors", "3 runs x the spiral's samples x 3");
     // Both models are immutable once loaded: no handle lock is needed to read them.
-    const SpiralExperimentResult result = runSpiralExperiment(model.model, real.model, spec);
+    const SpiralExperimentResult result = followSpiralRuns(prepared, real.model, spec);
     writeSpiralRuns(result, m, metrics, want_errors ? errors : nullptr);
   });
 }

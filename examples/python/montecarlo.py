@@ -41,8 +41,8 @@ def main():
     arguments = parser.parse_args()
     result = distributed.monte_carlo(arguments.urdf, arguments.params, samples=arguments.samples,
                                      seed=arguments.seed, report=arguments.report, use_plant=not arguments.quasi_static,
-                                     n_workers=arguments.workers, timeout=600)
-    result.write(arguments.out)
+                                     n_workers=arguments.workers, timeout=600, out=arguments.out,
+                                     progress=distributed.console_progress())
     print(result.summary())
     print("wrote %s/montecarlo_band.png" % arguments.out)
 

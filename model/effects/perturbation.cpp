@@ -9,6 +9,15 @@ bool endsWith(const std::string& text, const std::string& suffix) {
 }
 }  // namespace
 
+PerturbationLaw perturbationLaw(const std::string& name, const PerturbationSpec& spec) {
+  if (endsWith(name, "stiffness_nm_per_rad") || endsWith(name, "stiffness_n_per_m")) {
+    return {spec.stiffness_relative, true};
+  }
+  if (endsWith(name, "amplitude_rad")) return {spec.amplitude_relative, true};
+  if (endsWith(name, "phase_rad")) return {spec.phase_absolute_rad, false};
+  return {spec.geometry_relative, true};
+}
+
 JointErrorModel perturbedModel(const JointErrorModel& nominal, const PerturbationSpec& spec) {
   JointErrorModel truth = nominal;
   DeterministicRandom random(spec.seed);
@@ -18,14 +27,11 @@ JointErrorModel perturbedModel(const JointErrorModel& nominal, const Perturbatio
     std::vector<double> values = effect.parameters();
     for (std::size_t k = 0; k < values.size(); ++k) {
       const double draw = random.uniform(-1.0, 1.0);
-      if (endsWith(names[k], "stiffness_nm_per_rad") || endsWith(names[k], "stiffness_n_per_m")) {
-        values[k] *= 1.0 + spec.stiffness_relative * draw;
-      } else if (endsWith(names[k], "amplitude_rad")) {
-        values[k] *= 1.0 + spec.amplitude_relative * draw;
-      } else if (endsWith(names[k], "phase_rad")) {
-        values[k] += spec.phase_absolute_rad * draw;
+      const PerturbationLaw law = perturbationLaw(names[k], spec);
+      if (law.relative) {
+        values[k] *= 1.0 + law.scale * draw;
       } else {
-        values[k] *= 1.0 + spec.geometry_relative * draw;
+        values[k] += law.scale * draw;
       }
     }
     effect.setParameters(values);

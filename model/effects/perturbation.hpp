@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <string>
 
 #include "model/effects/joint_error_model.hpp"
 
@@ -16,7 +17,15 @@ struct PerturbationSpec {
   std::uint64_t seed = 2012;
 };
 
-// Parameters are classed by the unit in their name (stiffness, amplitude, phase, other).
+// A parameter's law under the perturbation: value * (1 + scale * U(-1, 1)) when relative, else
+// value + scale * U(-1, 1). Parameters are classed by the unit in their name (stiffness, amplitude,
+// phase, other): the one rule, which jc_spiral_job_parameters hands to Monte Carlo as the main job's law.
+struct PerturbationLaw {
+  double scale = 0.0;
+  bool relative = true;
+};
+PerturbationLaw perturbationLaw(const std::string& parameter_name, const PerturbationSpec& spec);
+
 JointErrorModel perturbedModel(const JointErrorModel& nominal, const PerturbationSpec& spec);
 
 }  // namespace jointcomp

@@ -1,9 +1,12 @@
 #include "model/experiment/spiral_experiment.hpp"
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 
 #include "model/common/errors.hpp"
 #include "model/common/random.hpp"
+#include "model/common/sin_cos.hpp"
 #include "model/robot/kinematics.hpp"
 
 namespace jointcomp {
@@ -42,117 +45,191 @@ SpiralExperimentResult runSpiralExperiment(const JointErrorModel& nominal, const
   return runSpiralExperiment(nominal, perturbedModel(nominal, spec.truth), spec, progress);
 }
 
-SpiralExperimentResult runSpiralExperiment(const JointErrorModel& nominal, const JointErrorModel& truth,
-                                           const SpiralExperimentSpec& spec,
-                                           const std::function<void(const std::string&)>& progress) {
+PreparedSpiral prepareSpiralRuns(const JointErrorModel& nominal, const SpiralExperimentSpec& spec,
+                                 const std::function<void(const std::string&)>& progress) {
   const Robot& robot = nominal.robot();
-  const Robot& true_robot = truth.robot();
-  if (true_robot.dof() != robot.dof()) {
-    throw InvalidArgument("the truth robot '" + true_robot.name + "' has " + std::to_string(true_robot.dof()) +
-                          " joints, the nominal robot '" + robot.name + "' " + std::to_string(robot.dof()));
-  }
   for (int joint : spec.compensated_joints) {
     if (joint < 0 || joint >= robot.dof()) {
       throw InvalidArgument("compensated joint " + std::to_string(joint + 1) + " does not exist: robot '" + robot.name +
                             "' has joints 1 to " + std::to_string(robot.dof()));
     }
   }
-  SpiralExperimentResult result;
-  tell(progress, "planning the spiral (feed rate, inverse kinematics)");
-  result.planned = planSpiralTrajectory(robot, spec.spiral, spec.feed_rate, spec.seed_posture);
-
-  const EffectMask truth_mask = truth.allEffects();
-  const EffectMask run_masks[3] = {0, nominal.loadsAnd({"compliance"}),
-                                   nominal.loadsAnd({"compliance", "transmission_error"})};
-  const char* run_names[4] = {"without correction", "stiffness correction", "stiffness and kinematic correction",
-                              "stiffness, kinematic and dynamic correction"};
-
-  JointErrorWorkspace ws(robot);
-  JointErrorWorkspace true_ws(true_robot);
-  result.dynamic = !spec.drives.empty();
-  std::unique_ptr<FlexibleJointPlant> plant;
-  if (result.dynamic) plant = std::make_unique<FlexibleJointPlant>(truth, spec.drives, spec.plant);
-  if (spec.dynamic_correction && !result.dynamic) {
+  if (spec.dynamic_correction && spec.drives.empty()) {
     throw InvalidArgument(
         "the dynamic correction needs the plant (drives in the parameter file), not the "
         "quasi-static robot");
   }
+  PreparedSpiral prepared;
+  tell(progress, "planning the spiral (feed rate, inverse kinematics)");
+  prepared.planned = planSpiralTrajectory(robot, spec.spiral, spec.feed_rate, spec.seed_posture);
+  const EffectMask run_masks[3] = {0, nominal.loadsAnd({"compliance"}),
+                                   nominal.loadsAnd({"compliance", "transmission_error"})};
+  const char* run_names[4] = {"without correction", "stiffness correction", "stiffness and kinematic correction",
+                              "stiffness, kinematic and dynamic correction"};
   const int run_count = spec.dynamic_correction ? 4 : 3;
-  result.runs.resize(run_count);
+  prepared.runs.resize(run_count);
+  prepared.reference_velocity.assign(run_count, prepared.planned.qd);
   for (int r = 0; r < run_count; ++r) {
-    SpiralRun& run = result.runs[r];
+    SpiralRun& run = prepared.runs[r];
     run.name = run_names[r];
-    tell(progress, "run " + std::to_string(r + 1) + "/" + std::to_string(run_count) + ": " + run.name);
+    tell(progress, "run " + std::to_string(r + 1) + "/" + std::to_string(run_count) + ": compensating " + run.name);
     // The controller interpolates with the planned velocities, or with the dynamic references' own.
-    std::vector<JointVector> reference_velocity = result.planned.qd;
+    std::vector<JointVector>& reference_velocity = prepared.reference_velocity[r];
     const auto computing = std::chrono::steady_clock::now();
     if (r < 3) {
-      run.compensation = compensateTrajectory(nominal, run_masks[r], result.planned.q, result.planned.qd, run.reference,
-                                              spec.compensation);
+      run.compensation = compensateTrajectory(nominal, run_masks[r], prepared.planned.q, prepared.planned.qd,
+                                              run.reference, spec.compensation);
     } else {
-      run.dynamic_compensation =
-          compensateDynamically(nominal, spec.drives, result.planned, run.reference, reference_velocity, spec.dynamic);
+      run.dynamic_compensation = compensateDynamically(nominal, spec.drives, prepared.planned, run.reference,
+                                                       reference_velocity, spec.dynamic);
     }
     run.compensation_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - computing).count();
-    if (!spec.compensated_joints.empty()) {
-      for (std::size_t k = 0; k < run.reference.size(); ++k) {
-        for (int j = 0; j < robot.dof(); ++j) {
-          bool selected = false;
-          for (int c : spec.compensated_joints) selected = selected || c == j;
-          if (!selected) {
-            run.reference[k][j] = result.planned.q[k][j];
-            reference_velocity[k][j] = result.planned.qd[k][j];
-          }
+    if (spec.compensated_joints.empty()) continue;
+    for (std::size_t k = 0; k < run.reference.size(); ++k) {
+      for (int j = 0; j < robot.dof(); ++j) {
+        bool selected = false;
+        for (int c : spec.compensated_joints) selected = selected || c == j;
+        if (!selected) {
+          run.reference[k][j] = prepared.planned.q[k][j];
+          reference_velocity[k][j] = prepared.planned.qd[k][j];
         }
       }
     }
-    // Each run has its own tracker noise; the dynamic correction's is the static one's it is compared with.
-    DeterministicRandom noise(spec.noise_seed * 1000003ULL + static_cast<std::uint64_t>(std::min(r, 2)));
-    const std::size_t count = run.reference.size();
-    run.actual.resize(count);
-    run.measured.resize(count);
-    run.error.resize(count);
-    const auto started = std::chrono::steady_clock::now();
-    if (result.dynamic) {
-      plant->reset(run.reference[0], result.planned.time[0]);
-      for (std::size_t k = 0; k < count; ++k) {
-        plant->setReference(run.reference[k], reference_velocity[k]);
-        run.actual[k] = plant->linkPositions();
-        if (k + 1 < count) plant->advance(result.planned.time[k + 1]);
-      }
+  }
+  return prepared;
+}
+
+namespace {
+
+// settleStatically's fixed point q = command + dq(q, command), iterated from ctx.q as given (a guess near the
+// solution) instead of from the command: along a path, the same point to the tolerance in fewer iterations.
+FixedPointReport settleFrom(const JointErrorModel& model, EffectMask mask, JointErrorWorkspace& ws, JointContext& ctx,
+                            const FixedPointOptions& options) {
+  updateMotorAngles(model, ctx);
+  // Gravity alone needs no poses (the compensator's shortcut): the joints' sines and cosines are enough.
+  const bool joint_frames = loadsWithoutKinematics(loadsReadKinematics(model, mask), ctx);
+  double cosines[kMaxJoints], sines[kMaxJoints];
+  FixedPointReport report;
+  JointVector dq;
+  for (report.iterations = 1; report.iterations <= options.max_iterations; ++report.iterations) {
+    if (joint_frames) {
+      sinCosBatch(ctx.q.data(), model.robot().dof(), sines, cosines);
+      loadTorqueInJointFrames(model, mask, ws, ctx, cosines, sines);
     } else {
-      JointContext ctx(robot.dof());
-      for (std::size_t k = 0; k < count; ++k) {
-        ctx.command = run.reference[k];
-        ctx.velocity = result.planned.qd[k];
-        ctx.time = result.planned.time[k];
-        const FixedPointReport settled = settleStatically(truth, truth_mask, true_ws, ctx, spec.compensation);
-        if (!settled.converged) {
-          throw SolverError("the simulated robot did not settle at sample " + std::to_string(k));
-        }
-        run.actual[k] = ctx.q;
-      }
+      computeLoadTorque(model, mask, ws, ctx);
     }
-    result.simulation_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+    dq.setZero(model.robot().dof());
+    addSelectedJointErrors(model, mask, ctx, dq);
+    const JointVector next = ctx.command + dq;
+    report.residual = (next - ctx.q).cwiseAbs().maxCoeff();
+    ctx.q = next;
+    if (!std::isfinite(report.residual)) break;
+    if (report.residual <= options.tolerance) {
+      report.converged = true;
+      return report;
+    }
+  }
+  report.iterations = std::min(report.iterations, options.max_iterations);
+  return report;
+}
+
+// Where the links of `truth` go under run `r`'s references: the plant's integration or the quasi-static
+// settling, into run.actual.
+void simulateRun(const PreparedSpiral& prepared, int r, const JointErrorModel& truth, JointErrorWorkspace& true_ws,
+                 FlexibleJointPlant* plant, const SpiralExperimentSpec& spec, SpiralRun& run) {
+  const JointTrajectory& planned = prepared.planned;
+  const std::vector<JointVector>& reference_velocity = prepared.reference_velocity[r];
+  const std::size_t count = run.reference.size();
+  run.actual.resize(count);
+  if (plant) {
+    plant->reset(run.reference[0], planned.time[0]);
     for (std::size_t k = 0; k < count; ++k) {
-      // The tool goes where the true robot's geometry puts it (the nominal one when the truth shares it).
-      forwardKinematics(true_robot, true_ws.robot, run.actual[k]);
-      const Eigen::Vector3d position = true_ws.robot.tool_pose.translation();
-      const double sigma = spec.noise.sigma(position);
-      // One draw per statement: the order of a constructor's arguments is unspecified (GCC evaluates them
-      // last to first, clang first to last), so three draws in one call gave each compiler other noise.
-      // z, y, x is the order of the GCC build the stored results come from.
-      const double noise_z = noise.normal();
-      const double noise_y = noise.normal();
-      const double noise_x = noise.normal();
-      const Eigen::Vector3d measured = position + sigma * Eigen::Vector3d(noise_x, noise_y, noise_z);
-      run.measured[k] = measured;
-      run.error[k] = measured - result.planned.tool_position[k];
+      plant->setReference(run.reference[k], reference_velocity[k]);
+      run.actual[k] = plant->linkPositions();
+      if (k + 1 < count) plant->advance(planned.time[k + 1]);
     }
-    run.metrics = accuracyMetrics(run.error);
+    return;
+  }
+  const EffectMask truth_mask = truth.allEffects();
+  JointContext ctx(truth.robot().dof());
+  for (std::size_t k = 0; k < count; ++k) {
+    // Started from the previous sample's links moved by the change of command: along the smooth path a few
+    // iterations reach the tolerance, where many are needed from the command.
+    ctx.q = k == 0 ? run.reference[0] : JointVector(run.actual[k - 1] + (run.reference[k] - run.reference[k - 1]));
+    ctx.command = run.reference[k];
+    ctx.velocity = planned.qd[k];
+    ctx.time = planned.time[k];
+    const FixedPointReport settled = settleFrom(truth, truth_mask, true_ws, ctx, spec.compensation);
+    if (!settled.converged) throw SolverError("the simulated robot did not settle at sample " + std::to_string(k));
+    run.actual[k] = ctx.q;
+  }
+}
+
+// The tracker's measurement of run `r` (its own noise stream) and the error against the plan.
+void measureRun(const JointTrajectory& planned, int r, const Robot& true_robot, JointErrorWorkspace& true_ws,
+                const SpiralExperimentSpec& spec, SpiralRun& run) {
+  // Each run has its own tracker noise; the dynamic correction's is the static one's it is compared with.
+  DeterministicRandom noise(spec.noise_seed * 1000003ULL + static_cast<std::uint64_t>(std::min(r, 2)));
+  const std::size_t count = run.reference.size();
+  run.measured.resize(count);
+  run.error.resize(count);
+  for (std::size_t k = 0; k < count; ++k) {
+    // The tool goes where the true robot's geometry puts it (the nominal one when the truth shares it).
+    forwardKinematics(true_robot, true_ws.robot, run.actual[k]);
+    const Eigen::Vector3d position = true_ws.robot.tool_pose.translation();
+    const double sigma = spec.noise.sigma(position);
+    // One draw per statement: the order of a constructor's arguments is unspecified (GCC evaluates them
+    // last to first, clang first to last), so three draws in one call gave each compiler other noise.
+    // z, y, x is the order of the GCC build the stored results come from.
+    const double noise_z = noise.normal();
+    const double noise_y = noise.normal();
+    const double noise_x = noise.normal();
+    const Eigen::Vector3d measured = position + sigma * Eigen::Vector3d(noise_x, noise_y, noise_z);
+    run.measured[k] = measured;
+    run.error[k] = measured - planned.tool_position[k];
+  }
+  run.metrics = accuracyMetrics(run.error);
+}
+
+}  // namespace
+
+SpiralExperimentResult followSpiralRuns(const PreparedSpiral& prepared, const JointErrorModel& truth,
+                                        const SpiralExperimentSpec& spec,
+                                        const std::function<void(const std::string&)>& progress) {
+  const Robot& true_robot = truth.robot();
+  const int dof = prepared.planned.q.empty() ? true_robot.dof() : static_cast<int>(prepared.planned.q[0].size());
+  if (true_robot.dof() != dof) {
+    throw InvalidArgument("the truth robot '" + true_robot.name + "' has " + std::to_string(true_robot.dof()) +
+                          " joints, the planned spiral " + std::to_string(dof));
+  }
+  SpiralExperimentResult result;
+  result.planned = prepared.planned;
+  result.dynamic = !spec.drives.empty();
+  result.runs = prepared.runs;
+  JointErrorWorkspace true_ws(true_robot);
+  std::unique_ptr<FlexibleJointPlant> plant;
+  if (result.dynamic) plant = std::make_unique<FlexibleJointPlant>(truth, spec.drives, spec.plant);
+  for (int r = 0; r < static_cast<int>(result.runs.size()); ++r) {
+    SpiralRun& run = result.runs[r];
+    tell(progress, "run " + std::to_string(r + 1) + "/" + std::to_string(result.runs.size()) + ": " + run.name);
+    const auto started = std::chrono::steady_clock::now();
+    simulateRun(prepared, r, truth, true_ws, plant.get(), spec, run);
+    result.simulation_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+    measureRun(result.planned, r, true_robot, true_ws, spec, run);
   }
   if (plant) result.plant_statistics = plant->statistics();
   return result;
+}
+
+SpiralExperimentResult runSpiralExperiment(const JointErrorModel& nominal, const JointErrorModel& truth,
+                                           const SpiralExperimentSpec& spec,
+                                           const std::function<void(const std::string&)>& progress) {
+  if (truth.robot().dof() != nominal.robot().dof()) {
+    throw InvalidArgument("the truth robot '" + truth.robot().name + "' has " + std::to_string(truth.robot().dof()) +
+                          " joints, the nominal robot '" + nominal.robot().name + "' " +
+                          std::to_string(nominal.robot().dof()));
+  }
+  return followSpiralRuns(prepareSpiralRuns(nominal, spec, progress), truth, spec, progress);
 }
 
 }  // namespace jointcomp

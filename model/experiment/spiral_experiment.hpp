@@ -80,6 +80,25 @@ struct SpiralExperimentResult {
 JointTrajectory planSpiralTrajectory(const Robot& robot, const SpiralSpec& spiral, const FeedRateSpec& feed_rate,
                                      JointVector seed_posture = {});
 
+// What every follower of one nominal model shares: the planned spiral and each run's references (the
+// compensation uses the nominal model only), computed once for many truths (Monte Carlo draws).
+struct PreparedSpiral {
+  JointTrajectory planned;
+  std::vector<SpiralRun> runs;                               // name, reference, compensation and its time
+  std::vector<std::vector<JointVector>> reference_velocity;  // what the controller interpolates with, per run
+};
+
+// Plans the spiral with nominal.robot() and compensates each run with `nominal` (spec.drives for the
+// fourth run's dynamic correction). Throws InvalidArgument for a compensated joint that does not exist.
+PreparedSpiral prepareSpiralRuns(const JointErrorModel& nominal, const SpiralExperimentSpec& spec,
+                                 const std::function<void(const std::string&)>& progress = {});
+
+// The prepared runs followed by `truth` (same number of joints as the prepared plan), measured with the
+// tracker noise of spec.noise_seed; runSpiralExperiment is prepareSpiralRuns then this.
+SpiralExperimentResult followSpiralRuns(const PreparedSpiral& prepared, const JointErrorModel& truth,
+                                        const SpiralExperimentSpec& spec,
+                                        const std::function<void(const std::string&)>& progress = {});
+
 // `progress` (may be empty) is told what is being done, for tools that show it.
 SpiralExperimentResult runSpiralExperiment(const JointErrorModel& nominal, const SpiralExperimentSpec& spec,
                                            const std::function<void(const std::string&)>& progress = {});

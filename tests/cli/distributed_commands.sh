@@ -26,8 +26,8 @@ expect_usage() {
   grep -qF -- "$phrase" log.txt || { cat log.txt; fail "jointcomp $*: no '$phrase' in the message"; }
   grep -qF -- "Usage: jointcomp $1" log.txt || { cat log.txt; fail "jointcomp $*: no usage"; }
 }
-expect_usage "--samples: '0' is out of range: it must be an integer from 1 to 10000" montecarlo --samples 0
-expect_usage "--samples: '1073741824' is out of range: it must be an integer from 1 to 10000" montecarlo --samples 1073741824
+expect_usage "--samples: '0' is out of range: it must be an integer from 1 to 10000000" montecarlo --samples 0
+expect_usage "--samples: '1073741824' is out of range: it must be an integer from 1 to 10000000" montecarlo --samples 1073741824
 expect_usage "--samples: '1e3' is not an integer" montecarlo --samples 1e3
 expect_usage "--seed: '-1' is out of range" montecarlo --seed -1
 expect_usage "--seed: '5x' is not a number" montecarlo --seed 5x
@@ -70,7 +70,8 @@ status=0
 
 # End to end on one local worker: a small Monte Carlo and a fleet of two robots.
 "$jointcomp" montecarlo --samples 2 --workers 1 --out mc >log.txt 2>&1 || { cat log.txt; fail "montecarlo failed"; }
-grep -q "With 95 % confidence" log.txt || { cat log.txt; fail "montecarlo printed no bound"; }
+grep -q "In 95 % of the draws the compensated path stays within" log.txt || { cat log.txt; fail "montecarlo printed no bound"; }
+grep -q "too few for a 95 % confidence interval" log.txt || { cat log.txt; fail "2 draws gave no warning"; }
 [ -s mc/montecarlo.json ] && [ -s mc/montecarlo.csv ] && [ -s mc/montecarlo_band.png ] || fail "montecarlo outputs missing"
 for k in 1 2; do
   "$jointcomp" simulate --protocol random --truth "$model/params/rx170.json" --perturb "$k" --seed "$k" --count 30 \
@@ -87,4 +88,24 @@ grep -q "Outliers: after-RMS above median" log.txt || { cat log.txt; fail "fleet
 for f in robot1/report.json robot2/calibrated.urdf fleet_summary.csv fleet_summary.json fleet.png; do
   [ -s "fleet/$f" ] || fail "fleet/$f missing"
 done
+# A client killed (SIGKILL) part-way resumes with --resume to the same bytes as a run never stopped.
+"$jointcomp" montecarlo --samples 60 --batch 2 --workers 1 --out whole >log.txt 2>&1 || { cat log.txt; fail "whole run"; }
+"$jointcomp" montecarlo --samples 60 --batch 2 --workers 1 --out killed >killed.txt 2>&1 &
+runner=$!
+for _ in $(seq 600); do [ -e killed/montecarlo.checkpoint.npz ] && break; sleep 0.1; done
+kill -KILL "$runner" 2>/dev/null || true
+wait "$runner" 2>/dev/null || true
+[ -e killed/montecarlo.checkpoint.npz ] || { cat killed.txt; fail "no checkpoint before the kill"; }
+[ ! -e killed/montecarlo.json ] || fail "the run finished before it was killed: nothing to resume"
+status=0
+"$jointcomp" montecarlo --samples 60 --batch 2 --workers 1 --out killed >log.txt 2>&1 || status=$?
+[ "$status" -eq 1 ] && grep -q "add --resume to continue it" log.txt || { cat log.txt; fail "a checkpoint was overwritten"; }
+"$jointcomp" montecarlo --samples 60 --batch 5 --workers 1 --out killed --resume >log.txt 2>&1 ||
+  { cat log.txt; fail "resume failed"; }
+for f in montecarlo.json montecarlo.csv montecarlo_band.png; do
+  cmp -s "whole/$f" "killed/$f" || fail "the resumed $f differs from the uninterrupted one"
+done
+[ ! -e killed/montecarlo.checkpoint.npz ] || fail "the checkpoint was left behind"
+[ ! -e dask-worker-space ] || fail "dask-worker-space left in the working folder"
+
 echo "distributed_commands: all checks passed"

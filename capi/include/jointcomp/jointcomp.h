@@ -324,6 +324,45 @@ JOINTCOMP_API jc_status jc_spiral_experiment_truth(jc_robot* nominal, jc_robot* 
                                                    double* metrics, int32_t metrics_len, double* errors,
                                                    int32_t errors_len);
 
+/* ---- Monte Carlo of the spiral: one job, many truths (issue 44) -----------------------------------------
+   A jc_spiral_job holds what every draw of a Monte Carlo shares: the spiral planned with `nominal` and the
+   three runs' references compensated with its parameters, computed once by jc_spiral_job_create (use_plant
+   as for jc_spiral_experiment_truth, the drives being nominal's). Each jc_spiral_job_run then simulates one
+   truth only: the nominal robot with its parameters replaced by `values`. The job keeps its own copy of the
+   model (the robot handle may be freed after creating it) and never changes, so runs on one job proceed in
+   parallel from several threads. jc_spiral_job_run(job, nominal values, 7) equals
+   jc_spiral_experiment_truth(nominal, nominal, ...) with that tracker seed. */
+typedef struct jc_spiral_job jc_spiral_job;
+JOINTCOMP_API jc_status jc_spiral_job_create(jc_robot* nominal, int32_t use_plant, jc_spiral_job** job);
+JOINTCOMP_API jc_status jc_spiral_job_free(jc_spiral_job* job);
+/* *samples receives m, the planned spiral's number of samples; *parameters p, the truth's parameters. */
+JOINTCOMP_API jc_status jc_spiral_job_sizes(jc_spiral_job* job, int32_t* samples, int32_t* parameters);
+/* The planned spiral's time (m, s). */
+JOINTCOMP_API jc_status jc_spiral_job_time(jc_spiral_job* job, double* time, int32_t time_len);
+/* The truth's parameters as a JSON array, in the order jc_spiral_job_run takes them, each {"name", "value"
+   (the nominal's), "law"}: first every effect's (its names, unit in the name: "joint_2.stiffness_nm_per_rad"),
+   then the geometry's deviations from the URDF (value 0), per joint "J.offset_rad" (unless an effect has
+   that name already), "J.placement_{dx,dy,dz}_m" and "J.placement_{rx,ry,rz}_rad", the joint's origin
+   becoming origin * Trans(d) * Exp(r) * Rot(axis, offset). "law" is how jc_spiral_experiment perturbs the
+   parameter, {"scale": s, "relative": true} for value * (1 + s U(-1, 1)), false for value + s U(-1, 1); null
+   for the geometry, which it does not perturb. buffer as for jc_robot_name. */
+JOINTCOMP_API jc_status jc_spiral_job_parameters(jc_spiral_job* job, char* buffer, int32_t capacity, int32_t* length);
+/* One truth follows the prepared runs: values (p), the truth's parameters; noise_seed (>= 0), the simulated
+   tracker's; metrics (3 x 5) and errors (optional, 3 x m x 3) as for jc_spiral_experiment. A value out of
+   its parameter's range (a stiffness <= 0) is JC_ERROR_INVALID_ARGUMENT naming the parameter. */
+JOINTCOMP_API jc_status jc_spiral_job_run(jc_spiral_job* job, const double* values, int32_t values_len,
+                                          int64_t noise_seed, double* metrics, int32_t metrics_len, double* errors,
+                                          int32_t errors_len);
+
+/* Poses of the tool (count x 16, as jc_forward_kinematics) at count joint vectors q (count x n): one call for a
+   batch. */
+JOINTCOMP_API jc_status jc_forward_kinematics_batch(jc_robot* robot, int32_t count, const double* q, int32_t q_len,
+                                                    double* poses, int32_t poses_len);
+
+/* Loads the robot from URDF text (no file needed: what a task sent to another machine carries) with its
+   parameters as JSON text (NULL: kinematics and dynamics only); the chain as for jc_robot_load. */
+JOINTCOMP_API jc_status jc_robot_load_text(const char* urdf_text, const char* parameters_json, jc_robot** robot);
+
 /* ---- Dynamic compensation of a trajectory with time (issue 18) ------------------------------------------
    The references that make the modelled robot (flexible joints, the drives and controller of the
    parameters' "plant" object, every effect, the handle's payload and tool wrench) put its links on a

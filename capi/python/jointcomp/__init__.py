@@ -25,6 +25,7 @@ from .metrics import Metrics, accuracy_metrics, average_absolute_deviation, peak
 from .plant import Plant, PlantStatistics
 from .robot import (RUN_NAMES, DynamicCompensation, Robot, SpiralExperiment, SpiralPlan,
                     TrajectoryCompensation)
+from .spiral_job import SpiralJob
 
 # jointcomp.distributed (Dask) is imported when first used: `python3 -m jointcomp.distributed` runs it as
 # __main__, which an import here would have loaded a second time.
@@ -85,7 +86,7 @@ def last_error():
 __all__ = [
     "ABI_VERSION", "__version__", "DynamicCompensation", "DistributedError", "FleetResult", "MonteCarloResult", "fleet", "monte_carlo", "FileError", "InternalError", "InvalidArgumentError", "JointcompError", "Metrics",
     "OutOfMemoryError", "Plant", "PlantLimitError", "PlantStatistics", "RUN_NAMES", "Report", "Robot", "SolverError", "SpiralExperiment",
-    "SpiralPlan", "TrajectoryCompensation", "UnreachableError", "WrongHandleError", "abi_version",
+    "SpiralJob", "SpiralPlan", "TrajectoryCompensation", "UnreachableError", "WrongHandleError", "abi_version",
     "accuracy_metrics", "average_absolute_deviation", "calibrate", "discover", "identify_stiffness",
     "identify_transmission_error", "last_error", "library_path", "peak_to_peak_deviation",
     "set_progress", "simulate_campaign", "status_name", "version",

@@ -117,6 +117,14 @@ PROTOTYPES = {
     "jc_average_absolute_deviation": (_i32, [_double_p, _i32, _double_p]),
     "jc_peak_to_peak_deviation": (_i32, [_double_p, _i32, _double_p]),
     "jc_spiral_experiment_truth": (_i32, [_handle, _handle, _i32, _double_p, _i32, _double_p, _i32]),
+    "jc_spiral_job_create": (_i32, [_handle, _i32, _handle_p]),
+    "jc_spiral_job_free": (_i32, [_handle]),
+    "jc_spiral_job_sizes": (_i32, [_handle, _int32_p, _int32_p]),
+    "jc_spiral_job_time": (_i32, [_handle, _double_p, _i32]),
+    "jc_spiral_job_parameters": (_i32, [_handle, ctypes.c_char_p, _i32, _int32_p]),
+    "jc_spiral_job_run": (_i32, [_handle, _double_p, _i32, ctypes.c_int64, _double_p, _i32, _double_p, _i32]),
+    "jc_forward_kinematics_batch": (_i32, [_handle, _i32, _double_p, _i32, _double_p, _i32]),
+    "jc_robot_load_text": (_i32, [_text, _text, _handle_p]),
 }
 
 

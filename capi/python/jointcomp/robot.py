@@ -29,6 +29,9 @@ TrajectoryCompensation.__doc__ = """Compensated joint references (m, n) in rad, 
 iteration count, and the largest |planned - reference| in rad."""
 
 
+_FK_CHUNK = 1 << 20  # rows per jc_forward_kinematics_batch call: 128 MB of poses, far inside int32 lengths
+
+
 def _optional_array(values):
     return None if values is None else _array(values)
 
@@ -106,6 +109,16 @@ class Robot(OwnedHandle):
     def from_json(cls, urdf_path, parameters_json):
         """The robot with its parameters given as JSON text."""
         return cls(urdf_path, parameters_json=parameters_json)
+
+    @classmethod
+    def from_text(cls, urdf_text, parameters_json=None):
+        """The robot from URDF text and its parameters as JSON text (None: kinematics and dynamics only):
+        no file needed, as on a worker of another machine."""
+        handle = ctypes.c_void_p()
+        _native.check(_native.lib.jc_robot_load_text(_native.text(urdf_text, "urdf_text"),
+                                                     _native.text(parameters_json, "parameters_json"),
+                                                     ctypes.byref(handle)))
+        return cls._adopt(handle)
 
     @classmethod
     def _adopt(cls, handle):
@@ -194,13 +207,19 @@ class Robot(OwnedHandle):
 
     def forward_kinematics(self, q):
         """Tool pose (4 x 4 homogeneous transform, base frame) at joint positions q (n), or the poses
-        (m, 4, 4) of a batch q (m, n)."""
-        def one(row):
+        (m, 4, 4) of a batch q (m, n): one library call per chunk of rows, never a list per row."""
+        rows, single = _rows(q, self._dof, "q")
+        if single:
             pose = np.empty((4, 4))
-            _native.check(_native.lib.jc_forward_kinematics(self.handle, _native.pointer(row), row.size,
+            _native.check(_native.lib.jc_forward_kinematics(self.handle, _native.pointer(rows[0]), self._dof,
                                                             _native.pointer(pose), pose.size))
             return pose
-        return _batch(q, self._dof, "q", one)
+        poses = np.empty((rows.shape[0], 4, 4))
+        for start in range(0, rows.shape[0], _FK_CHUNK):
+            chunk, out = rows[start:start + _FK_CHUNK], poses[start:start + _FK_CHUNK]
+            _native.check(_native.lib.jc_forward_kinematics_batch(
+                self.handle, chunk.shape[0], _native.pointer(chunk), chunk.size, _native.pointer(out), out.size))
+        return poses
 
     def inverse_kinematics(self, pose, seed):
         """(q, singular): the joint positions reaching ``pose`` (4 x 4) closest to ``seed`` (n), and whether

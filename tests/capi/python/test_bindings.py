@@ -21,6 +21,9 @@ C_TO_CTYPES = {
     "double*": ctypes.POINTER(ctypes.c_double),
     "int32_t*": ctypes.POINTER(ctypes.c_int32),
     "int64_t*": ctypes.POINTER(ctypes.c_int64),
+    "int64_t": ctypes.c_int64,
+    "jc_spiral_job*": ctypes.c_void_p,
+    "jc_spiral_job**": ctypes.POINTER(ctypes.c_void_p),
     "jc_robot*": ctypes.c_void_p,
     "jc_plant*": ctypes.c_void_p,
     "jc_robot**": ctypes.POINTER(ctypes.c_void_p),
@@ -45,10 +48,10 @@ def test_prototypes_match_the_header():
 def test_every_function_is_used_by_the_package_and_the_c_test():
     package = pathlib.Path(jointcomp.__file__).parent
     sources = "".join(path.read_text() for path in package.glob("*.py") if path.name != "_native.py")
-    c_test = (CHECKOUT / "tests" / "capi" / "test_capi.c").read_text()
+    c_test = "".join(path.read_text() for path in (CHECKOUT / "tests" / "capi").glob("test_capi*.c"))
     for name in functions(HEADER):
         assert re.search(r"\blib\.%s\b" % name, sources), name + " is not wrapped"
-        assert name + "(" in c_test, name + " is not called by test_capi.c"
+        assert name + "(" in c_test, name + " is not called by tests/capi/test_capi*.c"
 
 
 def test_public_api_has_docstrings():

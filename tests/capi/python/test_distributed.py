@@ -1,21 +1,25 @@
-"""jointcomp.distributed: Monte Carlo and fleet calibration on a Dask LocalCluster of two worker processes.
+"""jointcomp.distributed: Monte Carlo and fleet calibration, serial and on a Dask LocalCluster of two workers.
 
-The quasi-static robot and a few draws keep the file short (the plant is not the point here): one cluster
-serves every test, and the serial runs (this process, no Dask) are the reference the cluster's results must
-equal bit for bit.
+The quasi-static robot and a few draws keep the file short: one cluster serves most tests, and the serial
+runs (this process, no Dask) are the reference the cluster's results must equal byte for byte.
 """
 
 import json
+import math
+import os
+import pickle
+import signal
 
 import numpy as np
 import pytest
 
 import jointcomp
 from jointcomp import distributed as jd
+from jointcomp.distributed import laws, montecarlo, summary as summaries
 
 from conftest import RX170_PARAMETERS, RX170_URDF
 
-SAMPLES = 4
+SAMPLES = 6
 
 
 @pytest.fixture(scope="module")
@@ -25,255 +29,294 @@ def client():
 
 
 @pytest.fixture(scope="module")
-def serial_result():
-    return jd.monte_carlo(RX170_URDF, RX170_PARAMETERS, samples=SAMPLES, seed=7, serial=True)
+def spiral():
+    with jointcomp.Robot(RX170_URDF, RX170_PARAMETERS) as nominal:
+        job = jointcomp.SpiralJob(nominal)
+    yield job
+    job.close()
 
 
-def test_a_given_truth_is_followed_and_the_nominal_compensates(robot):
-    # The truth equal to the nominal: the full compensation leaves the tracker's noise and the
-    # compensation's residue only; a drawn truth leaves more.
-    itself = robot.spiral_experiment(use_plant=False, truth=robot)
-    assert itself.metrics[2].rms < 0.1 * itself.metrics[0].rms
-    parameters, urdf, _ = jd.draw_parameters(robot.parameters_json(), None,
-                                             jd.main_job_distribution(robot.parameters_json()), 7, 0)
-    assert urdf is None
-    with jointcomp.Robot.from_json(RX170_URDF, parameters) as truth:
-        drawn = robot.spiral_experiment(use_plant=False, truth=truth, errors=True)
-    assert drawn.metrics[2].rms > itself.metrics[2].rms
-    assert drawn.errors.shape == (3, robot.spiral_sample_count(), 3)
-    with pytest.raises(TypeError, match="truth must be a jointcomp.Robot"):
-        robot.spiral_experiment(truth="rx170.json")
-    with pytest.raises(jointcomp.InvalidArgumentError, match="truth"):
-        robot.spiral_experiment(use_plant=True, truth=jointcomp.Robot(RX170_URDF))
+@pytest.fixture(scope="module")
+def serial_run(tmp_path_factory):
+    out = tmp_path_factory.mktemp("serial")
+    result = jd.monte_carlo(RX170_URDF, RX170_PARAMETERS, samples=SAMPLES, seed=7, serial=True, out=out,
+                            batch_size=4)
+    return result, out
 
 
-def test_draws_depend_on_seed_and_index_only():
-    text = RX170_PARAMETERS.read_text()
-    law = jd.main_job_distribution(text)
-    # The main job's law: 6 stiffnesses, 4 harmonics x (amplitude, phase), the balancer's 6 numbers.
-    assert len(law) == 6 + 8 + 6
-    first = jd.draw_parameters(text, None, law, 7, 3)
-    assert first == jd.draw_parameters(text, None, law, 7, 3)
-    assert first != jd.draw_parameters(text, None, law, 7, 4)
-    assert first != jd.draw_parameters(text, None, law, 8, 3)
-    stiffness = json.loads(first[0])["effects"][0]["stiffness_nm_per_rad"]
-    nominal = json.loads(text)["effects"][0]["stiffness_nm_per_rad"]
-    assert all(abs(s / n - 1) <= 0.05 for s, n in zip(stiffness, nominal))
+def _bytes(folder):
+    return {name: (folder / name).read_bytes() for name in ("montecarlo.json", "montecarlo.csv", "montecarlo_band.png")}
 
 
-def test_two_workers_equal_the_serial_run_bit_for_bit(client, serial_result, tmp_path):
-    result = jd.monte_carlo(RX170_URDF, RX170_PARAMETERS, samples=SAMPLES, seed=7, client=client)
-    assert not result.failed and not serial_result.failed
-    assert np.array_equal(result.metrics, serial_result.metrics)
-    assert np.array_equal(result.band_norm, serial_result.band_norm)
-    assert np.array_equal(result.band_z, serial_result.band_z)
+def test_the_job_with_the_nominal_values_is_the_experiment_with_the_nominal_truth(robot, spiral):
+    # The documented identity: one draw of the job at the nominal values and tracker seed 7 (the default of
+    # jc_spiral_experiment_truth) is that call with the nominal robot as its own truth, bit for bit.
+    errors = np.empty((3, spiral.samples, 3))
+    metrics = spiral.run(spiral.nominal_values, 7, errors)
+    reference = robot.spiral_experiment(use_plant=False, truth=robot, errors=True)
+    assert np.array_equal(metrics, np.array([list(m) for m in reference.metrics]))
+    assert np.array_equal(errors, reference.errors)
+    assert np.array_equal(spiral.time(), robot.spiral_plan().time)
+    # Another tracker seed gives other noise, the same compensation.
+    assert not np.array_equal(spiral.run(spiral.nominal_values, 8), metrics)
+
+
+def test_a_drawn_geometry_is_the_urdf_moved_by_it(spiral):
+    # joint_3's origin is rpy (0, 0, pi/2): an offset d and a placement dx are, in the URDF, a yaw of
+    # pi/2 + offset and the origin moved by Rz(pi/2) (dx, 0, 0) = (0, dx, 0). Derived independently of the
+    # library's origin * Trans(d) * Exp(r) * Rot(axis, offset).
+    offset, dx = 2e-3, 1.5e-3
+    values = spiral.nominal_values.copy()
+    values[spiral.index["joint_3.offset_rad"]] = offset
+    values[spiral.index["joint_3.placement_dx_m"]] = dx
+    drawn = spiral.run(values, 7)
+    text = RX170_URDF.read_text().replace('<origin xyz="0.825 0 0" rpy="0 0 1.5707963267948966"/>',
+                                          '<origin xyz="0.825 %r 0" rpy="0 0 %r"/>' % (dx, math.pi / 2 + offset))
+    assert text != RX170_URDF.read_text()
+    with jointcomp.Robot(RX170_URDF, RX170_PARAMETERS) as nominal, \
+            jointcomp.Robot.from_text(text, RX170_PARAMETERS.read_text()) as moved:
+        expected = nominal.spiral_experiment(use_plant=False, truth=moved)
+    assert np.allclose(drawn, [list(m) for m in expected.metrics], rtol=1e-7, atol=1e-12)
+    assert drawn[0, 2] > 1.2 * spiral.run(spiral.nominal_values, 7)[0, 2]
+
+
+def test_the_seed_scheme_is_the_documented_one(spiral):
+    # Draw k of seed s, built here by hand from SeedSequence([s, k]): one uniform(-1, 1) per entry of the
+    # main job's law (all uniform), in order, then the tracker's seed. A stream shifted to k + 1 fails.
+    law = jd.main_job_distribution(spiral)
+    bound = laws.BoundLaw(law, spiral)
+    generator = np.random.Generator(np.random.PCG64(np.random.SeedSequence([7, 3])))
+    uniforms = [generator.uniform(-1.0, 1.0) for _ in law]
+    noise_seed = int(generator.integers(0, 2 ** 62))
+    expected = spiral.nominal_values.copy()
+    for entry, u in zip(law, uniforms):
+        k = spiral.index[entry["parameter"]]
+        expected[k] = expected[k] * (1 + entry["scale"] * u) if entry["relative"] else expected[k] + entry["scale"] * u
+    values, seed, clamped = bound.draw(7, 3)
+    assert np.array_equal(values, expected) and seed == noise_seed and clamped == 0
+    assert not np.array_equal(bound.draw(7, 4)[0], expected)
+    # The task's draw 3 is the job run with these values and that tracker seed.
+    job = {"key": "seed-scheme", "urdf_text": RX170_URDF.read_text(), "parameters_json": RX170_PARAMETERS.read_text(),
+           "distribution": law, "seed": 7, "use_plant": False, "band_points": 10}
+    batch = montecarlo._batch_task(job, (3, 4))
+    assert np.array_equal(batch["metrics"][0], spiral.run(expected, noise_seed))
+
+
+def test_the_main_job_law_is_the_libraries(spiral):
+    # Every effect parameter has the library's law; the perturbed experiment's truth lies inside it.
+    law = {e["parameter"]: e for e in jd.main_job_distribution(spiral)}
+    assert len(law) == 6 + 8 + 6  # 6 stiffnesses, 4 harmonics x (amplitude, phase), the balancer's 6 numbers
+    assert all(e["law"] == "uniform" and e["scale"] > 0 for e in law.values())
+    assert not any(name.endswith(("offset_rad", "_m")) and ".placement" in name for name in law)
+
+
+def test_a_summary_is_exact_counts_whatever_the_batching():
+    rng = np.random.default_rng(5)
+    draws = [(rng.lognormal(-9, 0.5, (3, 5)), rng.normal(0, 1e-4, (3, 8)), rng.lognormal(-9, 0.3, (3, 8)))
+             for _ in range(50)]
+    whole, parts = summaries.Summary(8), [summaries.Summary(8) for _ in range(3)]
+    for k, draw in enumerate(draws):
+        whole.add_draw(*draw)
+        parts[k % 3].add_draw(*draw)
+    merged = summaries.Summary(8)
+    for part in reversed(parts):
+        merged.merge(part)
+    travelled = pickle.loads(pickle.dumps(merged))  # as Dask ships it: the counts sparse
+    assert len(pickle.dumps(merged)) < 0.1 * sum(a.nbytes for a in merged.arrays().values())
+    for key, value in whole.arrays().items():
+        assert np.array_equal(value, merged.arrays()[key]), key
+        assert np.array_equal(value, travelled.arrays()[key]), key
+    # A percentile read from the bins is the nearest-rank percentile of the draws within the bins' 0.05 %.
+    values = np.array([d[0][2, 3] for d in draws])
+    for p in (5, 50, 95):
+        exact = np.percentile(values, p, method="inverted_cdf")
+        assert abs(merged.percentile(2, 3, p)[0] / exact - 1) <= 0.0005 + 1e-12
+
+
+def test_percentile_intervals_are_the_binomial_ones():
+    # Brute force from the binomial law: P(X_(l) <= x_q <= X_(u)) >= 95 % with equal tails.
+    for n, q in ((100, 0.95), (40, 0.5), (300, 0.05)):
+        cdf = np.cumsum([math.comb(n, k) * q ** k * (1 - q) ** (n - k) for k in range(n + 1)])
+        lower, upper = summaries.confidence_ranks(n, q)
+        assert cdf[lower - 1] <= 0.025 < cdf[lower]
+        assert cdf[upper - 1] >= 0.975 > cdf[upper - 2]
+    assert summaries.smallest_sample(0.95) == 72
+    assert summaries.confidence_ranks(71, 0.95)[1] is None
+    assert summaries.confidence_ranks(72, 0.95)[1] == 72
+
+
+def test_two_workers_equal_the_serial_run_byte_for_byte(client, serial_run, tmp_path):
+    serial, serial_out = serial_run
+    result = jd.monte_carlo(RX170_URDF, RX170_PARAMETERS, samples=SAMPLES, seed=7, client=client, out=tmp_path,
+                            batch_size=1)
+    assert _bytes(tmp_path) == _bytes(serial_out)
     stats = result.statistics()
-    # The compensation helps in every percentile of the max error.
-    for p in ("p5", "p50", "p95"):
-        assert stats["compensated"]["max"][p] < stats["uncompensated"]["max"][p]
-    result.write(tmp_path)
+    for p in ("p5", "p50", "p95"):  # the compensation helps in every percentile of the max error
+        assert stats["compensated"]["max"][p]["mm"] < stats["uncompensated"]["max"][p]["mm"]
     document = json.loads((tmp_path / "montecarlo.json").read_text())
-    assert document["succeeded"] == SAMPLES and len(document["per_draw_m"]["compensated"]) == SAMPLES
-    assert (tmp_path / "montecarlo_band.png").stat().st_size > 10000
-    assert len((tmp_path / "montecarlo.csv").read_text().splitlines()) == SAMPLES + 1
-    assert "within" in result.summary()
+    assert document["units"] == "mm" and document["succeeded"] == SAMPLES
+    assert document["warnings"] and "too few" in document["warnings"][0]  # 6 draws cannot bound a 95th percentile
+    assert document["runs"]["compensated"]["max"]["p95"]["ci_mm"][1] is None
+    rows = (tmp_path / "montecarlo.csv").read_text().splitlines()
+    assert len(rows) == SAMPLES + 1
+    # The CSV's metrics are the draws' own, in mm.
+    values = [float(v) for v in rows[1 + 2].split(",")[1:13]]
+    assert min(values) > 1e-4 and max(values) < 10
+    assert not list(tmp_path.glob("*.checkpoint.npz"))
 
 
-def test_one_worker_of_its_own_cluster_equals_the_serial_run(serial_result):
-    result = jd.monte_carlo(RX170_URDF, RX170_PARAMETERS, samples=SAMPLES, seed=7, n_workers=1, start_timeout=120)
-    assert np.array_equal(result.metrics, serial_result.metrics)
+def test_a_stopped_run_resumes_to_the_same_bytes(serial_run, tmp_path):
+    _, serial_out = serial_run
+
+    def stop_after_the_first_batch(done, total, rate):
+        if done < total:
+            raise KeyboardInterrupt
+    with pytest.raises(jd.Interrupted, match="resume"):
+        jd.monte_carlo(RX170_URDF, RX170_PARAMETERS, samples=SAMPLES, seed=7, serial=True, out=tmp_path,
+                       batch_size=2, progress=stop_after_the_first_batch)
+    assert (tmp_path / montecarlo.CHECKPOINT).exists()
+    with open(tmp_path / "montecarlo.csv", "ab") as stream:  # rows a killed run wrote after its checkpoint
+        stream.write(b"2,0.1,0.2\n" * 2000)
+    with pytest.raises(jd.DistributedError, match="--resume"):
+        jd.monte_carlo(RX170_URDF, RX170_PARAMETERS, samples=SAMPLES, seed=7, serial=True, out=tmp_path)
+    with pytest.raises(jd.DistributedError, match="another run"):
+        jd.monte_carlo(RX170_URDF, RX170_PARAMETERS, samples=SAMPLES, seed=8, serial=True, out=tmp_path,
+                       resume=True)
+    jd.monte_carlo(RX170_URDF, RX170_PARAMETERS, samples=SAMPLES, seed=7, serial=True, out=tmp_path, resume=True,
+                   batch_size=3)
+    assert _bytes(tmp_path) == _bytes(serial_out)
+    assert not (tmp_path / montecarlo.CHECKPOINT).exists()
 
 
-def test_a_worker_killed_mid_run_loses_no_draw(client, serial_result, tmp_path):
-    marker = tmp_path / "killed"
-    result = jd.monte_carlo(RX170_URDF, RX170_PARAMETERS, samples=SAMPLES, seed=7, client=client,
-                            _kill_marker=marker, timeout=120)
-    assert marker.read_text() == "killed once\n"  # the first attempt of draw 0 did kill its worker
-    assert not result.failed
-    assert np.array_equal(result.metrics, serial_result.metrics)
+def test_a_worker_without_the_library_is_left_out(serial_run, tmp_path, capsys):
+    _, serial_out = serial_run
+    with jd.cluster(n_workers=2, start_timeout=120) as connected:
+        worker = sorted(connected.scheduler_info()["workers"])[0]
+        connected.run(exec, "import sys\nfor k in [k for k in sys.modules if k.startswith('jointcomp')]: "
+                      "del sys.modules[k]\nsys.modules['jointcomp'] = None", workers=[worker])
+        jd.monte_carlo(RX170_URDF, RX170_PARAMETERS, samples=SAMPLES, seed=7, client=connected, out=tmp_path,
+                       batch_size=1)
+    assert "worker %s left out" % worker in capsys.readouterr().out
+    assert _bytes(tmp_path) == _bytes(serial_out)
+
+
+def test_a_worker_killed_mid_run_loses_no_draw(serial_run, tmp_path):
+    _, serial_out = serial_run
+    with jd.cluster(n_workers=2, start_timeout=120) as connected:
+        worker = sorted(connected.scheduler_info()["workers"])[0]
+        pid = connected.run(os.getpid, workers=[worker])[worker]
+        killed = []
+
+        def kill_a_worker_once(done, total, rate):
+            if not killed:
+                killed.append(worker)
+                os.kill(pid, signal.SIGKILL)
+        jd.monte_carlo(RX170_URDF, RX170_PARAMETERS, samples=SAMPLES, seed=7, client=connected, out=tmp_path,
+                       batch_size=1, progress=kill_a_worker_once)
+        assert worker not in connected.scheduler_info()["workers"]  # it died (its nanny started another)
+    assert killed and _bytes(tmp_path) == _bytes(serial_out)
+
+
+def test_a_scheduler_without_workers_is_named_within_seconds():
+    import distributed
+    with distributed.LocalCluster(n_workers=0, processes=False, dashboard_address=None) as empty:
+        with pytest.raises(jd.DistributedError, match="%s has no worker" % empty.scheduler_address):
+            jd.monte_carlo(RX170_URDF, RX170_PARAMETERS, samples=2, seed=7, scheduler=empty.scheduler_address,
+                           start_timeout=2)
 
 
 def test_a_calibration_report_gives_the_law(robot, tmp_path):
-    campaign = tmp_path / "poses.csv"
-    jointcomp.simulate_campaign(robot, campaign, protocol="random", seed=3, count=40)
+    campaign = tmp_path / "campaign.csv"
+    jointcomp.simulate_campaign(robot, campaign, protocol="random", count=40, seed=3)
     calibrated, report = jointcomp.calibrate(robot, campaign)
+    entries, left = jd.report_distribution(report)
+    named = [e["parameter"] for e in entries if "parameter" in e]
+    assert named and all(e["law"] == "normal" for e in entries if "parameter" in e)
+    assert any(s.startswith(("frame.", "target.")) for s in left)
     with calibrated:
-        calibrated.save(tmp_path / "calibrated.urdf", tmp_path / "calibrated.json")
-    (tmp_path / "report.json").write_text(report.json)
-    law, left = jd.report_distribution(tmp_path / "report.json")
-    names = {e["parameter"] for e in law if "parameter" in e}
-    assert "joint_2.offset_rad" in names and "joint_2.compliance_rad_per_nm" in names
-    assert any(item.startswith("target.") for item in left)
-    result = jd.monte_carlo(tmp_path / "calibrated.urdf", tmp_path / "calibrated.json",
-                            report=tmp_path / "report.json", samples=2, seed=1, serial=True)
-    assert not result.failed
-    print(result.summary())
-    # Calibration's uncertainty is microns: the compensated path stays far inside the uncompensated one.
-    stats = result.statistics()
-    assert stats["compensated"]["max"]["p95"] < 0.5 * stats["uncompensated"]["max"]["p5"]
-
-
-def test_a_drawn_geometry_moves_the_urdf():
-    urdf = RX170_URDF.read_text()
-    law = [{"parameter": "joint_2.placement_dz_m", "law": "normal", "scale": 1e-3}]
-    _, moved, _ = jd.draw_parameters(RX170_PARAMETERS.read_text(), urdf, jd.check_distribution(law), 1, 0)
-    assert moved is not None and moved != urdf
+        with jointcomp.SpiralJob(calibrated) as job:
+            laws.BoundLaw(entries, job)  # every propagated name is one of the robot's
 
 
 def test_bad_inputs_are_named(tmp_path):
-    with pytest.raises(jd.DistributedError, match="report: .*nothing.json does not exist"):
-        jd.monte_carlo(RX170_URDF, RX170_PARAMETERS, report=tmp_path / "nothing.json", samples=2, serial=True)
-    for samples in (0, -1, 2.5, jd.MAX_SAMPLES + 1, 2**30):
-        with pytest.raises(jd.DistributedError, match="samples is .*, must be an integer from 1 to 10000"):
-            jd.monte_carlo(RX170_URDF, RX170_PARAMETERS, samples=samples, serial=True)
-    with pytest.raises(jd.DistributedError, match="parameters: .*missing.json does not exist"):
-        jd.monte_carlo(RX170_URDF, tmp_path / "missing.json", samples=2, serial=True)
-    with pytest.raises(jd.DistributedError, match="entry 0: parameter 'joint_2.stifness' is none of"):
-        jd.monte_carlo(RX170_URDF, RX170_PARAMETERS, samples=2, serial=True,
-                       distribution=[{"parameter": "joint_2.stifness", "scale": 0.1}])
-    with pytest.raises(jd.DistributedError, match="joint_9.stiffness_nm_per_rad: the parameters have no compliance"):
-        jd.monte_carlo(RX170_URDF, RX170_PARAMETERS, samples=2, serial=True,
-                       distribution=[{"parameter": "joint_9.stiffness_nm_per_rad", "scale": 0.1}])
-    with pytest.raises(jd.DistributedError, match="campaign files that do not exist: .*absent.csv"):
-        jd.fleet(RX170_URDF, RX170_PARAMETERS, [tmp_path / "absent.csv"], tmp_path / "out", serial=True)
-    with pytest.raises(jd.DistributedError, match="scheduler tcp://127.0.0.1:9: no connection within 2 s"):
-        jd.monte_carlo(RX170_URDF, RX170_PARAMETERS, samples=1, scheduler="tcp://127.0.0.1:9", start_timeout=2)
+    def refused(match, **kwargs):
+        with pytest.raises(jd.DistributedError, match=match):
+            jd.monte_carlo(RX170_URDF, RX170_PARAMETERS, serial=True, **kwargs)
+    refused("samples is 0", samples=0)
+    refused("seed is -1", seed=-1)
+    refused("not a parameter of this robot", samples=1,
+            distribution=[{"parameter": "joint_9.stiffness_nm_per_rad", "scale": 1.0}])
+    refused("law 'cauchy'", samples=1, distribution=[{"parameter": "joint_2.stiffness_nm_per_rad", "scale": 1.0,
+                                                     "law": "cauchy"}])
+    for text, match in (("{not json", "is not JSON"), ('[{"parameter": 5, "scale": 1}]', "must be a name"),
+                        ('[{"parameter": "a", "scale": "big"}]', "finite number"), ("[]", "non-empty list")):
+        path = tmp_path / "law.json"
+        path.write_text(text)
+        refused(match, samples=1, distribution=str(path))
+    for text, match in (('{"format": "jointcomp-calibration-report/1", "parameters": [{"identified": true, '
+                         '"sigma": 1}]}', "malformed jointcomp-calibration-report/1 report"),
+                        ('{"format": "other"}', "not a report jointcomp knows"), ("[1, 2]", "JSON object")):
+        path = tmp_path / "report.json"
+        path.write_text(text)
+        refused(match, samples=1, report=str(path))
 
 
-def test_fleet_writes_a_folder_per_robot_and_the_summary(robot, client, tmp_path):
+def test_fleet_reports_every_robot_and_writes_the_summary_always(robot, client, tmp_path):
     campaigns = []
-    for k in range(3):
-        parameters, _, _ = jd.draw_parameters(robot.parameters_json(), None,
-                                              jd.main_job_distribution(robot.parameters_json()), 11, k)
-        with jointcomp.Robot.from_json(RX170_URDF, parameters) as truth:
-            campaigns.append(jointcomp.simulate_campaign(truth, tmp_path / ("robot%d.csv" % k), protocol="random",
-                                                         seed=k + 1, count=30))
+    for k in (1, 2):
+        path = tmp_path / ("robot%d.csv" % k)
+        jointcomp.simulate_campaign(robot, path, protocol="random", count=30, seed=k)
+        campaigns.append(path)
     broken = tmp_path / "broken.csv"
-    broken.write_text("not a campaign\n")
-    result = jd.fleet(RX170_URDF, RX170_PARAMETERS, campaigns + [broken], tmp_path / "fleet", client=client)
-    assert [r["name"] for r in result.robots] == ["robot0", "robot1", "robot2", "broken"]
-    assert "broken.csv" in result.robots[3]["error"] and len(result.failed) == 1
-    for k in range(3):
-        folder = tmp_path / "fleet" / ("robot%d" % k)
-        assert json.loads((folder / "report.json").read_text())["format"] == "jointcomp-calibration-report/1"
-        assert (folder / "calibrated.urdf").is_file() and (folder / "calibrated.json").is_file()
-        assert result.robots[k]["after"]["rms_mm"] <= result.robots[k]["before"]["rms_mm"]
-    assert len((tmp_path / "fleet" / "fleet_summary.csv").read_text().splitlines()) == 5
-    summary = json.loads((tmp_path / "fleet" / "fleet_summary.json").read_text())
-    assert summary["failed"] == ["broken"] and summary["outlier_rule"] == jd.OUTLIER_RULE
-    assert (tmp_path / "fleet" / "fleet.png").is_file()
+    broken.write_text("# not a campaign\n1,2,3\n")
+    held = tmp_path / "robot1_again.csv"
+    jointcomp.simulate_campaign(robot, held, protocol="random", count=20, seed=9)
+    out = tmp_path / "new" / "fleet"  # a folder that does not exist yet
+    result = jd.fleet(RX170_URDF, RX170_PARAMETERS, campaigns + [broken], out, client=client,
+                      holdouts={str(campaigns[0]): [str(held)]})
+    assert [r["name"] for r in result.failed] == ["broken"]
+    assert "broken.csv" in result.robots[2]["error"] and "after" in result.robots[0]
+    table = (out / "fleet_summary.csv").read_text().splitlines()
+    assert table[0].split(",")[8] == "held_out_rms_mm" and float(table[1].split(",")[8]) > 0
+    assert "FAILED" in (out / "fleet_summary.txt").read_text()
+    assert (out / "robot1" / "calibrated.urdf").exists()
+    # Every robot failing still writes the summary, with each reason.
+    everything_broken = jd.fleet(RX170_URDF, RX170_PARAMETERS, [broken], tmp_path / "other" / "out", serial=True)
+    assert len(everything_broken.failed) == 1
+    assert "broken" in (tmp_path / "other" / "out" / "fleet_summary.csv").read_text()
 
 
 def test_the_outlier_rule():
-    robots = [{"name": "r%d" % k, "campaign": "c", "before": {"rms_mm": 1.0, "mean_mm": 1.0, "max_mm": 2.0},
-               "after": {"rms_mm": value, "mean_mm": value, "max_mm": value}}
-              for k, value in enumerate([0.40, 0.42, 0.41, 0.43, 0.39, 0.90])]
+    robots = [{"name": "r%d" % k, "campaign": "", "before": {"rms_mm": 1.0}, "after": {"rms_mm": v}}
+              for k, v in enumerate([0.10, 0.11, 0.09, 0.10, 0.12, 0.50])]
     result = jd.FleetResult("calibrate", robots)
-    # median 0.415, MAD 0.015: threshold 0.415 + 3 x 1.4826 x 0.015 = 0.4817 mm
-    assert result.threshold_mm == pytest.approx(0.415 + 3 * 1.4826 * 0.015)
     assert [r["name"] for r in robots if r["outlier"]] == ["r5"]
+    assert 0.12 < result.threshold_mm < 0.50
 
 
-def test_correlated_draws_follow_the_correlation():
-    parameters = RX170_PARAMETERS.read_text()
-    law = jd.check_distribution([
-        {"parameter": "joint_2.stiffness_nm_per_rad", "law": "normal", "scale": 1000.0},
-        {"parameter": "joint_3.stiffness_nm_per_rad", "law": "normal", "scale": 2000.0},
-        {"correlation": {"parameters": ["joint_2.stiffness_nm_per_rad", "joint_3.stiffness_nm_per_rad"],
-                         "matrix": [[1.0, -0.9], [-0.9, 1.0]]}}])
-    nominal = next(e for e in json.loads(parameters)["effects"] if e["type"] == "compliance")["stiffness_nm_per_rad"]
-    moves = []
-    for k in range(600):
-        drawn, _, _ = jd.draw_parameters(parameters, None, law, 11, k)
-        stiffness = next(e for e in json.loads(drawn)["effects"] if e["type"] == "compliance")["stiffness_nm_per_rad"]
-        moves.append((stiffness[1] - nominal[1], stiffness[2] - nominal[2]))
-    moves = np.array(moves)
-    assert np.corrcoef(moves.T)[0, 1] == pytest.approx(-0.9, abs=0.03)
-    assert np.std(moves[:, 0]) == pytest.approx(1000.0, rel=0.1)
-    assert np.std(moves[:, 1]) == pytest.approx(2000.0, rel=0.1)
-    for bad, message in (([[1.0, 1.5], [1.5, 1.0]], "not a correlation matrix"),
-                         ([[1.0, 0.2], [0.3, 1.0]], "symmetric"),
-                         ([[1.0, 0.2]], "must be 2 x 2")):
-        with pytest.raises(jd.DistributedError, match=message):
-            jd.check_distribution(law[:2] + [{"correlation": {"parameters": law[2]["correlation"]["parameters"],
-                                                               "matrix": bad}}])
+def test_correlated_draws_follow_the_correlation(spiral):
+    names = ["joint_2.stiffness_nm_per_rad", "joint_3.stiffness_nm_per_rad"]
+    law = jd.check_distribution([{"parameter": names[0], "scale": 1000.0}, {"parameter": names[1], "scale": 1000.0},
+                                 {"correlation": {"parameters": names, "matrix": [[1, 0.8], [0.8, 1]]}}])
+    bound = laws.BoundLaw(law, spiral)
+    draws = np.array([bound.draw(1, k)[0][[spiral.index[n] for n in names]] for k in range(400)])
+    assert abs(np.corrcoef(draws.T)[0, 1] - 0.8) < 0.08
+    with pytest.raises(jd.DistributedError, match="not a correlation matrix"):
+        jd.check_distribution([{"parameter": names[0], "scale": 1.0}, {"parameter": names[1], "scale": 1.0},
+                               {"correlation": {"parameters": names, "matrix": [[1, 2], [2, 1]]}}])
 
 
-def test_a_calibration_report_carries_its_correlation(robot, tmp_path):
-    campaign = tmp_path / "poses.csv"
-    jointcomp.simulate_campaign(robot, campaign, protocol="random", seed=5, count=60)
-    _, report = jointcomp.calibrate(robot, campaign)
-    data = json.loads(report.json)
-    correlation = np.array(data["correlation"]["matrix"])
-    assert correlation.shape[0] == len(data["correlation"]["parameters"]) >= 2
-    np.testing.assert_allclose(np.diag(correlation), 1.0)
-    assert np.max(np.abs(correlation - np.eye(len(correlation)))) > 0.1  # some parameters do trade off
-    law, _ = jd.report_distribution(data)
-    blocks = [e["correlation"] for e in law if "correlation" in e]
-    assert len(blocks) == 1 and all(name in {e.get("parameter") for e in law} for name in blocks[0]["parameters"])
-
-
-def test_output_names_from_user_data_are_plain_file_names():
-    from jointcomp._paths import plain_file_name
-    assert plain_file_name("..") == "robot" and plain_file_name("...") == "robot" and plain_file_name("") == "robot"
-    assert plain_file_name("../../victim") == "_.._victim"
-    assert plain_file_name("a/b\\c d\nе") == "a_b_c_d__"
-    assert plain_file_name(".hidden") == "hidden" and plain_file_name("r1-arm_2.v3") == "r1-arm_2.v3"
-    assert len(plain_file_name("x" * 10000)) == 64
-
-
-def test_fleet_writes_only_inside_out_whatever_the_campaigns_are_named(robot, tmp_path):
-    # A campaign named "...csv" has the stem "..": its folder was out/.., the user's own folder.
-    campaign = jointcomp.simulate_campaign(robot, tmp_path / "...csv", protocol="random", seed=1, count=30)
-    out = tmp_path / "deep" / "out"
-    result = jd.fleet(RX170_URDF, RX170_PARAMETERS, [campaign], out, serial=True)
-    assert [r["name"] for r in result.robots] == ["robot"] and not result.failed
-    assert (out / "robot" / "report.json").is_file()
-    assert sorted(p.name for p in (tmp_path / "deep").iterdir()) == ["out"]
-
-
-def test_out_is_checked_before_any_work(tmp_path, monkeypatch, capsys):
-    def no_work(*arguments, **keywords):
-        raise AssertionError("work started before --out was checked")
-    monkeypatch.setattr(jd, "_run_tasks", no_work)
-    monkeypatch.setattr(jd, "monte_carlo", no_work)
-    a_file = tmp_path / "a_file"
-    a_file.write_text("not a folder\n")
-    campaign = tmp_path / "c.csv"
-    campaign.write_text("# a campaign\n")
-    for out, message in ((a_file, "exists and is not a folder"), (a_file / "below", "cannot be created"),
-                         ("/proc/jointcomp-out", "cannot be created"), ("", "the path is empty")):
-        with pytest.raises(jd.DistributedError, match=message):
-            jd.fleet(RX170_URDF, RX170_PARAMETERS, [campaign], out, serial=True)
-        robot_files = ["--urdf", str(RX170_URDF), "--params", str(RX170_PARAMETERS)]
-        assert jd.main(["montecarlo"] + robot_files + ["--out", str(out)]) == 1
-        assert "--out: " in capsys.readouterr().err
-        assert jd.main(["fleet"] + robot_files + ["--campaign", str(campaign), "--out", str(out)]) == 1
-        assert message in capsys.readouterr().err
-
-
-def test_a_writer_killed_part_way_leaves_nothing_behind(tmp_path):
-    # Every output of montecarlo and fleet: whole or absent, and no ".name.tmpPID" left by a kill.
-    import subprocess
-    import sys
-    from jointcomp._paths import write_atomically
-    write_atomically(tmp_path / "a.txt", lambda stream: stream.write(b"first\n"))
-    write_atomically(tmp_path / "a.txt", lambda stream: stream.write(b"second\n"))
-    assert (tmp_path / "a.txt").read_text() == "second\n" and (tmp_path / "a.txt").stat().st_mode & 0o777 == 0o644
-    dying = ("import os, signal, sys\n"
-             "from jointcomp._paths import write_atomically\n"
-             "def write(stream):\n"
-             "    stream.write(b'half')\n"
-             "    stream.flush()\n"
-             "    os.kill(os.getpid(), signal.SIGKILL)\n"
-             "write_atomically(sys.argv[1], write)\n")
-    status = subprocess.run([sys.executable, "-c", dying, str(tmp_path / "a.txt")]).returncode
-    assert status == -9
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["a.txt"] and (tmp_path / "a.txt").read_text() == "second\n"
-
-
-def test_a_timeout_that_is_no_number_of_seconds_is_refused(capsys):
-    for timeout in ("nan", "-1", "0", "inf"):
-        assert jd.main(["montecarlo", "--urdf", str(RX170_URDF), "--params", str(RX170_PARAMETERS),
-                        "--timeout", timeout, "--out", "unused"]) == 1
-        assert "--timeout is" in capsys.readouterr().err
+def test_forward_kinematics_of_a_batch_is_one_call_per_chunk(robot, monkeypatch):
+    rng = np.random.default_rng(2)
+    q = rng.uniform(-1, 1, (2500, 6))
+    calls = []
+    batch = jointcomp._native.lib.jc_forward_kinematics_batch
+    monkeypatch.setattr(jointcomp.robot, "_FK_CHUNK", 1000)
+    monkeypatch.setattr(jointcomp._native.lib, "jc_forward_kinematics_batch",
+                        lambda *a: calls.append(a[1]) or batch(*a))
+    poses = robot.forward_kinematics(q)
+    assert calls == [1000, 1000, 500]
+    monkeypatch.undo()
+    for k in (0, 1234, 2499):
+        assert np.array_equal(poses[k], robot.forward_kinematics(q[k]))
+    assert robot.forward_kinematics(np.empty((0, 6))).shape == (0, 4, 4)

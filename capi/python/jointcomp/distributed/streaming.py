@@ -1,0 +1,239 @@
+"""The Dask side: a cluster to run on, and tasks streamed through it with a bounded number in flight.
+
+Failures say what happened: a scheduler without workers is an error within ``start_timeout`` naming it; a
+worker that cannot load the library is left out and its task runs elsewhere; a lost scheduler or Ctrl-C
+stop the run with the number of tasks done (the caller's checkpoint keeps them); a LocalCluster started here
+works in a temporary folder removed on leaving, and serves no dashboard unless asked.
+"""
+
+import contextlib
+import os
+import pathlib
+import shutil
+import tempfile
+import time
+
+from .laws import DistributedError
+
+
+LOST_AFTER = 10.0  # s without a connection to the scheduler before the run is called lost
+
+
+class WorkerWithoutLibrary(Exception):
+    """Raised by a task on a worker that cannot import jointcomp or load libjointcomp: args are the worker's
+    address (None outside a worker) and why."""
+
+
+def load_jointcomp():
+    """jointcomp on a worker, or WorkerWithoutLibrary saying why not and which worker."""
+    try:
+        import jointcomp
+    except Exception as error:  # ImportError, OSError from ctypes: this worker cannot run tasks
+        address = None
+        with contextlib.suppress(Exception):
+            from distributed import get_worker
+            address = get_worker().address
+        raise WorkerWithoutLibrary(address, "%s: %s" % (type(error).__name__, error)) from None
+    return jointcomp
+
+
+def _import_distributed():
+    try:
+        import distributed
+    except ImportError:
+        raise DistributedError("Dask's distributed package is missing: apt-get install python3-distributed "
+                               "python3-dask (packaging/install-deps.sh)") from None
+    return distributed
+
+
+@contextlib.contextmanager
+def cluster(client=None, scheduler=None, n_workers=None, start_timeout=30.0, dashboard=None):
+    """A Dask client: ``client`` as given, one connected to ``scheduler`` (an address such as
+    tcp://host:8786), or a LocalCluster of ``n_workers`` single-threaded worker processes (default: the
+    machine's cores) started here and closed on leaving, its scratch folder removed. Connecting, starting,
+    and finding at least one worker take at most ``start_timeout`` seconds, or DistributedError says so.
+    ``dashboard``: an address ("127.0.0.1:8787") for the LocalCluster's dashboard; None: none."""
+    if client is not None:
+        yield client
+        return
+    distributed = _import_distributed()
+    if scheduler:
+        try:
+            connected = distributed.Client(scheduler, timeout=start_timeout, set_as_default=False)
+        except (OSError, TimeoutError) as error:
+            raise DistributedError("scheduler %s: no connection within %g s (%s)" % (
+                scheduler, start_timeout, error)) from None
+        with connected:
+            _wait_for_workers(connected, scheduler, start_timeout)
+            yield connected
+        return
+    n_workers = n_workers or os.cpu_count() or 1
+    if n_workers < 1:
+        raise DistributedError("n_workers is %d, must be at least 1" % n_workers)
+    _export_environment()
+    scratch = tempfile.mkdtemp(prefix="jointcomp-dask-")
+    try:
+        local = _start_local(distributed, n_workers, start_timeout, dashboard, scratch)
+        try:
+            with distributed.Client(local, set_as_default=False) as connected:
+                yield connected
+        finally:
+            local.close()
+    finally:
+        shutil.rmtree(scratch, ignore_errors=True)
+
+
+def _start_local(distributed, n_workers, start_timeout, dashboard, scratch):
+    # The scheduler's HTTP server starts whatever the dashboard setting: on loopback and a free port unless a
+    # dashboard address is asked for (dashboard_address=None alone still bound 0.0.0.0:8787).
+    scheduler_kwargs = {"dashboard": dashboard is not None, "dashboard_address": dashboard or "127.0.0.1:0"}
+    try:
+        return distributed.LocalCluster(n_workers=n_workers, threads_per_worker=1, processes=True,
+                                        host="127.0.0.1", dashboard_address=None, scheduler_kwargs=scheduler_kwargs,
+                                        local_directory=scratch, silence_logs=40, timeout=start_timeout)
+    except (TimeoutError, OSError, RuntimeError) as error:
+        raise DistributedError("the local cluster of %d workers did not start within %g s (%s)" % (
+            n_workers, start_timeout, error)) from None
+
+
+def _wait_for_workers(client, scheduler, start_timeout):
+    try:
+        client.wait_for_workers(1, timeout=start_timeout)
+    except (TimeoutError, OSError) as error:
+        raise DistributedError("scheduler %s has no worker (none joined within %g s): start workers with "
+                               "`dask worker %s` (%s)" % (scheduler, start_timeout, scheduler,
+                                                          type(error).__name__)) from None
+
+
+def _export_environment():
+    """Local workers are new processes: they find this package and the library this process loaded."""
+    import jointcomp
+    package_root = str(pathlib.Path(jointcomp.__file__).resolve().parent.parent)
+    paths = os.environ.get("PYTHONPATH", "").split(os.pathsep)
+    if package_root not in paths:
+        os.environ["PYTHONPATH"] = os.pathsep.join([package_root] + [p for p in paths if p])
+    os.environ.setdefault("JOINTCOMP_LIBRARY", str(jointcomp.library_path))
+
+
+def stream(client, function, job, items, merge, *, in_flight, timeout, retries, describe, scheduler=None):
+    """``function(job, item)`` for every item, merged IN ITEM ORDER by ``merge(item, result)``, with at most
+    ``in_flight`` tasks submitted and not yet merged (client memory bounded whatever the number of items).
+    ``client`` None runs here. A task raising WorkerWithoutLibrary excludes its worker and runs again on
+    the others. ``timeout``: seconds for all items. Raises DistributedError on a timeout, a lost scheduler,
+    or no usable worker; on any exception (Ctrl-C too) the tasks in flight are cancelled first."""
+    deadline = time.monotonic() + timeout
+    if client is None:
+        for item in items:
+            merge(item, function(job, item))
+            if time.monotonic() > deadline:
+                raise DistributedError("%s: not done within %g s" % (describe, timeout))
+        return
+    distributed = _import_distributed()
+    items = enumerate(items)  # (sequence number, item): merged in that order
+    pending, done, excluded, in_progress = [], {}, set(), {}
+    futures = distributed.as_completed(loop=client.loop)
+    where = scheduler or "the scheduler"
+    _probe(client, excluded, describe)
+
+    def submit(numbered, again=False):
+        workers = _usable_workers(client, excluded, describe)
+        future = client.submit(function, job, numbered[1], retries=retries, pure=False, workers=workers,
+                               allow_other_workers=False)
+        futures.add(future)
+        in_progress[future.key] = numbered
+        if not again:
+            pending.append(numbered[0])
+
+    try:
+        for numbered in items:
+            submit(numbered)
+            if len(pending) >= in_flight:
+                break
+        while pending:
+            future = _next_done(futures, client, deadline, describe, where, timeout)
+            numbered = in_progress.pop(future.key)
+            result = _result(future, numbered[1], client, excluded, describe, where)
+            if result is _AGAIN:
+                submit(numbered, again=True)
+                continue
+            done[numbered[0]] = (numbered[1], result)
+            while pending and pending[0] in done:
+                merge(*done.pop(pending.pop(0)))
+                following = next(items, None)
+                if following is not None:
+                    submit(following)
+    except BaseException:
+        with contextlib.suppress(Exception):
+            client.cancel(list(futures.futures))
+        raise
+
+
+_AGAIN = object()
+
+
+def _next_done(futures, client, deadline, describe, where, timeout):
+    """The next finished future; DistributedError past the deadline or once the scheduler is lost."""
+    lost_since = None
+    while not futures.has_ready():
+        if futures.is_empty():
+            raise DistributedError("%s: no task left in flight (lost %s?)" % (describe, where))
+        now = time.monotonic()
+        if now > deadline:
+            raise DistributedError("%s: not done within %g s" % (describe, timeout))
+        if client.status != "running":
+            lost_since = lost_since or now
+            if now - lost_since > LOST_AFTER:
+                raise DistributedError("%s: lost %s (no connection for %g s)" % (describe, where, LOST_AFTER))
+        else:
+            lost_since = None
+        time.sleep(0.02)
+    return next(futures)
+
+
+def _usable_workers(client, excluded, describe):
+    """The workers not excluded, or None (any) when none is; DistributedError when every one is."""
+    if not excluded:
+        return None
+    workers = [w for w in client.scheduler_info().get("workers", {}) if w not in excluded]
+    if not workers:
+        raise DistributedError("%s: no worker can load jointcomp (%d left out)" % (describe, len(excluded)))
+    return workers
+
+
+def can_load():
+    """True on a worker that can import jointcomp and load its library (else unpickling this fails)."""
+    return load_jointcomp() is not None
+
+
+def _probe(client, excluded, describe):
+    """Adds the workers that cannot load jointcomp to ``excluded``, saying so; True when one was added."""
+    answers = client.run(can_load, on_error="return")
+    added = False
+    for worker, answer in sorted(answers.items()):
+        if answer is not True and worker not in excluded:
+            excluded.add(worker)
+            added = True
+            why = answer.args[1] if isinstance(answer, WorkerWithoutLibrary) else "%s: %s" % (
+                type(answer).__name__, answer)
+            print("jointcomp: worker %s left out: it cannot load jointcomp (%.300s)" % (worker, why), flush=True)
+    if answers and len(excluded) >= len(answers):
+        raise DistributedError("%s: no worker can load jointcomp (%d left out)" % (describe, len(excluded)))
+    return added
+
+
+def _result(future, item, client, excluded, describe, where):
+    """The future's result; _AGAIN when its worker turned out to lack the library (it is then excluded)."""
+    try:
+        return future.result()
+    except (WorkerWithoutLibrary, ImportError) as error:
+        if _probe(client, excluded, describe):
+            return _AGAIN
+        raise DistributedError("%s: a worker cannot load jointcomp: %.300s" % (describe, error)) from None
+    except Exception as error:
+        name = type(error).__name__
+        if name in ("CancelledError", "FutureCancelledError", "CommClosedError") or isinstance(error, OSError):
+            raise DistributedError("%s: lost %s (%s)" % (describe, where, name)) from None
+        if name == "KilledWorker":
+            raise DistributedError("%s: task %.100r killed its workers again and again (%.200s)" % (
+                describe, item, error)) from None
+        raise DistributedError("%s: task %.100r failed: %s: %.500s" % (describe, item, name, error)) from None
