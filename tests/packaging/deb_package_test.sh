@@ -28,7 +28,8 @@ for file in usr/bin/jointcomp "$libdir/libjointcomp.so" usr/include/jointcomp/jo
   usr/lib/python3/dist-packages/jointcomp/__init__.py usr/share/jointcomp/robots/rx170.urdf \
   usr/share/jointcomp/robots/ur10.urdf usr/share/jointcomp/params/rx170.json \
   usr/share/jointcomp/plots/plot_spiral_runs.py usr/share/jointcomp/fmu/jointcomp_fmi2.fmu \
-  usr/share/jointcomp/fmu/jointcomp_fmi3.fmu usr/share/jointcomp/matlab/jointcomp_load.m; do
+  usr/share/jointcomp/fmu/jointcomp_fmi3.fmu usr/share/jointcomp/matlab/jointcomp_load.m \
+  usr/share/jointcomp/fmu/binaries/linux64/jointcomp.so usr/share/jointcomp/fmu/binaries/x86_64-linux/jointcomp.so; do
   [ -e "$root/$file" ] || { echo "the package lacks /$file"; dpkg-deb --contents "$deb"; exit 1; }
 done
 
@@ -37,6 +38,12 @@ cd "$work/run"  # nowhere near a source tree
 "$root/usr/bin/jointcomp" --version | tee "$work/version.txt"
 grep -q "^jointcomp $version$" "$work/version.txt"
 grep -qF "files: $(realpath "$root")/usr/share/jointcomp (installed)" "$work/version.txt"
+
+echo "== it exports an FMU of a robot from the installed binaries"
+"$root/usr/bin/jointcomp" export-fmu --urdf "$root/usr/share/jointcomp/robots/rx170.urdf" \
+  --params "$root/usr/share/jointcomp/params/rx170.json" --fmi 3 --out "$work/run/rx170.fmu" | tee "$work/export.txt"
+grep -q "FMI 3.0 co-simulation" "$work/export.txt"
+unzip -l "$work/run/rx170.fmu" | grep -q "binaries/x86_64-linux/jointcomp.so"
 
 echo "== it runs the main job and plots"
 "$root/usr/bin/jointcomp" paper --out "$work/run/paper" | tee "$work/paper.txt"
