@@ -138,8 +138,8 @@ void expectAWorkingFmu(const std::string& name, const std::vector<std::string>& 
     const std::string schema = test::sharedFile("fmi-schema");
     if (!schema.empty() && fs::exists(schema)) {
       const ProgramRun valid = runProgram({"/usr/bin/bash", std::string(JOINTCOMP_TESTS_DIR) + "/fmu/check_schema.sh",
-                                    std::to_string(version), folder + "/modelDescription.xml"},
-                                   folder);
+                                           std::to_string(version), folder + "/modelDescription.xml"},
+                                          folder);
       EXPECT_EQ(valid.status, 0) << valid.output;
     }
     auto without = makeMaster(version, folder);
@@ -177,12 +177,13 @@ class FmuOfTheUr10 : public ::testing::Test {
 protected:
   void SetUp() override {
     JOINTCOMP_REQUIRE_SHARED_FILE("the IPA UR10 Series A", "data/ipa-ur10/Series_A/measurements_grid.csv");
-    scratch_ = scratchFolder("ur10_campaign");
+    // Each test its own folder: ctest runs them at once.
+    scratch_ = scratchFolder(std::string("ur10_") + ::testing::UnitTest::GetInstance()->current_test_info()->name());
     campaign_ = scratch_ + "/A.csv";
     const std::string series = test::sharedFile("data/ipa-ur10/Series_A");
-    const ProgramRun imported = runProgram({JOINTCOMP_CLI, "import-ipa", "--in", series + "/measurements_grid.csv", "--trafo",
-                                     series + "/Trafo_TM_F_init.txt", "--out", campaign_},
-                                    scratch_);
+    const ProgramRun imported = runProgram({JOINTCOMP_CLI, "import-ipa", "--in", series + "/measurements_grid.csv",
+                                            "--trafo", series + "/Trafo_TM_F_init.txt", "--out", campaign_},
+                                           scratch_);
     ASSERT_EQ(imported.status, 0) << imported.output;
   }
   void expectExported(const std::string& command, const std::vector<std::string>& options) {
