@@ -23,8 +23,6 @@
 
 namespace {
 
-namespace table = jointcomp::fmu::table;
-
 // The FMU's own resources/ folder (robot.json and parameters.json), from the build tree.
 constexpr const char* kResourceDir = JOINTCOMP_FUZZ_FMU_RESOURCES;
 
