@@ -138,8 +138,8 @@ FixedPointReport settleFrom(const JointErrorModel& model, EffectMask mask, Joint
   return report;
 }
 
-// Where the links of `truth` go under the references of the prepared run `r`: the plant's integration or the quasi-static
-// settling, into run.actual.
+// Where the links of `truth` go under the references of the prepared run `r`: the plant's integration or the
+// quasi-static settling, into run.actual.
 void simulateRun(const PreparedSpiral& prepared, int r, const JointErrorModel& truth, JointErrorWorkspace& true_ws,
                  FlexibleJointPlant* plant, const SpiralExperimentSpec& spec, SpiralRun& run) {
   const JointTrajectory& planned = prepared.planned;
