@@ -113,6 +113,7 @@ nlohmann::ordered_json identificationJson(const PaperIdentification& identificat
     }
     json["transmission_error"]["harmonics"].push_back(entry);
   }
+  json["load_refit"] = sweepLoadRefitJson(identification.load_refit);
   json["files"] = {{"parameters", files.parameters},
                    {"report", files.report},
                    {"truth", files.truth},

@@ -71,6 +71,9 @@ PaperIdentificationReport paperIdentificationReport(const PaperIdentification& i
                                                     const PaperIdentificationSources& sources,
                                                     const JointErrorModel* truth);
 
+// The refitted load parameters (name, nominal, value, standard error) and the sweep's residual before and after.
+nlohmann::ordered_json sweepLoadRefitJson(const SweepLoadRefit& refit);
+
 // The campaign seeds identifyFromSimulatedCampaigns uses for `seed`: (stiffness, sweep).
 std::pair<std::uint64_t, std::uint64_t> paperCampaignSeeds(std::uint64_t seed);
 
