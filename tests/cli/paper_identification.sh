@@ -51,10 +51,12 @@ with jointcomp.Robot(urdf, source / "model" / "params" / "rx170.json") as nomina
                 assert abs(got - want) <= 1e-9 * abs(want), (name, key, got, want)
         assert report.data["format"] == "jointcomp-identification-reports/1"
         assert metrics[2].ra < 0.5 * metrics[0].ra
-# The report gives Monte Carlo a law: the identified stiffnesses and joint 2's harmonics, with their errors.
+# The report gives Monte Carlo a law: the identified stiffnesses, joint 2's harmonics and the refitted balancer,
+# with their errors (bound to the robot's parameters by the run below, which names any it does not know).
 entries, left = distributed.report_distribution(out / "identification" / "report.json")
 names = [e["parameter"] for e in entries]
 assert "joint_2.stiffness_nm_per_rad" in names and any(n.startswith("joint_2.harmonic_stage_2_x2") for n in names), names
+assert "joint_2.spring_balancer.stiffness_n_per_m" in names, names
 distributed.monte_carlo(str(urdf), str(out / "identification" / "params.json"), samples=2, seed=1,
                         report=str(out / "identification" / "report.json"), serial=True)
 print("paper_identification: C API = CLI; Monte Carlo takes the report (%d laws)" % len(entries))

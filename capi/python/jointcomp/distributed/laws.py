@@ -201,7 +201,8 @@ def _report_data(report):
 
 def _reports_distribution(data):
     """Several identifications of one robot in one document (``jointcomp paper``'s identification/report.json:
-    its stiffness and transmission-error reports): the union of their laws."""
+    its stiffness and transmission-error reports, and the load effects refitted to the sweep): the union of
+    their laws (standard errors only)."""
     entries, left = [], []
     parts = data.get("reports")
     if not isinstance(parts, list):
@@ -214,6 +215,10 @@ def _reports_distribution(data):
             continue
         entries += part_entries
         left += part_left
+    # The load effects refitted to the sweep (the balancer), by their posterior standard errors.
+    for p in (data.get("load_refit") or {}).get("parameters", []):
+        if p.get("se"):
+            entries.append(_entry(p["name"], "normal", p["se"], False, "load refit to the sweep"))
     if not entries:
         raise DistributedError("report: none of its reports states a parameter with a standard error (%s)"
                                % "; ".join(left))
