@@ -6,6 +6,7 @@
 #include <fstream>
 #include <memory>
 #include <sstream>
+#include <stdexcept>
 
 #include <sys/stat.h>
 #include <nlohmann/json.hpp>
@@ -140,7 +141,13 @@ int runPaper(int argc, char** argv) {
   IdentifiedRuns identified;
   if (!options.has("nominal-only")) {
     progress("the paper's identification: measuring the simulated robot, then identifying it");
-    identified = identifyAndRun(setup, truth, spec, progress);
+    try {
+      identified = identifyAndRun(setup, truth, spec, progress);
+    } catch (const Error& error) {
+      // The message as it was, with the way round it (a parameter file the paper's campaigns cannot identify).
+      throw std::runtime_error(std::string("the paper's identification: ") + error.what() +
+                               " (--nominal-only runs the spiral with the nominal model, without identifying)");
+    }
   }
   progress("the nominal model's runs");
   const SpiralExperimentResult result = runSpiralExperiment(nominal, truth, spec, progress);

@@ -68,4 +68,10 @@ PY
 ! grep -q "identified model" log2.txt || fail "--nominal-only printed identified rows"
 /usr/bin/python3 -c 'import json,sys; s=json.load(open(sys.argv[1])); assert "identified_model_runs" not in s and len(s["runs"]) == 3' \
   n/summary.json || fail "--nominal-only summary.json"
+# A parameter file the campaigns cannot identify (no compliance): the reason, and the way round it.
+echo '{"format": "jointcomp-parameters/1", "robot": "rx170", "effects": []}' >minimal.json
+if "$jointcomp" paper --quasi-static --params minimal.json --no-plot --out m >log3.txt 2>&1; then
+  fail "paper identified a robot without compliance"
+fi
+grep -q "no compliance effect.*--nominal-only" log3.txt || { cat log3.txt; fail "no reason or way round it"; }
 echo "paper_identification: passed"
