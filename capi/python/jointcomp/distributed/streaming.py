@@ -63,9 +63,12 @@ def cluster(client=None, scheduler=None, n_workers=None, start_timeout=30.0, das
         except (OSError, TimeoutError) as error:
             raise DistributedError("scheduler %s: no connection within %g s (%s)" % (
                 scheduler, start_timeout, error)) from None
-        with connected:
+        try:
             _wait_for_workers(connected, scheduler, start_timeout)
             yield connected
+        finally:
+            with contextlib.suppress(Exception):  # a lost scheduler is not waited for
+                connected.close(timeout=2)
         return
     n_workers = n_workers or os.cpu_count() or 1
     if n_workers < 1:
@@ -163,8 +166,9 @@ def stream(client, function, job, items, merge, *, in_flight, timeout, retries, 
                 if following is not None:
                     submit(following)
     except BaseException:
-        with contextlib.suppress(Exception):
-            client.cancel(list(futures.futures))
+        if client.status == "running":  # a client that lost its scheduler would wait for it to cancel
+            with contextlib.suppress(Exception):
+                client.cancel(list(futures.futures))
         raise
 
 
@@ -223,6 +227,8 @@ def _probe(client, excluded, describe):
 
 def _result(future, item, client, excluded, describe, where):
     """The future's result; _AGAIN when its worker turned out to lack the library (it is then excluded)."""
+    if future.status == "cancelled":  # the client cancels every future when it loses the scheduler
+        raise DistributedError("%s: lost %s (its tasks were cancelled)" % (describe, where))
     try:
         return future.result()
     except (WorkerWithoutLibrary, ImportError) as error:
