@@ -99,12 +99,16 @@ def _start_local(distributed, n_workers, start_timeout, dashboard, scratch):
             n_workers, start_timeout, error)) from None
 
 
+WORKER_WAIT = 10.0  # s: the longest a scheduler without workers is waited for
+
+
 def _wait_for_workers(client, scheduler, start_timeout):
+    wait = min(start_timeout, WORKER_WAIT)
     try:
-        client.wait_for_workers(1, timeout=start_timeout)
+        client.wait_for_workers(1, timeout=wait)
     except (TimeoutError, OSError) as error:
         raise DistributedError("scheduler %s has no worker (none joined within %g s): start workers with "
-                               "`dask worker %s` (%s)" % (scheduler, start_timeout, scheduler,
+                               "`dask worker %s` (%s)" % (scheduler, wait, scheduler,
                                                           type(error).__name__)) from None
 
 
