@@ -10,7 +10,9 @@ import contextlib
 import os
 import pathlib
 import shutil
+import signal
 import tempfile
+import threading
 import time
 
 from .laws import DistributedError
@@ -90,6 +92,10 @@ def _start_local(distributed, n_workers, start_timeout, dashboard, scratch):
     # The scheduler's HTTP server starts whatever the dashboard setting: on loopback and a free port unless a
     # dashboard address is asked for (dashboard_address=None alone still bound 0.0.0.0:8787).
     scheduler_kwargs = {"dashboard": dashboard is not None, "dashboard_address": dashboard or "127.0.0.1:0"}
+    # The workers start with Ctrl-C ignored (a signal ignored stays so in a new process): it reaches the whole
+    # process group, and this process, not each worker with its own traceback, stops the run and the cluster.
+    main_thread = threading.current_thread() is threading.main_thread()
+    interrupt = signal.signal(signal.SIGINT, signal.SIG_IGN) if main_thread else None
     try:
         return distributed.LocalCluster(n_workers=n_workers, threads_per_worker=1, processes=True,
                                         host="127.0.0.1", dashboard_address=None, scheduler_kwargs=scheduler_kwargs,
@@ -97,6 +103,9 @@ def _start_local(distributed, n_workers, start_timeout, dashboard, scratch):
     except (TimeoutError, OSError, RuntimeError) as error:
         raise DistributedError("the local cluster of %d workers did not start within %g s (%s)" % (
             n_workers, start_timeout, error)) from None
+    finally:
+        if main_thread:
+            signal.signal(signal.SIGINT, interrupt)
 
 
 WORKER_WAIT = 10.0  # s: the longest a scheduler without workers is waited for
