@@ -111,12 +111,24 @@ int runPython(const std::vector<std::string>& arguments) {
     execve(kPython, argv.data(), envp.data());
     _exit(127);
   }
+  // Ctrl-C reaches the whole foreground group: the child stops its run itself (cluster closed, temporary
+  // folders removed, checkpoint kept, exit 130), so this process waits for it instead of dying and taking the
+  // child down with it (PR_SET_PDEATHSIG) before it could clean up. The child started with the default action.
+  struct sigaction ignore {
+  }, old_interrupt{}, old_quit{};
+  ignore.sa_handler = SIG_IGN;
+  sigemptyset(&ignore.sa_mask);
+  sigaction(SIGINT, &ignore, &old_interrupt);
+  sigaction(SIGQUIT, &ignore, &old_quit);
   int status = 0;
-  while (waitpid(child, &status, 0) < 0) {
-    if (errno != EINTR) {
-      std::fprintf(stderr, "jointcomp: lost the Python process: %s\n", std::strerror(errno));
-      return 1;
-    }
+  pid_t waited = 0;
+  while ((waited = waitpid(child, &status, 0)) < 0 && errno == EINTR) {}
+  const int wait_error = errno;
+  sigaction(SIGINT, &old_interrupt, nullptr);
+  sigaction(SIGQUIT, &old_quit, nullptr);
+  if (waited < 0) {
+    std::fprintf(stderr, "jointcomp: lost the Python process: %s\n", std::strerror(wait_error));
+    return 1;
   }
   if (WIFEXITED(status) && WEXITSTATUS(status) == 127) {
     std::fprintf(stderr,

@@ -6,6 +6,7 @@
 #include <fstream>
 #include <memory>
 #include <sstream>
+#include <stdexcept>
 
 #include <sys/stat.h>
 #include <nlohmann/json.hpp>
@@ -13,9 +14,12 @@
 #include "cli/commands.hpp"
 #include "cli/options.hpp"
 #include "cli/output_paths.hpp"
+#include "cli/paper_output.hpp"
 #include "cli/plot.hpp"
 #include "cli/robot_setup.hpp"
 #include "model/common/errors.hpp"
+#include "model/effects/perturbation.hpp"
+#include "model/experiment/paper_identification.hpp"
 #include "model/experiment/spiral_experiment.hpp"
 #include "model/io/atomic_file.hpp"
 #include "model/io/parameter_file.hpp"
@@ -24,115 +28,10 @@
 namespace jointcomp::cli {
 namespace {
 
-// Table II of Olabi et al. (IEEE ICIT 2012), in mm.
-constexpr double kPaperRa[3] = {0.2032, 0.0459, 0.0312};
-constexpr double kPaperRz[3] = {0.2882, 0.2097, 0.1502};
-constexpr double kPaperFeedRate = 0.03;  // m/s
 // The feed rates `paper` accepts: a tenth of the paper's (the 30 s spiral takes 300 s, planned and simulated
 // in ten times the paper's work) to 2 m/s. Slower plans grow without bound (1e-5 m/s: 3.6 GB after 120 s).
 constexpr double kMinFeedRate = 0.003;
 constexpr double kMaxFeedRate = 2.0;
-
-std::string runsCsv(const SpiralExperimentResult& result) {
-  std::ostringstream csv;
-  csv.precision(9);
-  csv << "run,t_s,planned_x_mm,planned_y_mm,planned_z_mm,measured_x_mm,measured_y_mm,measured_z_mm,"
-         "error_x_mm,error_y_mm,error_z_mm";
-  const int dof = result.planned.q.front().size();
-  for (int j = 1; j <= dof; ++j) csv << ",q_theo" << j << "_deg";
-  for (int j = 1; j <= dof; ++j) csv << ",q_ref" << j << "_deg";
-  csv << "\n";
-  const double deg = 180.0 / 3.14159265358979323846;
-  for (std::size_t r = 0; r < result.runs.size(); ++r) {
-    const SpiralRun& run = result.runs[r];
-    for (std::size_t k = 0; k < run.error.size(); ++k) {
-      const Eigen::Vector3d p = result.planned.tool_position[k] * 1e3;
-      const Eigen::Vector3d m = run.measured[k] * 1e3;
-      const Eigen::Vector3d e = run.error[k] * 1e3;
-      csv << r << ',' << result.planned.time[k] << ',' << p.x() << ',' << p.y() << ',' << p.z() << ',' << m.x() << ','
-          << m.y() << ',' << m.z() << ',' << e.x() << ',' << e.y() << ',' << e.z();
-      for (int j = 0; j < dof; ++j) csv << ',' << result.planned.q[k][j] * deg;
-      for (int j = 0; j < dof; ++j) csv << ',' << run.reference[k][j] * deg;
-      csv << "\n";
-    }
-  }
-  return csv.str();
-}
-
-// What `jointcomp paper` writes beside the CSV: the runs' metrics against the paper's.
-std::string summaryJson(const SpiralExperimentResult& result, const SpiralExperimentSpec& spec,
-                        const std::string& robot_name) {
-  nlohmann::ordered_json summary;
-  summary["experiment"] = "Olabi et al. 2012 spiral, simulated " + robot_name;
-  summary["robot"] = robot_name;
-  summary["samples"] = result.planned.size();
-  summary["duration_s"] = result.planned.time.back();
-  summary["truth_seed"] = spec.truth.seed;
-  summary["simulated_robot"] = result.dynamic ? "flexible-joint plant (CVODE)" : "quasi-static";
-  summary["feed_rate_m_per_s"] = spec.feed_rate.speed;  // (no timings: the same inputs give the same file)
-  for (std::size_t r = 0; r < result.runs.size(); ++r) {
-    const SpiralRun& run = result.runs[r];
-    nlohmann::ordered_json entry = {{"name", run.name},
-                                    {"ra_mm", run.metrics.ra * 1e3},
-                                    {"rz_mm", run.metrics.rz * 1e3},
-                                    {"rms_3d_mm", run.metrics.rms * 1e3},
-                                    {"max_3d_mm", run.metrics.max * 1e3}};
-    if (r < 3) {
-      entry["paper_ra_mm"] = kPaperRa[r];
-      entry["paper_rz_mm"] = kPaperRz[r];
-      entry["compensation_max_iterations"] = run.compensation.max_iterations;
-      entry["compensation_max_correction_deg"] = run.compensation.max_correction * 180.0 / 3.14159265358979323846;
-    } else {
-      const DynamicCompensationReport& d = run.dynamic_compensation;
-      entry["plant_runs"] = d.iterations;
-      entry["closed_form_max_link_error_rad"] = d.initial_error_rad;
-      entry["nominal_plant_max_link_error_rad"] = d.max_error_rad;
-      entry["compensation_max_correction_deg"] = d.max_correction_rad * 180.0 / 3.14159265358979323846;
-    }
-    summary["runs"].push_back(entry);
-  }
-
-  return summary.dump(2) + "\n";
-}
-
-// The plant's speed and the Table II analogue, on the console.
-void printTable(const SpiralExperimentResult& result) {
-  if (result.dynamic) {
-    const PlantStatistics& st = result.plant_statistics;
-    std::printf(
-        "  plant: %.1fx real time (%.3f s for %zu x %.1f s of motion); CVODE %ld steps, %ld right-hand sides, "
-        "%ld Jacobians\n",
-        static_cast<double>(result.runs.size()) * result.planned.time.back() / result.simulation_seconds,
-        result.simulation_seconds, result.runs.size(), result.planned.time.back(), st.steps, st.rhs_evaluations,
-        st.jacobian_evaluations);
-    if (result.runs.size() > 3) {
-      const DynamicCompensationReport& d = result.runs[3].dynamic_compensation;
-      std::printf(
-          "  dynamic correction: %.2f s; largest link error of the nominal plant %.2g rad in closed form, %.2g rad "
-          "after %d runs\n",
-          result.runs[3].compensation_seconds, d.initial_error_rad, d.max_error_rad, d.iterations);
-    }
-  }
-  std::printf("\nTable II analogue (%zu samples, %.1f s of motion; errors measured by a simulated tracker)\n",
-              result.planned.size(), result.planned.time.back());
-  std::printf("%-36s %9s %9s %11s %11s %10s %10s\n", "run", "Ra [mm]", "Rz [mm]", "RMS3D [mm]", "max3D [mm]",
-              "paper Ra", "paper Rz");
-  for (std::size_t r = 0; r < result.runs.size(); ++r) {
-    const AccuracyMetrics& m = result.runs[r].metrics;
-    if (r < 3) {
-      std::printf("%-36s %9.4f %9.4f %11.4f %11.4f %10.4f %10.4f\n", result.runs[r].name.c_str(), m.ra * 1e3,
-                  m.rz * 1e3, m.rms * 1e3, m.max * 1e3, kPaperRa[r], kPaperRz[r]);
-    } else {
-      std::printf("%-36s %9.4f %9.4f %11.4f %11.4f %10s %10s\n", result.runs[r].name.c_str(), m.ra * 1e3, m.rz * 1e3,
-                  m.rms * 1e3, m.max * 1e3, "-", "-");
-    }
-  }
-  const double ra_gain = 1.0 - result.runs[2].metrics.ra / result.runs[0].metrics.ra;
-  const double rz_gain = 1.0 - result.runs[2].metrics.rz / result.runs[0].metrics.rz;
-  std::printf("reduction with both corrections: Ra %.0f %% (paper %.0f %%), Rz %.0f %% (paper %.0f %%)\n",
-              ra_gain * 100, (1 - kPaperRa[2] / kPaperRa[0]) * 100, rz_gain * 100,
-              (1 - kPaperRz[2] / kPaperRz[0]) * 100);
-}
 
 // The FMUs of this build, handed out beside the results (in `folder`).
 void handOutFmus(const std::string& folder) {
@@ -181,13 +80,38 @@ SpiralExperimentSpec specFromOptions(const Options& options, const ParameterSet&
   return spec;
 }
 
+// The identified and perfect models' runs, beside the nominal's (null with --nominal-only).
+struct IdentifiedRuns {
+  std::unique_ptr<PaperIdentification> identification;
+  std::unique_ptr<SpiralExperimentResult> identified, perfect;
+};
+
+IdentifiedRuns identifyAndRun(const RobotSetup& setup, const JointErrorModel& truth, const SpiralExperimentSpec& spec,
+                              const Progress& progress) {
+  IdentifiedRuns runs;
+  PaperIdentificationSpec identification;
+  identification.seed = spec.truth.seed;
+  runs.identification = std::make_unique<PaperIdentification>(
+      identifyFromSimulatedCampaigns(setup.parameters.model, truth, identification, progress));
+  progress("identification took " + std::to_string(runs.identification->seconds).substr(0, 4) + " s");
+  SpiralExperimentSpec later = spec;
+  later.first_run = 1;  // the uncorrected run does not depend on the model
+  progress("the identified model's runs");
+  runs.identified = std::make_unique<SpiralExperimentResult>(
+      runSpiralExperiment(*runs.identification->identified, truth, later, progress));
+  later.first_run = 2;  // the floor: the corrections computed from the truth itself
+  progress("the perfect model's runs (the floor)");
+  runs.perfect = std::make_unique<SpiralExperimentResult>(runSpiralExperiment(truth, truth, later, progress));
+  return runs;
+}
+
 }  // namespace
 
 int runPaper(int argc, char** argv) {
   const Options options(argc, argv,
                         {"urdf", "base-link", "tip-link", "params", "out", "seed", "compensate-joints", "no-plot",
-                         "quasi-static", "feed-rate", "no-dynamic-correction"},
-                        {"no-plot", "quasi-static", "no-dynamic-correction"});
+                         "quasi-static", "feed-rate", "no-dynamic-correction", "nominal-only"},
+                        {"no-plot", "quasi-static", "no-dynamic-correction", "nominal-only"});
   const std::string out = options.get("out", "out/paper");
   prepareOutputFolder(out);
   const auto started = std::chrono::steady_clock::now();
@@ -208,15 +132,39 @@ int runPaper(int argc, char** argv) {
       "%.2f rad (phases); seed %llu\n",
       spec.truth.stiffness_relative * 100, spec.truth.amplitude_relative * 100, spec.truth.phase_absolute_rad,
       static_cast<unsigned long long>(spec.truth.seed));
-  const SpiralExperimentResult result = runSpiralExperiment(nominal, spec, [&](const std::string& what) {
+  const Progress progress = [&](const std::string& what) {
     const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
     std::printf("  [%6.2f s] %s\n", elapsed, what.c_str());
     std::fflush(stdout);
-  });
+  };
+  const JointErrorModel truth = perturbedModel(nominal, spec.truth);
+  IdentifiedRuns identified;
+  if (!options.has("nominal-only")) {
+    progress("the paper's identification: measuring the simulated robot, then identifying it");
+    try {
+      identified = identifyAndRun(setup, truth, spec, progress);
+    } catch (const Error& error) {
+      // The message as it was, with the way round it (a parameter file the paper's campaigns cannot identify).
+      throw std::runtime_error(std::string("the paper's identification: ") + error.what() +
+                               " (--nominal-only runs the spiral with the nominal model, without identifying)");
+    }
+  }
+  progress("the nominal model's runs");
+  const SpiralExperimentResult result = runSpiralExperiment(nominal, truth, spec, progress);
+  const PaperRuns runs{&result, identified.identified.get(), identified.perfect.get()};
 
-  writeFileAtomically(out + "/spiral_runs.csv", runsCsv(result));
-  writeFileAtomically(out + "/summary.json", summaryJson(result, spec, setup.robot->name));
-  printTable(result);
+  nlohmann::ordered_json identification;
+  if (identified.identification) {
+    std::printf("\n%s", identificationSummary(*identified.identification, truth).c_str());
+    const IdentificationFiles files = writeIdentification(out + "/identification", *identified.identification, truth,
+                                                          setup.parameters.drives, setup.params, setup.urdf);
+    identification = identificationJson(*identified.identification, truth, files);
+    std::printf("wrote %s/ (campaigns, identified params.json, report.json for jointcomp montecarlo --report)\n",
+                files.folder.c_str());
+  }
+  writeFileAtomically(out + "/spiral_runs.csv", runsCsv(runs));
+  writeFileAtomically(out + "/summary.json", summaryJson(runs, spec, setup.robot->name, identification));
+  printTable(runs);
   std::printf("wrote %s/spiral_runs.csv and %s/summary.json\n", out.c_str(), out.c_str());
   handOutFmus(out + "/fmu");
   if (!options.has("no-plot"))

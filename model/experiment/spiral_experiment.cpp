@@ -67,14 +67,19 @@ PreparedSpiral prepareSpiralRuns(const JointErrorModel& nominal, const SpiralExp
   const char* run_names[4] = {"without correction", "stiffness correction", "stiffness and kinematic correction",
                               "stiffness, kinematic and dynamic correction"};
   const int run_count = spec.dynamic_correction ? 4 : 3;
-  prepared.runs.resize(run_count);
-  prepared.reference_velocity.assign(run_count, prepared.planned.qd);
-  for (int r = 0; r < run_count; ++r) {
-    SpiralRun& run = prepared.runs[r];
+  if (spec.first_run < 0 || spec.first_run >= run_count) {
+    throw InvalidArgument("first_run is " + std::to_string(spec.first_run) + ", must be from 0 to " +
+                          std::to_string(run_count - 1));
+  }
+  prepared.runs.resize(run_count - spec.first_run);
+  prepared.reference_velocity.assign(run_count - spec.first_run, prepared.planned.qd);
+  for (int r = spec.first_run; r < run_count; ++r) {
+    SpiralRun& run = prepared.runs[r - spec.first_run];
+    run.index = r;
     run.name = run_names[r];
     tell(progress, "run " + std::to_string(r + 1) + "/" + std::to_string(run_count) + ": compensating " + run.name);
     // The controller interpolates with the planned velocities, or with the dynamic references' own.
-    std::vector<JointVector>& reference_velocity = prepared.reference_velocity[r];
+    std::vector<JointVector>& reference_velocity = prepared.reference_velocity[r - spec.first_run];
     const auto computing = std::chrono::steady_clock::now();
     if (r < 3) {
       run.compensation = compensateTrajectory(nominal, run_masks[r], prepared.planned.q, prepared.planned.qd,
@@ -133,8 +138,8 @@ FixedPointReport settleFrom(const JointErrorModel& model, EffectMask mask, Joint
   return report;
 }
 
-// Where the links of `truth` go under run `r`'s references: the plant's integration or the quasi-static
-// settling, into run.actual.
+// Where the links of `truth` go under the references of the prepared run `r`: the plant's integration or the
+// quasi-static settling, into run.actual.
 void simulateRun(const PreparedSpiral& prepared, int r, const JointErrorModel& truth, JointErrorWorkspace& true_ws,
                  FlexibleJointPlant* plant, const SpiralExperimentSpec& spec, SpiralRun& run) {
   const JointTrajectory& planned = prepared.planned;
@@ -165,7 +170,7 @@ void simulateRun(const PreparedSpiral& prepared, int r, const JointErrorModel& t
   }
 }
 
-// The tracker's measurement of run `r` (its own noise stream) and the error against the plan.
+// The tracker's measurement of run number `r` (0 to 3: its own noise stream) and the error against the plan.
 void measureRun(const JointTrajectory& planned, int r, const Robot& true_robot, JointErrorWorkspace& true_ws,
                 const SpiralExperimentSpec& spec, SpiralRun& run) {
   // Each run has its own tracker noise; the dynamic correction's is the static one's it is compared with.
@@ -215,7 +220,7 @@ SpiralExperimentResult followSpiralRuns(const PreparedSpiral& prepared, const Jo
     const auto started = std::chrono::steady_clock::now();
     simulateRun(prepared, r, truth, true_ws, plant.get(), spec, run);
     result.simulation_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
-    measureRun(result.planned, r, true_robot, true_ws, spec, run);
+    measureRun(result.planned, run.index, true_robot, true_ws, spec, run);
   }
   if (plant) result.plant_statistics = plant->statistics();
   return result;

@@ -48,6 +48,9 @@ struct SpiralExperimentSpec {
   // compensateDynamically (model/plant/dynamic_compensation.hpp) for the nominal model and drives.
   bool dynamic_correction = false;
   DynamicCompensationOptions dynamic;
+  // The first run made (0 to 3): the later runs of another model need no uncorrected run of their own
+  // (it does not depend on the model), a perfect model's floor only the corrected runs.
+  int first_run = 0;
 
   // The paper's spiral: a = 24 mm, b = 0.15, theta 0 to 4 pi, in the plane Z = 200 mm, centred at
   // X = 1.2 m in front of the robot where the arm reaches out and joint 2 carries most of the error.
@@ -55,6 +58,7 @@ struct SpiralExperimentSpec {
 };
 
 struct SpiralRun {
+  int index = 0;                          // 0 to 3, in the order below (spec.first_run may skip some)
   std::string name;                       // "without correction", ...
   std::vector<JointVector> reference;     // commanded joints
   std::vector<JointVector> actual;        // where the simulated links went
@@ -71,7 +75,8 @@ struct SpiralExperimentResult {
   bool dynamic = false;              // the plant (true) or the quasi-static robot
   PlantStatistics plant_statistics;  // summed over the runs
   double simulation_seconds = 0.0;   // wall-clock time spent simulating the robot
-  std::vector<SpiralRun> runs;       // the paper's three, and the dynamic correction's when asked for
+  std::vector<SpiralRun> runs;       // the paper's three, and the dynamic correction's when asked for, from
+                                     // spec.first_run on
 };
 
 // The spiral as a joint trajectory: feed-rate planned, tool pointing down, inverse kinematics from

@@ -572,6 +572,44 @@ static void test_spiral(jc_robot* robot, jc_robot* bare) {
     EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "errors_len",
                   jc_spiral_experiment_truth(robot, robot, 0, own, 15, errors, 3 * m));
   }
+  {
+    /* The paper's whole method on a given truth (jc_identify_and_compensate): the robot as its own truth,
+       measured and identified, leaves less after both corrections than the uncorrected run, about as
+       little as its own model; bad options are refused with outputs untouched. */
+    double identified_metrics[15], own[15];
+    jc_robot* identified = NULL;
+    jc_report* report = NULL;
+    char* text = NULL;
+    int32_t length = 0;
+    EXPECT_OK(jc_spiral_experiment_truth(robot, robot, 0, own, 15, NULL, 0));
+    EXPECT_OK(jc_identify_and_compensate(robot, robot, "{\"seed\": 3}", identified_metrics, 15, &identified, &report));
+    CHECK(identified != NULL && report != NULL);
+    CHECK(identified_metrics[10] < 0.1 * identified_metrics[0] && identified_metrics[10] < 2 * own[10]);
+    CHECK(same_bits(identified_metrics, own, 5)); /* the uncorrected run does not depend on the model */
+    EXPECT_OK(jc_report_json(report, NULL, 0, &length));
+    text = (char*)malloc((size_t)length + 1);
+    EXPECT_OK(jc_report_json(report, text, length + 1, &length));
+    CHECK(strstr(text, "\"jointcomp-identification-reports/1\"") != NULL);
+    free(text);
+    EXPECT_OK(jc_report_free(report));
+    EXPECT_OK(jc_robot_free(identified));
+    identified = NULL;
+    report = NULL;
+    EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "metrics_len is 5",
+                  jc_identify_and_compensate(robot, robot, NULL, identified_metrics, 5, &identified, &report));
+    EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "dynamic_correction",
+                  jc_identify_and_compensate(robot, robot, "{\"dynamic_correction\": true}", identified_metrics, 20,
+                                             &identified, &report));
+    EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "feed_rate_m_per_s",
+                  jc_identify_and_compensate(robot, robot, "{\"feed_rate_m_per_s\": 5}", identified_metrics, 15,
+                                             &identified, &report));
+    EXPECT_STATUS(
+        JC_ERROR_INVALID_ARGUMENT, "use_plant",
+        jc_identify_and_compensate(robot, bare, "{\"use_plant\": true}", identified_metrics, 15, &identified, &report));
+    EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "truth is NULL",
+                  jc_identify_and_compensate(robot, NULL, NULL, identified_metrics, 15, &identified, &report));
+    CHECK(identified == NULL && report == NULL);
+  }
   free(time);
   free(positions);
   free(q);

@@ -194,6 +194,13 @@ std::vector<RobotCall> everyRobotCall() {
       {"jc_spiral_experiment_truth",
        [](jc_robot* r, Buffers& b) { return jc_spiral_experiment_truth(r, r, 0, b.a.data(), 15, nullptr, 0); },
        "nominal"},
+      {"jc_identify_and_compensate",
+       [](jc_robot* r, Buffers& b) {
+         return identification(b, [r, &b](jc_robot** o, jc_report** p) {
+           return jc_identify_and_compensate(r, r, nullptr, b.a.data(), 15, o, p);
+         });
+       },
+       "nominal"},
       {"jc_robot_free", [](jc_robot* r, Buffers&) { return jc_robot_free(r); }},
   };
 }

@@ -8,8 +8,10 @@ model="$2"
 work="$3"
 fail() { echo "distributed_commands: $*" >&2; exit 1; }
 rm -rf "$work"
-mkdir -p "$work"
+mkdir -p "$work/tmp"
 cd "$work"
+# The killed run below cannot remove its cluster's temporary folder: it stays here, not in /tmp.
+export TMPDIR="$work/tmp"
 
 for command in montecarlo fleet; do
   "$jointcomp" "$command" --help >help.txt || fail "$command --help exited $?"
@@ -107,5 +109,21 @@ for f in montecarlo.json montecarlo.csv montecarlo_band.png; do
 done
 [ ! -e killed/montecarlo.checkpoint.npz ] || fail "the checkpoint was left behind"
 [ ! -e dask-worker-space ] || fail "dask-worker-space left in the working folder"
+
+# Ctrl-C (SIGINT to the whole process group, as a terminal sends it) stops the run cleanly: exit 130, one
+# message naming the checkpoint, no traceback, the cluster's temporary folder removed.
+before=$(ls "$TMPDIR" | wc -l)
+# (A background job of a script starts with SIGINT ignored: the run is started with it restored, as in a terminal.)
+setsid /usr/bin/python3 -c 'import os, signal, sys; signal.signal(signal.SIGINT, signal.SIG_DFL); os.execv(sys.argv[1], sys.argv[1:])' \
+  "$jointcomp" montecarlo --samples 200 --batch 2 --workers 1 --out interrupted >log.txt 2>&1 &
+runner=$!
+for _ in $(seq 600); do [ -e interrupted/montecarlo.checkpoint.npz ] && break; sleep 0.1; done
+kill -INT -- "-$runner"
+status=0
+wait "$runner" || status=$?
+[ "$status" -eq 130 ] || { cat log.txt; fail "Ctrl-C: exit $status, expected 130"; }
+grep -q "interrupted; .* draws are kept in interrupted/montecarlo.checkpoint.npz" log.txt || { cat log.txt; fail "Ctrl-C: no message"; }
+if grep -q "Traceback" log.txt; then cat log.txt; fail "Ctrl-C printed a traceback"; fi
+[ "$(ls "$TMPDIR" | wc -l)" -eq "$before" ] || fail "Ctrl-C left a temporary folder in $TMPDIR"
 
 echo "distributed_commands: all checks passed"

@@ -363,6 +363,28 @@ JOINTCOMP_API jc_status jc_forward_kinematics_batch(jc_robot* robot, int32_t cou
    parameters as JSON text (NULL: kinematics and dynamics only); the chain as for jc_robot_load. */
 JOINTCOMP_API jc_status jc_robot_load_text(const char* urdf_text, const char* parameters_json, jc_robot** robot);
 
+/* ---- The paper's whole method on a given truth (issue 43) -----------------------------------------------
+   Measure, identify, compensate, as `jointcomp paper` does: the paper's identification campaigns are simulated
+   on `truth` with the instruments' noise (the stiffness protocol under known loads, measured by the laser
+   tracker and two levels; the joint-2 sweep from -50 to +50 deg, by the tracker; both quasi-static), the joint
+   stiffnesses and joint 2's transmission error are identified against `nominal`'s parameters
+   (model/identify), and the spiral is compensated with the identified model and followed by `truth`.
+   options_json (may be NULL): "seed" (the campaigns' noise, a whole number from 0 to 2^53; default 2012, as
+   `jointcomp paper --seed`), "use_plant" (true: the truth is the flexible-joint plant, needs its drives;
+   default false), "dynamic_correction" (true: a fourth run with the dynamic correction of the identified
+   model, needs use_plant; default false), "feed_rate_m_per_s" (0.003 to 2, default 0.03; acceleration and
+   jerk scale with it). metrics (3 x 5, or 4 x 5 with dynamic_correction; all in m): per run Ra, Rz, RMS, max
+   and mean, the runs of jc_spiral_experiment with the identified model's corrections. *identified (NULL: not
+   wanted): `nominal` with the identified parameters, and nominal's drives. *report (NULL: not wanted): both
+   identifications' reports in one JSON document ("format": "jointcomp-identification-reports/1", which
+   `jointcomp montecarlo --report` takes once written to a file; truths included) and their summaries.
+   Outputs are written only on success. JC_ERROR_INVALID_ARGUMENT for bad handles, options or metrics length;
+   JC_ERROR_MEASUREMENT when a campaign cannot identify what is asked; JC_ERROR_SOLVER when the simulated robot
+   does not settle. Neither robot handle is changed or locked. */
+JOINTCOMP_API jc_status jc_identify_and_compensate(jc_robot* nominal, jc_robot* truth, const char* options_json,
+                                                   double* metrics, int32_t metrics_len, jc_robot** identified,
+                                                   jc_report** report);
+
 /* ---- Dynamic compensation of a trajectory with time (issue 18) ------------------------------------------
    The references that make the modelled robot (flexible joints, the drives and controller of the
    parameters' "plant" object, every effect, the handle's payload and tool wrench) put its links on a

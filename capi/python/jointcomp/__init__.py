@@ -19,8 +19,8 @@ environment variable).
 from . import _native
 from .errors import (FileError, InternalError, InvalidArgumentError, JointcompError, OutOfMemoryError,
                      PlantLimitError, SolverError, UnreachableError, WrongHandleError)
-from .identification import (Report, calibrate, discover, identify_stiffness, identify_transmission_error,
-                             simulate_campaign)
+from .identification import (Report, calibrate, discover, identify_and_compensate, identify_stiffness,
+                             identify_transmission_error, simulate_campaign)
 from .metrics import Metrics, accuracy_metrics, average_absolute_deviation, peak_to_peak_deviation
 from .plant import Plant, PlantStatistics
 from .robot import (RUN_NAMES, DynamicCompensation, Robot, SpiralExperiment, SpiralPlan,
@@ -87,7 +87,8 @@ __all__ = [
     "ABI_VERSION", "__version__", "DynamicCompensation", "DistributedError", "FleetResult", "MonteCarloResult", "fleet", "monte_carlo", "FileError", "InternalError", "InvalidArgumentError", "JointcompError", "Metrics",
     "OutOfMemoryError", "Plant", "PlantLimitError", "PlantStatistics", "RUN_NAMES", "Report", "Robot", "SolverError", "SpiralExperiment",
     "SpiralJob", "SpiralPlan", "TrajectoryCompensation", "UnreachableError", "WrongHandleError", "abi_version",
-    "accuracy_metrics", "average_absolute_deviation", "calibrate", "discover", "identify_stiffness",
+    "accuracy_metrics", "average_absolute_deviation", "calibrate", "discover", "identify_and_compensate",
+    "identify_stiffness",
     "identify_transmission_error", "last_error", "library_path", "peak_to_peak_deviation",
     "set_progress", "simulate_campaign", "status_name", "version",
 ]

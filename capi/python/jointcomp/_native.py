@@ -125,6 +125,7 @@ PROTOTYPES = {
     "jc_spiral_job_run": (_i32, [_handle, _double_p, _i32, ctypes.c_int64, _double_p, _i32, _double_p, _i32]),
     "jc_forward_kinematics_batch": (_i32, [_handle, _i32, _double_p, _i32, _double_p, _i32]),
     "jc_robot_load_text": (_i32, [_text, _text, _handle_p]),
+    "jc_identify_and_compensate": (_i32, [_handle, _handle, _text, _double_p, _i32, _handle_p, _handle_p]),
 }
 
 

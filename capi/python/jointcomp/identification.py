@@ -116,3 +116,29 @@ def discover(nominal, campaigns, holdouts=None, **options):
     angle_ranges, pairs (jc_discover in jointcomp.h)."""
     return _run(_native.lib.jc_discover, nominal.handle, _paths(campaigns, "campaigns"),
                 _paths(holdouts, "holdouts"), _options(options))
+
+
+def identify_and_compensate(nominal, truth, *, seed=2012, use_plant=False, dynamic_correction=False,
+                            feed_rate_m_per_s=0.03):
+    """The paper's whole method on ``truth`` (a Robot playing the real robot; jc_identify_and_compensate):
+    its identification campaigns simulated on ``truth`` with the instruments' noise of ``seed``, the joint
+    stiffnesses and joint 2's transmission error identified against ``nominal``'s parameters, and the spiral
+    compensated with the identified model and followed by ``truth`` (quasi-static, or the flexible-joint plant
+    with ``use_plant``; ``dynamic_correction`` adds the fourth run). Returns ``(identified, metrics, report)``:
+    the identified Robot, one :class:`jointcomp.Metrics` per run (see jointcomp.RUN_NAMES; the fourth is the
+    dynamic correction's) and the :class:`Report` holding both identifications' reports."""
+    from .metrics import Metrics
+    import numpy as np
+    for name, robot in (("nominal", nominal), ("truth", truth)):
+        if not isinstance(robot, Robot):
+            raise TypeError("%s must be a jointcomp.Robot, not %s" % (name, type(robot).__name__))
+    metrics = np.empty((4 if dynamic_correction else 3, 5))
+    robot = ctypes.c_void_p()
+    report = ctypes.c_void_p()
+    options = {"seed": seed, "use_plant": use_plant, "dynamic_correction": dynamic_correction,
+               "feed_rate_m_per_s": feed_rate_m_per_s}
+    _native.check(_native.lib.jc_identify_and_compensate(nominal.handle, truth.handle, _options(options),
+                                                         _native.pointer(metrics), metrics.size,
+                                                         ctypes.byref(robot), ctypes.byref(report)))
+    identified = Robot._adopt(robot)
+    return identified, [Metrics(*row) for row in metrics.tolist()], Report(report)

@@ -9,6 +9,7 @@ import math
 import os
 import pickle
 import signal
+import time
 
 import numpy as np
 import pytest
@@ -215,6 +216,25 @@ def test_a_worker_killed_mid_run_loses_no_draw(serial_run, tmp_path):
                        batch_size=1, progress=kill_a_worker_once)
         assert worker not in connected.scheduler_info()["workers"]  # it died (its nanny started another)
     assert killed and _bytes(tmp_path) == _bytes(serial_out)
+
+
+def test_a_lost_scheduler_stops_the_run_with_its_checkpoint(serial_run, tmp_path):
+    import distributed
+    _, serial_out = serial_run
+    other = distributed.LocalCluster(n_workers=1, threads_per_worker=1, dashboard_address=None, silence_logs=50)
+    lost = []
+
+    def lose_the_scheduler(done, total, rate):
+        if not lost:
+            other.close()
+            lost.append(time.monotonic())
+    with pytest.raises(jd.DistributedError, match="lost .* run again with --resume"):
+        jd.monte_carlo(RX170_URDF, RX170_PARAMETERS, samples=SAMPLES, seed=7, scheduler=other.scheduler_address,
+                       out=tmp_path, batch_size=1, progress=lose_the_scheduler)
+    # Said at once, not after the client's 30 s of trying to reconnect (nor a cancel waiting for them).
+    assert time.monotonic() - lost[0] < 15
+    jd.monte_carlo(RX170_URDF, RX170_PARAMETERS, samples=SAMPLES, seed=7, serial=True, out=tmp_path, resume=True)
+    assert _bytes(tmp_path) == _bytes(serial_out)
 
 
 def test_a_scheduler_without_workers_is_named_within_seconds():

@@ -174,3 +174,27 @@ def test_bad_options_and_files_raise_named_errors(robot, tmp_path):
     with pytest.raises(jointcomp.InvalidArgumentError, match="both NULL"):
         robot.save()
     assert not (tmp_path / "x.csv").exists()  # nothing written by a refused call
+
+
+def test_identify_and_compensate_beats_the_nominal_model_and_refuses_bad_input(robot, bare_robot):
+    """The paper's whole method on a truth of the caller's (a stiffer joint 2, a stronger balancer spring):
+    the identified model, measured on that truth, leaves less Ra after both corrections than the nominal one;
+    the identified robot carries the truth's joint-2 stiffness within its stated interval."""
+    def changed(document):
+        effect(document, "compliance")["stiffness_nm_per_rad"][1] *= 1.04
+        effect(document, "spring_balancer")["stiffness_n_per_m"] *= 1.03
+
+    with jointcomp.Robot.from_json(RX170_URDF, parameters_with(changed)) as truth:
+        nominal_runs = robot.spiral_experiment(use_plant=False, truth=truth).metrics
+        identified, metrics, report = jointcomp.identify_and_compensate(robot, truth, seed=11)
+        with identified:
+            assert metrics[2].ra < 0.5 * nominal_runs[2].ra, (metrics[2], nominal_runs[2])
+            joint2 = report.data["reports"][0]["joints"][1]["local"]
+            low, high = joint2["stiffness_interval_nm_per_rad"]
+            assert low <= 850000.0 * 1.04 <= high, joint2
+        with pytest.raises(jointcomp.InvalidArgumentError, match="feed_rate_m_per_s"):
+            jointcomp.identify_and_compensate(robot, truth, feed_rate_m_per_s=50)
+        with pytest.raises(jointcomp.InvalidArgumentError, match="use_plant"):
+            jointcomp.identify_and_compensate(robot, bare_robot, use_plant=True)
+        with pytest.raises(TypeError, match="truth must be a jointcomp.Robot"):
+            jointcomp.identify_and_compensate(robot, "truth.json")

@@ -1,6 +1,7 @@
 """The command line of jointcomp.distributed: what `jointcomp montecarlo` and `jointcomp fleet` run."""
 
 import argparse
+import logging
 import math
 import sys
 
@@ -73,6 +74,9 @@ def _fleet(arguments):
 
 def main(argv=None):
     arguments = _parser().parse_args(argv)
+    # Dask's and Tornado's own logs of a lost connection are tracebacks; what went wrong is said once, below.
+    for name in ("distributed", "tornado", "asyncio"):
+        logging.getLogger(name).setLevel(logging.CRITICAL)
     try:
         if arguments.workers is not None and arguments.workers < 1:
             raise DistributedError("--workers is %d, must be at least 1" % arguments.workers)

@@ -199,17 +199,46 @@ def _report_data(report):
         raise DistributedError("report: the text is not JSON: %s" % error) from None
 
 
+def _reports_distribution(data):
+    """Several identifications of one robot in one document (``jointcomp paper``'s identification/report.json:
+    its stiffness and transmission-error reports, and the load effects refitted to the sweep): the union of
+    their laws (standard errors only)."""
+    entries, left = [], []
+    parts = data.get("reports")
+    if not isinstance(parts, list):
+        raise DistributedError("report: malformed jointcomp-identification-reports/1 report (no list of reports)")
+    for part in parts:
+        try:
+            part_entries, part_left = report_distribution(part)
+        except DistributedError as error:
+            left.append(str(error))
+            continue
+        entries += part_entries
+        left += part_left
+    # The load effects refitted to the sweep (the balancer), by their posterior standard errors.
+    for p in (data.get("load_refit") or {}).get("parameters", []):
+        if p.get("se"):
+            entries.append(_entry(p["name"], "normal", p["se"], False, "load refit to the sweep"))
+    if not entries:
+        raise DistributedError("report: none of its reports states a parameter with a standard error (%s)"
+                               % "; ".join(left))
+    return check_distribution(entries, "report"), left
+
+
 def report_distribution(report):
     """The distribution a report states: ``(entries, not_propagated)``. ``report``: a jointcomp.Report, its
     JSON text or dict, or the path of a report.json. Every estimate with a standard error becomes a normal
     law around the identified value (the parameters must be the identified ones: the report's robot).
-    Reports: stiffness and transmission-error identification, calibration (the instrument frame and target
+    Reports: stiffness and transmission-error identification (also both in one, as ``jointcomp paper``
+    writes them), calibration (the instrument frame and target
     are the set-up's, not the robot's: not_propagated) and discovery. A calibration report's correlation
     comes along as a correlation entry over the propagated parameters. A report missing what its format
     promises is named, never a traceback."""
     data = _report_data(report)
     if not isinstance(data, dict):
         raise DistributedError("report: a report is a JSON object, not %s" % type(data).__name__)
+    if data.get("format") == "jointcomp-identification-reports/1":
+        return _reports_distribution(data)
     try:
         entries, left = _report_entries(data)
         entries = _with_correlation(entries, data.get("correlation"))

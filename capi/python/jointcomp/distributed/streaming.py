@@ -10,7 +10,9 @@ import contextlib
 import os
 import pathlib
 import shutil
+import signal
 import tempfile
+import threading
 import time
 
 from .laws import DistributedError
@@ -63,9 +65,12 @@ def cluster(client=None, scheduler=None, n_workers=None, start_timeout=30.0, das
         except (OSError, TimeoutError) as error:
             raise DistributedError("scheduler %s: no connection within %g s (%s)" % (
                 scheduler, start_timeout, error)) from None
-        with connected:
+        try:
             _wait_for_workers(connected, scheduler, start_timeout)
             yield connected
+        finally:
+            with contextlib.suppress(Exception):  # a lost scheduler is not waited for
+                connected.close(timeout=2)
         return
     n_workers = n_workers or os.cpu_count() or 1
     if n_workers < 1:
@@ -87,6 +92,10 @@ def _start_local(distributed, n_workers, start_timeout, dashboard, scratch):
     # The scheduler's HTTP server starts whatever the dashboard setting: on loopback and a free port unless a
     # dashboard address is asked for (dashboard_address=None alone still bound 0.0.0.0:8787).
     scheduler_kwargs = {"dashboard": dashboard is not None, "dashboard_address": dashboard or "127.0.0.1:0"}
+    # The workers start with Ctrl-C ignored (a signal ignored stays so in a new process): it reaches the whole
+    # process group, and this process, not each worker with its own traceback, stops the run and the cluster.
+    main_thread = threading.current_thread() is threading.main_thread()
+    interrupt = signal.signal(signal.SIGINT, signal.SIG_IGN) if main_thread else None
     try:
         return distributed.LocalCluster(n_workers=n_workers, threads_per_worker=1, processes=True,
                                         host="127.0.0.1", dashboard_address=None, scheduler_kwargs=scheduler_kwargs,
@@ -94,14 +103,21 @@ def _start_local(distributed, n_workers, start_timeout, dashboard, scratch):
     except (TimeoutError, OSError, RuntimeError) as error:
         raise DistributedError("the local cluster of %d workers did not start within %g s (%s)" % (
             n_workers, start_timeout, error)) from None
+    finally:
+        if main_thread:
+            signal.signal(signal.SIGINT, interrupt)
+
+
+WORKER_WAIT = 10.0  # s: the longest a scheduler without workers is waited for
 
 
 def _wait_for_workers(client, scheduler, start_timeout):
+    wait = min(start_timeout, WORKER_WAIT)
     try:
-        client.wait_for_workers(1, timeout=start_timeout)
+        client.wait_for_workers(1, timeout=wait)
     except (TimeoutError, OSError) as error:
         raise DistributedError("scheduler %s has no worker (none joined within %g s): start workers with "
-                               "`dask worker %s` (%s)" % (scheduler, start_timeout, scheduler,
+                               "`dask worker %s` (%s)" % (scheduler, wait, scheduler,
                                                           type(error).__name__)) from None
 
 
@@ -163,8 +179,9 @@ def stream(client, function, job, items, merge, *, in_flight, timeout, retries, 
                 if following is not None:
                     submit(following)
     except BaseException:
-        with contextlib.suppress(Exception):
-            client.cancel(list(futures.futures))
+        if client.status == "running":  # a client that lost its scheduler would wait for it to cancel
+            with contextlib.suppress(Exception):
+                client.cancel(list(futures.futures))
         raise
 
 
@@ -223,6 +240,8 @@ def _probe(client, excluded, describe):
 
 def _result(future, item, client, excluded, describe, where):
     """The future's result; _AGAIN when its worker turned out to lack the library (it is then excluded)."""
+    if future.status == "cancelled":  # the client cancels every future when it loses the scheduler
+        raise DistributedError("%s: lost %s (its tasks were cancelled)" % (describe, where))
     try:
         return future.result()
     except (WorkerWithoutLibrary, ImportError) as error:
