@@ -3,10 +3,6 @@
 // serialise the state, terminate) with its compensation reducing the links' error on the demo move. Robots:
 // the shipped RX170, a 7-joint arm (tests/data/arm7), the UR10 as calibrated and as discovered from the
 // IPA Series A (JOINTCOMP_SHARED); and robots an FMU cannot represent, refused at export with the reason.
-#include <fcntl.h>
-#include <spawn.h>
-#include <sys/wait.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
@@ -19,41 +15,13 @@
 
 #include "fmu/description/variable_table.hpp"
 #include "tests/fmu/fmu_master.hpp"
+#include "tests/support/child_process.hpp"
 #include "tests/support/shared_data.hpp"
-
-extern char** environ;
 
 namespace jointcomp::fmutest {
 namespace {
 
 namespace fs = std::filesystem;
-
-struct ProgramRun {
-  int status = -1;     // the exit status, -1 if it did not exit
-  std::string output;  // stdout and stderr
-};
-
-// Runs a program from an argument vector (no shell), its output into a file read back.
-ProgramRun runProgram(const std::vector<std::string>& arguments, const std::string& scratch) {
-  const std::string log = scratch + "/run.log";
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  posix_spawn_file_actions_addopen(&actions, 1, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  posix_spawn_file_actions_adddup2(&actions, 1, 2);
-  std::vector<char*> argv;
-  for (const std::string& a : arguments) argv.push_back(const_cast<char*>(a.c_str()));
-  argv.push_back(nullptr);
-  pid_t pid = 0;
-  ProgramRun run;
-  if (posix_spawn(&pid, argv[0], &actions, nullptr, argv.data(), environ) == 0) {
-    int status = 0;
-    waitpid(pid, &status, 0);
-    run.status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  }
-  posix_spawn_file_actions_destroy(&actions);
-  run.output = readFile(log);
-  return run;
-}
 
 std::string scratchFolder(const std::string& name) {
   const std::string folder = std::string(JOINTCOMP_FMU_SCRATCH_DIR) + "/any robot/" + name;
@@ -68,14 +36,14 @@ std::string exportFmu(const std::string& name, int version, const std::vector<st
   std::vector<std::string> arguments = {JOINTCOMP_CLI, "export-fmu"};
   arguments.insert(arguments.end(), robot_options.begin(), robot_options.end());
   arguments.insert(arguments.end(), {"--fmi", std::to_string(version), "--out", scratch + "/" + name + ".fmu"});
-  const ProgramRun exported = runProgram(arguments, scratch);
-  EXPECT_EQ(exported.status, 0) << exported.output;
-  if (exported.status != 0) return "";
+  const test::ChildResult exported = test::runChild(arguments);
+  EXPECT_EQ(exported.exit_code, 0) << exported.output;
+  if (exported.exit_code != 0) return "";
   const std::string unzipped_fmu = scratch + "/unzipped";
   fs::create_directories(unzipped_fmu);
-  const ProgramRun unzipped_run =
-      runProgram({"/usr/bin/unzip", "-q", scratch + "/" + name + ".fmu", "-d", unzipped_fmu}, scratch);
-  EXPECT_EQ(unzipped_run.status, 0) << unzipped_run.output;
+  const test::ChildResult unzipped_run =
+      test::runChild({"/usr/bin/unzip", "-q", scratch + "/" + name + ".fmu", "-d", unzipped_fmu});
+  EXPECT_EQ(unzipped_run.exit_code, 0) << unzipped_run.output;
   return unzipped_fmu;
 }
 
@@ -137,10 +105,10 @@ void expectAWorkingFmu(const std::string& name, const std::vector<std::string>& 
     ASSERT_FALSE(folder.empty());
     const std::string schema = test::sharedFile("fmi-schema");
     if (!schema.empty() && fs::exists(schema)) {
-      const ProgramRun valid = runProgram({"/usr/bin/bash", std::string(JOINTCOMP_TESTS_DIR) + "/fmu/check_schema.sh",
-                                           std::to_string(version), folder + "/modelDescription.xml"},
-                                          folder);
-      EXPECT_EQ(valid.status, 0) << valid.output;
+      const test::ChildResult valid =
+          test::runChild({"/usr/bin/bash", std::string(JOINTCOMP_TESTS_DIR) + "/fmu/check_schema.sh",
+                          std::to_string(version), folder + "/modelDescription.xml"});
+      EXPECT_EQ(valid.exit_code, 0) << valid.output;
     }
     auto without = makeMaster(version, folder);
     ASSERT_EQ(static_cast<int>(without->roleVrs("q_desired").size()), joints);
@@ -181,10 +149,10 @@ protected:
     scratch_ = scratchFolder(std::string("ur10_") + ::testing::UnitTest::GetInstance()->current_test_info()->name());
     campaign_ = scratch_ + "/A.csv";
     const std::string series = test::sharedFile("data/ipa-ur10/Series_A");
-    const ProgramRun imported = runProgram({JOINTCOMP_CLI, "import-ipa", "--in", series + "/measurements_grid.csv",
-                                            "--trafo", series + "/Trafo_TM_F_init.txt", "--out", campaign_},
-                                           scratch_);
-    ASSERT_EQ(imported.status, 0) << imported.output;
+    const test::ChildResult imported =
+        test::runChild({JOINTCOMP_CLI, "import-ipa", "--in", series + "/measurements_grid.csv", "--trafo",
+                        series + "/Trafo_TM_F_init.txt", "--out", campaign_});
+    ASSERT_EQ(imported.exit_code, 0) << imported.output;
   }
   void expectExported(const std::string& command, const std::vector<std::string>& options) {
     const std::string out = scratch_ + "/" + command;
@@ -192,8 +160,8 @@ protected:
                                           "--campaign",  campaign_, "--out",  out,
                                           "--no-plot"};
     arguments.insert(arguments.end(), options.begin(), options.end());
-    const ProgramRun fitted = runProgram(arguments, scratch_);
-    ASSERT_EQ(fitted.status, 0) << fitted.output;
+    const test::ChildResult fitted = test::runChild(arguments);
+    ASSERT_EQ(fitted.exit_code, 0) << fitted.output;
     EXPECT_NE(fitted.output.find("export-fmu"), std::string::npos) << "the command that exports the result\n"
                                                                    << fitted.output;
     expectAWorkingFmu("ur10_" + command,
@@ -223,8 +191,8 @@ TEST(FmuOfAnyRobot, ARobotTheFmuCannotRepresentIsRefusedWithTheReason) {
     std::vector<std::string> arguments = {JOINTCOMP_CLI, "export-fmu"};
     arguments.insert(arguments.end(), c.options.begin(), c.options.end());
     arguments.insert(arguments.end(), {"--out", scratch + "/refused.fmu"});
-    const ProgramRun run = runProgram(arguments, scratch);
-    EXPECT_NE(run.status, 0) << run.output;
+    const test::ChildResult run = test::runChild(arguments);
+    EXPECT_NE(run.exit_code, 0) << run.output;
     EXPECT_NE(run.output.find(c.reason), std::string::npos) << run.output;
     EXPECT_FALSE(fs::exists(scratch + "/refused.fmu"));
   }
