@@ -332,8 +332,7 @@ FmuResources loadFmuResources(const std::string& resource_dir, const std::string
   ParameterSet parameters = parseParameterSet(parameter_text, parameter_path, robot, EffectRegistry::builtin());
   ModelAttributes model;
   model.version = version;
-  VariableTable table =
-      buildVariableTable(*robot, parameters, model, token);
+  VariableTable table = buildVariableTable(*robot, parameters, model, token);
   return FmuResources{std::move(robot), std::move(parameters), std::move(table)};
 }
 

@@ -48,7 +48,6 @@
 #include "model/plant/dynamic_compensation.hpp"
 #include "model/plant/flexible_joint_plant.hpp"
 #include "model/robot/kinematics.hpp"
-#include "fmu/description/variable_table.hpp"
 #include "tests/fmu/fmu_master.hpp"
 
 namespace jointcomp {
