@@ -69,7 +69,9 @@ const char* optionHelp(const std::string& name) {
       {"protocol", "stiffness, joint2-sweep, spiral, random or back-and-forth"},
       {"perturb", "perturb the truth with this seed and write it beside the campaign"},
       {"plant", "measure on the flexible-joint plant"},
-      {"target", "target on the flange x,y,z in mm"},
+      {"target",
+       "target on the flange x,y,z in mm (the tool offset; calibrate: replaces the campaigns' # target:, fitted "
+       "unless --fix target)"},
       {"from", "sweep start in deg"},
       {"to", "sweep end in deg"},
       {"step", "sweep step in deg (at most 1e6 steps)"},
@@ -82,7 +84,11 @@ const char* optionHelp(const std::string& name) {
       {"warm-up", "thermal warm-up RISE_DEGC[,TAU_S[,START_DEGC]]"},
       {"in", "the file to import"},
       {"trafo", "the IPA tracker-to-base transform file"},
-      {"columns", "campaign column = export column, comma-separated (t=Time,q1=A1,...)"},
+      {"columns",
+       "campaign column = export column, comma-separated (t=Time,q1=A1,...); joint_K columns are found as qK; "
+       "x=X_target+dX takes the sum of two columns"},
+      {"joints",
+       "the number of joints, 1 to 12 (default: as many as mapped; refused when the header seems to hold one more)"},
       {"angles", "the export's angle unit: deg or rad"},
       {"lengths", "the export's length unit: mm or m"},
       {"separator", "the export's cell separator: , ; | or tab (default: detected)"},

@@ -33,8 +33,8 @@
 #include <vector>
 
 #include "model/effects/registry.hpp"
-#include "model/identify/geometric_calibration.hpp"
 #include "model/identify/joint_coverage.hpp"
+#include "model/identify/kinematic_calibration.hpp"
 #include "model/identify/residual_analysis.hpp"
 
 namespace jointcomp {
