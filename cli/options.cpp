@@ -18,7 +18,9 @@ const char* optionHelp(const std::string& name) {
       {"params", "parameter file (joint-error effects, gears, drives)"},
       {"truth", "parameter file of the simulated robot as it really is"},
       {"out", "output folder (a file for simulate, the importers and export-fmu); checked before any work"},
-      {"campaign", "measurement campaign(s) to fit (docs/measurement-campaign.md), comma-separated or repeated"},
+      {"campaign",
+       "measurement campaign(s) to fit (docs/measurement-campaign.md), comma-separated or repeated; calibrate takes "
+       "at most 1,000,000 rows in all (about 6 KB of memory a row), discover at most 100,000 (about 50 KB a row)"},
       {"holdout", "held-out campaign(s), evaluated with only their instrument frame refitted; repeatable"},
       {"seed", "random seed, 0 to 2^62"},
       {"compensate-joints", "joints whose references are compensated, e.g. 2,3 (default: all)"},

@@ -594,6 +594,13 @@ DiscoveryResult discoverEffects(const JointErrorModel& prior, const std::vector<
   if (options.angle_ranges < 2 || options.angle_ranges > 50)
     throw InvalidArgument("discover: angle_ranges must lie in 2 .. 50");
   if (fitted.empty()) throw InvalidArgument("discover: no fitted campaign");
+  std::size_t rows = 0;
+  for (const MeasurementCampaign& c : fitted) rows += c.size();
+  if (rows > kMaxDiscoveryRows) {
+    throw InvalidArgument("discover: the fitted campaigns have " + std::to_string(rows) +
+                          " rows, more than discovery takes (" + std::to_string(kMaxDiscoveryRows) +
+                          " rows, about 50 KB of memory each)");
+  }
   return DiscoveryRun(prior, KinematicCalibration(prior, fitted, options.calibration), heldout, options).run();
 }
 

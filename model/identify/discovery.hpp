@@ -29,6 +29,7 @@
 // Library code: never prints; throws InvalidArgument for unusable inputs, with the campaign's name.
 #pragma once
 
+#include <cstddef>
 #include <string>
 #include <vector>
 
@@ -38,6 +39,11 @@
 #include "model/identify/residual_analysis.hpp"
 
 namespace jointcomp {
+
+// The most fitted rows discovery takes, all campaigns together: its candidates' columns and the
+// linearised problem grow by about 50 KB a row (20,000 rows: about 1 GB), so 100,000 rows need about 5 GB.
+// Beyond it discoverEffects refuses, naming the number.
+constexpr std::size_t kMaxDiscoveryRows = 100000;
 
 struct DiscoveryOptions {
   DiscoveryOptions();  // out of line: GCC 12 warns falsely of the inlined defaults of its std::function

@@ -608,6 +608,10 @@ GeometricCalibrationResult calibrateGeometry(const JointErrorModel& prior,
   const int n = robot.dof();
   const MeasurementCampaign whole = concatenateCampaigns(campaigns);
   const std::string& source = whole.source;
+  if (whole.size() > kMaxCalibrationRows) {
+    throw InvalidArgument(source + ": " + std::to_string(whole.size()) + " rows are more than a calibration takes (" +
+                          std::to_string(kMaxCalibrationRows) + " rows, about 6 KB of memory each)");
+  }
   for (const MeasurementCampaign& c : campaigns) {
     if (c.has_target != whole.has_target || (c.has_target && c.target_in_flange != whole.target_in_flange)) {
       throw InvalidArgument("campaign '" + c.source + "' names another target in the flange than '" +

@@ -39,6 +39,7 @@
 // errors of model/common/errors.hpp with the campaign's name in the message.
 #pragma once
 
+#include <cstddef>
 #include <string>
 #include <vector>
 
@@ -259,6 +260,11 @@ struct GeometricCalibrationResult {
 // of another robot, SolverError when Levenberg-Marquardt does not converge. Messages name the campaign.
 GeometricCalibrationResult calibrateGeometry(const JointErrorModel& prior, const MeasurementCampaign& campaign,
                                              const GeometricCalibrationOptions& options = {});
+
+// The most rows a calibration takes, all campaigns together: its memory grows by about 6 KB a row (100,000
+// rows of a six-joint arm: 601 MB; the Jacobian by every parameter and its copies), 1e6 rows about 6 GB.
+// Beyond it calibrateGeometry refuses, naming the number.
+constexpr std::size_t kMaxCalibrationRows = 1000000;
 
 // Campaigns in the instrument frame whose frames, each fitted alone on the prior, lie further apart than
 // this are from different set-ups (a nominal robot's frame fit moves by millimetres between campaigns of one).
