@@ -29,9 +29,74 @@
 
 namespace jointcomp::cli {
 
-int runCalibrate(int argc, char** argv) {
-  // --campaign and --holdout may be given more than once (and each may list files separated by commas).
-  std::vector<std::string> campaign_paths, holdouts;
+namespace {
+
+// --fix takes parameter names, and "target" and "frame" for their groups.
+std::vector<std::string> expandedFixNames(const std::vector<std::string>& names) {
+  std::vector<std::string> out;
+  for (const std::string& name : names) {
+    if (name == "target") {
+      for (const char* axis : {"x", "y", "z"}) out.push_back(std::string("target.") + axis + "_m");
+    } else if (name == "frame") {
+      for (const char* p : {"tx_m", "ty_m", "tz_m", "rx_rad", "ry_rad", "rz_rad"})
+        out.push_back(std::string("frame.") + p);
+    } else {
+      out.push_back(name);
+    }
+  }
+  return out;
+}
+
+// The target on the flange every campaign is calibrated with: --target, else the campaigns' own `# target:`,
+// else the "tool" of the parameter file (a calibrated robot's, on the URDF it was measured from). Returns
+// where it came from ("" when from the campaigns or nowhere).
+std::string applyTarget(const Options& options, const RobotSetup& setup, std::vector<MeasurementCampaign>& campaigns,
+                        std::vector<std::pair<std::string, MeasurementCampaign>>& held) {
+  Eigen::Vector3d target;
+  std::string from;
+  if (options.has("target")) {
+    const std::vector<double> mm = numberList(options.get("target", ""), "target", {-1e4, 1e4});
+    if (mm.size() != 3) throw UsageError("--target takes x,y,z in mm");
+    target = Eigen::Vector3d(mm[0], mm[1], mm[2]) * 1e-3;
+    from = "--target";
+  } else if (setup.parameters.tool && !campaigns.front().has_target &&
+             setup.parameters.tool->flange_link == setup.robot->tip_link) {
+    target = setup.parameters.tool->in_flange;
+    from = setup.params + " (tool)";
+  } else {
+    return "";
+  }
+  const auto apply = [&](MeasurementCampaign& campaign) {
+    campaign.has_target = true;
+    campaign.target_in_flange = target;
+  };
+  for (MeasurementCampaign& campaign : campaigns) apply(campaign);
+  for (auto& entry : held) apply(entry.second);
+  return from;
+}
+
+std::string urdfHeader(const Robot& robot, const std::string& urdf, const std::string& campaign_path,
+                       const CalibrationRun& run, const UrdfToolLink& tool) {
+  std::string rigid;
+  for (const std::string& item : run.compliance_left_out) {
+    rigid += (rigid.empty() ? "" : ", ") + item.substr(0, item.find(':'));
+  }
+  char target[160];
+  std::snprintf(target, sizeof(target), "%.6f, %.6f, %.6f mm", tool.offset.x() * 1e3, tool.offset.y() * 1e3,
+                tool.offset.z() * 1e3);
+  return "  " + robot.name + " after kinematic calibration by jointcomp calibrate\n  nominal: " + urdf +
+         "\n  campaign: " + campaign_path + "\n  Joint placements corrected. The chain ends at link '" + tool.name +
+         "', the calibrated target (" + target + " from '" + robot.tip_link +
+         "'): campaigns measured with this URDF need no target.\n" +
+         "  Joint offsets and compliance are in the parameter file" +
+         (rigid.empty() ? std::string(".")
+                        : "; it writes the compliance of " + rigid + " as rigid (summary.txt says why).");
+}
+
+// --campaign and --holdout may be given more than once (and each may list files separated by commas):
+// taken out of the arguments into their lists; the rest is returned for the option parser.
+std::vector<char*> takeCampaignArguments(int argc, char** argv, std::vector<std::string>& campaign_paths,
+                                         std::vector<std::string>& holdouts) {
   std::vector<char*> rest = {argv[0]};
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
@@ -44,9 +109,17 @@ int runCalibrate(int argc, char** argv) {
     }
     rest.push_back(argv[i]);
   }
+  return rest;
+}
+
+}  // namespace
+
+int runCalibrate(int argc, char** argv) {
+  std::vector<std::string> campaign_paths, holdouts;
+  std::vector<char*> rest = takeCampaignArguments(argc, argv, campaign_paths, holdouts);
   const Options options(static_cast<int>(rest.size()), rest.data(),
                         {"urdf", "base-link", "tip-link", "campaign", "holdout", "params", "out", "loss",
-                         "loss-scale-mm", "pivot-threshold", "fix", "no-plot", "quiet"},
+                         "loss-scale-mm", "pivot-threshold", "fix", "target", "no-plot", "quiet"},
                         {"no-plot", "quiet"});
   if (campaign_paths.empty() || !options.has("out")) {
     throw std::invalid_argument(
@@ -69,28 +142,28 @@ int runCalibrate(int argc, char** argv) {
   calibration.loss_scale = options.number("loss-scale-mm", 0.0, {0.0, 1e6, true}) * 1e-3;
   calibration.identifiability.relative_pivot_threshold =
       options.number("pivot-threshold", calibration.identifiability.relative_pivot_threshold, {0.0, 1.0, true});
-  calibration.fixed = splitCommaList(options.get("fix", ""));
+  calibration.fixed = expandedFixNames(splitCommaList(options.get("fix", "")));
   calibration.progress = consoleProgress(options);
 
   std::printf("jointcomp calibrate: robot %s (%s), campaign %s\n", robot->name.c_str(), urdf.c_str(),
               campaign_path.c_str());
+  if (!setup.assumed().empty()) std::printf("  %s\n", setup.assumed().c_str());
   std::vector<MeasurementCampaign> campaigns;
   for (const std::string& path : campaign_paths) campaigns.push_back(readCampaignFile(path));
   std::vector<std::pair<std::string, MeasurementCampaign>> held;
   for (const std::string& path : holdouts) held.emplace_back(path, readCampaignFile(path));
+  const std::string target_from = applyTarget(options, setup, campaigns, held);
+  if (!target_from.empty()) std::printf("  target on the flange from %s\n", target_from.c_str());
   const CalibrationRun run = runCalibration(prior, campaigns, held, calibration);
 
+  // The tool point the calibration fitted, in both files: the URDF ends at it (a link of its own, so that
+  // kinematics, compensation and the plant work there), the parameter file says where it is on the flange.
   const std::string urdf_out = out + "/" + plainFileName(robot->name) + "_calibrated.urdf";  // inside --out
-  saveRobotUrdf(*run.calibrated_robot, urdf_out,
-                "  " + robot->name + " after kinematic calibration by jointcomp calibrate\n  nominal: " + urdf +
-                    "\n  campaign: " + campaign_path + "\n  Joint placements corrected; " +
-                    (run.compliance_left_out.empty()
-                         ? std::string("joint offsets and compliance are in the parameter file.")
-                         : "joint offsets are in the parameter file, with the compliance of all joints but " +
-                               std::to_string(run.compliance_left_out.size()) +
-                               ", which it writes as rigid (summary.txt says which and why)."));
+  const UrdfToolLink tool_link{toolLinkName(*robot), run.result.estimate.target};
+  saveRobotUrdf(*run.calibrated_robot, urdf_out, urdfHeader(*robot, urdf, campaign_path, run, tool_link), &tool_link);
   const std::string params_out = out + "/parameters.json";
-  saveParameterFile(run.calibrated, params_out, setup.parameters.drives);  // the prior's drives, if any
+  const ToolTarget tool{robot->tip_link, tool_link.name, run.result.estimate.target};
+  saveParameterFile(run.calibrated, params_out, setup.parameters.drives, &tool);  // the prior's drives, if any
 
   CalibrationSources sources;
   sources.urdf = urdf;

@@ -72,12 +72,17 @@ void writeDiscoveryOutputs(const DiscoveryResult& result, const DiscoveryOptions
   const std::shared_ptr<const Robot>& robot = setup.robot;
   const std::string& urdf = setup.urdf;
   const std::string urdf_out = out + "/" + plainFileName(robot->name) + "_discovered.urdf";
+  // The fitted target on the flange: the URDF ends at it (a link of its own), the parameter file says where.
+  const UrdfToolLink tool_link{toolLinkName(*robot), result.calibration.estimate.target};
   saveRobotUrdf(result.model.robot(), urdf_out,
                 "  " + robot->name + " after jointcomp discover\n  nominal: " + urdf +
-                    "\n  Joint placements corrected; joint offsets, compliance and the discovered effects are in the "
-                    "parameter file.");
+                    "\n  Joint placements corrected; the chain ends at link '" + tool_link.name +
+                    "', the fitted target; joint offsets, compliance and the discovered effects are in the "
+                    "parameter file.",
+                &tool_link);
   const std::string params_out = out + "/parameters.json";
-  saveParameterFile(result.model, params_out, setup.parameters.drives);  // the prior's drives, if any
+  const ToolTarget tool{robot->tip_link, tool_link.name, tool_link.offset};
+  saveParameterFile(result.model, params_out, setup.parameters.drives, &tool);  // the prior's drives, if any
 
   DiscoverySources sources;
   sources.urdf = urdf;
@@ -183,6 +188,7 @@ int runDiscover(int argc, char** argv) {
   checkFoldsFitRows(discovery.folds, fitted);
   std::printf("jointcomp discover: robot %s, %zu fitted and %zu held-out campaign(s), base %s\n", robot->name.c_str(),
               fitted.size(), held.size(), base.c_str());
+  if (!setup.assumed().empty()) std::printf("  %s\n", setup.assumed().c_str());
   const auto fit_started = std::chrono::steady_clock::now();
   const DiscoveryResult result = discoverEffects(prior, fitted, held, discovery);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - fit_started).count();

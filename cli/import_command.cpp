@@ -24,8 +24,9 @@ int runImportIpa(int argc, char** argv) {
 }
 
 int runImportCsv(int argc, char** argv) {
-  const Options options(argc, argv,
-                        {"in", "out", "columns", "angles", "lengths", "separator", "decimal", "robot", "frame"});
+  const Options options(
+      argc, argv,
+      {"in", "out", "columns", "angles", "lengths", "separator", "decimal", "robot", "frame", "joints", "target"});
   if (!options.has("in") || !options.has("out")) {
     throw std::invalid_argument(
         "import-csv needs --in EXPORT.csv and --out CAMPAIGN.csv (and --columns t=NAME,q1=NAME,..,x=NAME,..)");
@@ -53,15 +54,23 @@ int runImportCsv(int argc, char** argv) {
   const std::string frame = options.get("frame", "base");
   if (frame != "base" && frame != "instrument") throw std::invalid_argument("--frame takes base or instrument");
   csv.frame = frame == "base" ? MeasurementFrame::Base : MeasurementFrame::Instrument;
+  csv.joints = static_cast<int>(options.integer("joints", 0, 1, kMaxJoints));
+  if (options.has("target")) {
+    const std::vector<double> target = numberList(options.get("target", ""), "target", {-1e4, 1e4});
+    if (target.size() != 3) throw std::invalid_argument("--target takes x,y,z in mm");
+    csv.has_target = true;
+    csv.target_in_flange = Eigen::Vector3d(target[0], target[1], target[2]) * 1e-3;
+  }
   const MeasurementCampaign campaign = importCsvFile(options.get("in", ""), csv);
   writeCampaignFile(campaign, options.get("out", ""));
   std::printf(
       "imported %zu rows of %d joints from %s into %s (separator %s, decimal mark '%s', %s lines of "
-      "preamble skipped%s)\n",
+      "preamble skipped%s%s)\n",
       campaign.size(), campaign.dof, options.get("in", "").c_str(), options.get("out", "").c_str(),
       campaign.metadata.at("separator").c_str(), campaign.metadata.at("decimal_mark").c_str(),
       campaign.metadata.at("imported_preamble_lines").c_str(),
-      campaign.metadata.count("time_from") ? "; time from the row index" : "");
+      campaign.metadata.count("time_from") ? "; time from the row index" : "",
+      campaign.has_target ? "; target from --target" : "; no target: the flange point unless calibrate --target says");
   return 0;
 }
 

@@ -8,6 +8,7 @@
 #include "cli/commands.hpp"
 #include "cli/file_locations.hpp"
 #include "cli/options.hpp"
+#include "cli/output_paths.hpp"
 
 namespace {
 
@@ -103,9 +104,11 @@ int main(int argc, char** argv) {
   } catch (const jointcomp::cli::HelpShown&) {
     return 0;
   } catch (const jointcomp::cli::UsageError& error) {
+    jointcomp::cli::removeCreatedEmptyFolders();
     std::fprintf(stderr, "jointcomp %s: %s\n", command.c_str(), error.what());
     return 2;
   } catch (const std::bad_alloc&) {
+    jointcomp::cli::removeCreatedEmptyFolders();
     // Not "std::bad_alloc": say what it means and where to look.
     std::fprintf(stderr,
                  "jointcomp %s: out of memory: the inputs ask for more than this machine has (the limits of the "
@@ -113,6 +116,7 @@ int main(int argc, char** argv) {
                  command.c_str(), command.c_str());
     return 1;
   } catch (const std::exception& error) {
+    jointcomp::cli::removeCreatedEmptyFolders();
     std::fprintf(stderr, "jointcomp %s: %s\n", command.c_str(), error.what());
     return 1;
   }

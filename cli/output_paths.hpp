@@ -11,6 +11,10 @@ namespace jointcomp::cli {
 // it. Throws std::invalid_argument naming `option` ("--out"), the path and the reason otherwise.
 void prepareOutputFolder(const std::string& folder, const std::string& option = "--out");
 
+// The folders prepareOutputFolder and prepareOutputFile made, removed again when still empty: what a refused
+// run calls (cli/main.cpp) so that it leaves no empty --out folder behind. Folders that existed are kept.
+void removeCreatedEmptyFolders();
+
 // The same for a file to be written: its folder must be preparable and the path must not be a folder.
 void prepareOutputFile(const std::string& file, const std::string& option = "--out");
 

@@ -21,6 +21,12 @@ struct RobotSetup {
   std::string params;  // the parameter file read; "" when there was none
   std::shared_ptr<const Robot> robot;
   ParameterSet parameters;  // without a file: no effects, a direct gear train, no drives
+  // What was assumed for want of a parameter file, said once by the commands that fit ("" with a file).
+  std::string assumed() const {
+    return params.empty() ? "no --params: no prior joint errors, every gear ratio 1 (a joint's motor turns with it: "
+                            "motor and output harmonics are one), no drives"
+                          : "";
+  }
 };
 
 // The chain of the URDF that --base-link and --tip-link choose (default: the URDF's root, and the end of
@@ -50,10 +56,23 @@ inline RobotSetup loadRobotSetup(const Options& options, const std::string& defa
   const std::string urdf = options.get("urdf", default_urdf);
   const std::string params = options.get(params_option, default_params);
   auto robot = std::make_shared<const Robot>(loadRobotFromUrdfFile(urdf, chainOptions(options)));
-  ParameterSet parameters = params.empty()
-                                ? ParameterSet{JointErrorModel(robot, GearTrain::direct(robot->dof()), {}), {}}
-                                : loadParameterSet(params, robot);
+  ParameterSet parameters =
+      params.empty() ? ParameterSet{JointErrorModel(robot, GearTrain::direct(robot->dof()), {}), {}, std::nullopt}
+                     : loadParameterSet(params, robot);
   return RobotSetup{urdf, params, std::move(robot), std::move(parameters)};
+}
+
+// A calibrated URDF's tool link (calibrate, discover): the tip link's name with "_target", made unique.
+inline std::string toolLinkName(const Robot& robot) {
+  std::string name = robot.tip_link + "_target";
+  const auto taken = [&robot](const std::string& n) {
+    if (n == robot.root_link || n == robot.tip_link) return true;
+    for (const Joint& joint : robot.joints)
+      if (n == joint.child_link) return true;
+    return false;
+  };
+  while (taken(name)) name += "_";
+  return name;
 }
 
 }  // namespace jointcomp::cli

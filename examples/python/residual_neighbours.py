@@ -58,6 +58,10 @@ def main():
     frame_rotation = rotation(np.array([value["frame.rx_rad"], value["frame.ry_rad"], value["frame.rz_rad"]]))
     frame_translation = np.array([value["frame.tx_m"], value["frame.ty_m"], value["frame.tz_m"]])
     target = np.array([value["target.x_m"], value["target.y_m"], value["target.z_m"]])
+    # The calibrated URDF ends at a tool link at the fitted target (the parameter file's "tool" says so):
+    # its forward kinematics already reach the measured point.
+    if "tool" in json.load(open(report["outputs"]["parameters"])):
+        target = np.zeros(3)
     q, measured, time = read_campaign(arguments.campaign)
     with jointcomp.Robot(report["outputs"]["urdf"], report["outputs"]["parameters"]) as robot:
         predicted = np.empty_like(measured)

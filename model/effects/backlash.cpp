@@ -1,6 +1,7 @@
 #include "model/effects/backlash.hpp"
 
 #include <cmath>
+#include <cstdio>
 
 #include <nlohmann/json.hpp>
 
@@ -55,6 +56,28 @@ double BacklashDiscovery::feature(const DiscoveryData& data, int row, int joint)
 
 std::unique_ptr<Effect> BacklashDiscovery::effectOf(const DiscoveryData& data, const std::vector<double>& width) const {
   return std::make_unique<BacklashEffect>(*data.robot, width, data.velocity_scale);
+}
+
+std::string BacklashDiscovery::physicalProblem(const DiscoveryData& data, const DiscoveryCandidate& candidate,
+                                               const Eigen::VectorXd& theta, const JointVector&) const {
+  const int j = candidate.joint;
+  if (j < 0 || theta.size() != 1) return {};
+  const double width = theta[0];
+  const double turn = std::abs(width) * 0.5;  // rad, the most it moves the joint over the fitted rows
+  char text[240];
+  if (width < 0.0) {
+    std::snprintf(text, sizeof(text),
+                  "not physical: %s's backlash width %.3g rad is negative (the link would lead the motion)",
+                  jointNameOf(data, j).c_str(), width);
+  } else if (turn > kMaxPlausibleJointError) {
+    std::snprintf(
+        text, sizeof(text),
+        "not physical: %s's backlash width %.3g rad turns the joint by %.3g rad, beyond the plausible %.3g rad",
+        jointNameOf(data, j).c_str(), width, turn, kMaxPlausibleJointError);
+  } else {
+    return {};
+  }
+  return text;
 }
 
 }  // namespace jointcomp

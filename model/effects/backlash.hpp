@@ -77,6 +77,10 @@ public:
 class BacklashDiscovery : public PerJointFeatureDiscovery {
 public:
   BacklashDiscovery() : PerJointFeatureDiscovery("backlash", "backlash_width_rad", false) {}
+  // Physical: a lost motion lags the motion (width not negative) and turns the joint by at most
+  // kMaxPlausibleJointError over the fitted rows.
+  std::string physicalProblem(const DiscoveryData& data, const DiscoveryCandidate& candidate,
+                              const Eigen::VectorXd& theta, const JointVector& compliance) const override;
 
 protected:
   double feature(const DiscoveryData& data, int row, int joint) const override;

@@ -1,5 +1,7 @@
 #include "model/effects/compliance.hpp"
 
+#include <cstdio>
+
 #include <cmath>
 #include <limits>
 
@@ -28,6 +30,24 @@ std::unique_ptr<Effect> ComplianceEffect::fromJson(const nlohmann::json& json, c
 std::unique_ptr<Effect> ComplianceEffect::fromValues(const Robot& robot, const std::vector<double>& values,
                                                      const std::vector<double>&) {
   return std::make_unique<ComplianceEffect>(robot, values);
+}
+
+std::string ComplianceEffect::implausibility(double compliance, double largest_torque, const std::string& joint) {
+  char text[240];
+  if (!(compliance > 0.0)) {
+    std::snprintf(text, sizeof(text), "%s: compliance %.3g rad/(N m) is not positive", joint.c_str(), compliance);
+  } else if (1.0 / compliance < kMinPlausibleStiffness) {
+    std::snprintf(text, sizeof(text), "%s: stiffness %.3g N m/rad is below the plausible %.0f N m/rad", joint.c_str(),
+                  1.0 / compliance, kMinPlausibleStiffness);
+  } else if (compliance * largest_torque > kMaxPlausibleDeflection) {
+    std::snprintf(
+        text, sizeof(text),
+        "%s: stiffness %.3g N m/rad deflects the joint by %.3g rad at %.3g N m, beyond the plausible %.3g rad",
+        joint.c_str(), 1.0 / compliance, compliance * largest_torque, largest_torque, kMaxPlausibleDeflection);
+  } else {
+    return {};
+  }
+  return text;
 }
 
 void ComplianceEffect::parametersChanged() {

@@ -28,6 +28,14 @@ public:
   std::unique_ptr<Effect> clone() const override { return std::make_unique<ComplianceEffect>(*this); }
 
   double stiffness(int joint) const { return field(0)[static_cast<std::size_t>(joint)]; }
+
+  // The physical constraint of a joint's compliance c (rad/(N m)), which the calibration and discovery
+  // respect: positive, a stiffness 1/c of at least kMinPlausibleStiffness, and a deflection c |tau| of at
+  // most kMaxPlausibleDeflection at the largest torque the joint carried in the data. Empty when `c` meets
+  // it, else why not (naming `joint`).
+  static constexpr double kMinPlausibleStiffness = 100.0;  // N m/rad: 1 N m turns such a joint by 0.57 deg
+  static constexpr double kMaxPlausibleDeflection = 0.01;  // rad
+  static std::string implausibility(double compliance, double largest_torque, const std::string& joint);
   std::optional<CalibrationParameter> calibrationParameter() const override { return CalibrationParameter::Compliance; }
   double calibrationValue(int joint) const override { return compliance_[joint]; }
 

@@ -1,5 +1,8 @@
 #include "model/effects/discovery_family.hpp"
 
+#include <algorithm>
+#include <cmath>
+
 #include "model/effects/joint_error_model.hpp"
 
 namespace jointcomp {
@@ -24,6 +27,14 @@ std::string DiscoveryFamily::physicalProblem(const DiscoveryData&, const Discove
 
 const std::string& jointNameOf(const DiscoveryData& data, int joint) {
   return data.robot->joints[static_cast<std::size_t>(joint)].name;
+}
+
+double largestTorque(const DiscoveryData& data, int joint) {
+  double most = 0.0;
+  for (const JointVector& torque : data.load_torque) {
+    if (joint < torque.size()) most = std::max(most, std::abs(torque[joint]));
+  }
+  return most;
 }
 
 void CalibrationParameterDiscovery::offer(const DiscoveryData& data, int joint,

@@ -170,4 +170,10 @@ Eigen::MatrixXd featureColumn(const DiscoveryData& data, Feature feature) {
 // The joint's name, for "<joint>.<parameter>" names.
 const std::string& jointNameOf(const DiscoveryData& data, int joint);
 
+// The physical bound every joint-error family shares: no effect may turn a joint by more than this over
+// the fitted rows (0.57 deg; a robot deflecting or losing that much would not hold a path to a millimetre).
+constexpr double kMaxPlausibleJointError = 0.01;  // rad
+// The largest |load torque| of `joint` over the fitted rows (N m).
+double largestTorque(const DiscoveryData& data, int joint);
+
 }  // namespace jointcomp

@@ -1,6 +1,7 @@
 #include "model/effects/hysteresis.hpp"
 
 #include <cmath>
+#include <cstdio>
 
 #include <nlohmann/json.hpp>
 
@@ -52,6 +53,29 @@ double HysteresisDiscovery::feature(const DiscoveryData& data, int row, int join
 std::unique_ptr<Effect> HysteresisDiscovery::effectOf(const DiscoveryData& data,
                                                       const std::vector<double>& width) const {
   return std::make_unique<HysteresisEffect>(*data.robot, width, data.velocity_scale);
+}
+
+std::string HysteresisDiscovery::physicalProblem(const DiscoveryData& data, const DiscoveryCandidate& candidate,
+                                                 const Eigen::VectorXd& theta, const JointVector&) const {
+  const int j = candidate.joint;
+  if (j < 0 || theta.size() != 1) return {};
+  const double width = theta[0];
+  const double turn =
+      std::abs(width) * 0.5 * largestTorque(data, j);  // rad, the most it moves the joint over the fitted rows
+  char text[240];
+  if (width < 0.0) {
+    std::snprintf(text, sizeof(text),
+                  "not physical: %s's hysteresis width %.3g rad/(N m) is negative (the link would lead the motion)",
+                  jointNameOf(data, j).c_str(), width);
+  } else if (turn > kMaxPlausibleJointError) {
+    std::snprintf(
+        text, sizeof(text),
+        "not physical: %s's hysteresis width %.3g rad/(N m) turns the joint by %.3g rad, beyond the plausible %.3g rad",
+        jointNameOf(data, j).c_str(), width, turn, kMaxPlausibleJointError);
+  } else {
+    return {};
+  }
+  return text;
 }
 
 }  // namespace jointcomp

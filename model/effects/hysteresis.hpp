@@ -59,6 +59,10 @@ public:
 class HysteresisDiscovery : public PerJointFeatureDiscovery {
 public:
   HysteresisDiscovery() : PerJointFeatureDiscovery("hysteresis", "hysteresis_width_rad_per_nm", true) {}
+  // Physical: a lost motion lags the motion (width not negative) and turns the joint by at most
+  // kMaxPlausibleJointError over the fitted rows.
+  std::string physicalProblem(const DiscoveryData& data, const DiscoveryCandidate& candidate,
+                              const Eigen::VectorXd& theta, const JointVector& compliance) const override;
 
 protected:
   double feature(const DiscoveryData& data, int row, int joint) const override;

@@ -51,12 +51,19 @@ std::string NonlinearComplianceDiscovery::physicalProblem(const DiscoveryData& d
                                                           const Eigen::VectorXd& theta,
                                                           const JointVector& compliance) const {
   const int j = candidate.joint;
-  if (j < 0 || theta.size() != 1 || theta[0] >= 0.0) return {};
-  double most = 0.0;  // N m, the largest torque the joint carried in the fitted rows
-  for (const JointVector& torque : data.load_torque) most = std::max(most, std::abs(torque[j]));
+  if (j < 0 || theta.size() != 1) return {};
+  const double most = largestTorque(data, j);  // N m, the largest torque the joint carried in the fitted rows
   const double linear = j < compliance.size() ? std::max(0.0, compliance[j]) : 0.0;
-  if (linear + 3.0 * theta[0] * most * most > 0.0) return {};
   char text[240];
+  const double deflection = std::abs(linear * most + theta[0] * most * most * most);
+  if (deflection > kMaxPlausibleJointError) {
+    std::snprintf(text, sizeof(text),
+                  "not physical: %s deflects by %.3g rad at %.4g N m (compliance %.4g rad/(N m), cubic %.4g "
+                  "rad/(N m)^3), beyond the plausible %.3g rad",
+                  jointNameOf(data, j).c_str(), deflection, most, linear, theta[0], kMaxPlausibleJointError);
+    return text;
+  }
+  if (theta[0] >= 0.0 || linear + 3.0 * theta[0] * most * most > 0.0) return {};
   std::snprintf(text, sizeof(text),
                 "not physical: %s's deflection turns back at %.4g N m, inside the fitted torques (up to %.4g N m): "
                 "compliance %.4g rad/(N m), cubic %.4g rad/(N m)^3",

@@ -34,7 +34,8 @@ public:
 
 // Discovery: "nonlinear_compliance", one column per joint, tau_j^3 (needs the load torque). Physical only when
 // the joint's whole deflection c1 tau + c3 tau^3 grows with the torque over the fitted rows' torques
-// (c1 + 3 c3 tau^2 > 0): a softening that turns the deflection back is refused.
+// (c1 + 3 c3 tau^2 > 0): a softening that turns the deflection back is refused; and that deflection stays
+// within kMaxPlausibleJointError at the largest torque.
 class NonlinearComplianceDiscovery : public PerJointFeatureDiscovery {
 public:
   NonlinearComplianceDiscovery()

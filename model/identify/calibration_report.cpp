@@ -67,14 +67,17 @@ CalibrationRun runCalibration(const JointErrorModel& prior, const std::vector<Me
   const auto started = std::chrono::steady_clock::now();
   GeometricCalibrationResult result = calibrateGeometry(prior, campaigns, options);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+  // After: what the written files give (the calibrated robot's load torques), as the fitted rows' figures.
+  const CalibratedView written =
+      options.calibrated_torques ? asWritten(prior, result.estimate) : CalibratedView{prior, result.estimate};
   std::vector<CalibrationHoldoutRun> runs;
   for (const auto& [name, held] : holdouts) {
     CalibrationHoldoutRun run;
     run.name = name;
     run.before = evaluateOnCampaign(prior, nominalParameters(prior, held), held, true, options);
-    run.after = evaluateOnCampaign(prior, result.estimate, held, true, options);
-    run.shared_frame = evaluateOnCampaign(prior, result.estimate, held, false, options);
-    run.residual = rowResiduals(prior, run.after.parameters, held);
+    run.after = evaluateOnCampaign(written.model, written.parameters, held, true, options);
+    run.shared_frame = evaluateOnCampaign(written.model, written.parameters, held, false, options);
+    run.residual = rowResiduals(written.model, run.after.parameters, held);
     runs.push_back(std::move(run));
   }
   auto calibrated_robot = std::make_shared<const Robot>(correctedRobot(prior.robot(), result.estimate));
@@ -83,7 +86,8 @@ CalibrationRun runCalibration(const JointErrorModel& prior, const std::vector<Me
   // Each row's residual in its own set-up's frame, from the rows the fit saw; the pose analysis on all of
   // them, in one time line.
   const MeasurementCampaign whole = concatenateCampaigns(campaigns);
-  std::vector<RowResidual> residual = rowResiduals(prior, result.estimate, campaigns, result.setup_of_campaign);
+  std::vector<RowResidual> residual =
+      rowResiduals(written.model, written.parameters, campaigns, result.setup_of_campaign);
   std::vector<JointVector> pose_q;
   std::vector<Eigen::Vector3d> pose_error;
   std::vector<double> pose_time;
@@ -253,7 +257,8 @@ nlohmann::ordered_json calibrationReportJson(const CalibrationRun& run, const Ge
   }
   for (const CalibrationHoldoutRun& held : run.holdouts) {
     campaigns.push_back({{"file", held.name},
-                         {"role", "holdout (robot fixed, instrument frame re-fitted)"},
+                         {"role", result.frame_fitted ? "holdout (robot fixed, instrument frame re-fitted)"
+                                                      : "holdout (robot fixed, base frame)"},
                          {"rows", held.after.statistics.rows},
                          {"skipped_not_measured", held.after.skipped_rows},
                          {"before", errorStatisticsJson(held.before.statistics)},
@@ -287,7 +292,9 @@ std::string calibrationSummary(const CalibrationRun& run, const CalibrationSourc
                 result.free.size(), result.names.size(), result.condition_number, result.condition_number_at_start,
                 result.residual_sigma * 1e3, result.iterations, run.seconds);
   summary << line;
-  summary << "\n3-D error [mm]                      rows     before (nominal, frame fitted)   after (calibrated)\n";
+  const bool frame = result.frame_fitted;  // campaigns in the instrument frame: a frame is fitted to each
+  summary << "\n3-D error [mm]                      rows     before (nominal"
+          << (frame ? ", frame fitted)" : ", base frame)  ") << "   after (calibrated)\n";
   summary << "                                           mean     rms     max      mean     rms     max\n";
   if (result.sources.size() > 1) {
     for (std::size_t c = 0; c < result.sources.size(); ++c) {
@@ -299,22 +306,27 @@ std::string calibrationSummary(const CalibrationRun& run, const CalibrationSourc
     summary << tableRow(baseName(sources.campaign) + " (calibration)", result.used_rows, result.before, result.after);
   }
   for (const CalibrationHoldoutRun& held : run.holdouts) {
-    summary << tableRow(baseName(held.name) + " (held out, frame re-fitted)", held.after.statistics.rows,
-                        held.before.statistics, held.after.statistics);
+    summary << tableRow(baseName(held.name) + (frame ? " (held out, frame re-fitted)" : " (held out)"),
+                        held.after.statistics.rows, held.before.statistics, held.after.statistics);
+    if (frame) {
+      summary << tableRow(baseName(held.name) + " (held out, calibration's frame)", held.shared_frame.statistics.rows,
+                          held.before.statistics, held.shared_frame.statistics);
+    }
   }
   for (const CalibrationHoldoutRun& held : run.holdouts) {
+    if (!frame) continue;  // the base frame: no frame fit, nothing weighed down in one
     std::snprintf(line, sizeof(line),
                   "%s: %d rows down-weighted in its frame fit (scale %.3f mm), %d of them below half weight\n",
                   baseName(held.name).c_str(), held.after.downweighted_rows, held.after.loss_scale * 1e3,
                   held.after.outlier_rows);
     summary << line;
     // A frame that fits three times worse than the re-fitted one means the set-ups differ.
-    std::snprintf(line, sizeof(line), "%s with the calibration campaign's frame (not re-fitted): RMS %.3f mm%s\n",
-                  baseName(held.name).c_str(), held.shared_frame.statistics.rms * 1e3,
-                  held.shared_frame.statistics.rms > 3.0 * held.after.statistics.rms + 1e-4
-                      ? ": the campaigns do not share the instrument frame"
-                      : ": the campaigns share the instrument frame");
-    summary << line;
+    summary << baseName(held.name)
+            << (held.shared_frame.statistics.rms > 3.0 * held.after.statistics.rms + 1e-4
+                    ? ": with the calibration's frame three times worse than re-fitted: the campaigns do not share "
+                      "the instrument frame\n"
+                    : ": with the calibration's frame as good as re-fitted: the campaigns share the instrument "
+                      "frame\n");
   }
   summary << "\nWhat the calibration leaves. " << describePosePredictability(run.pose) << "\n";
   summary << "\nIdentified parameters (1 sigma):\n";

@@ -149,8 +149,7 @@ std::vector<double> zErrors(const JointErrorModel& model, const GeometricParamet
   }
   std::vector<double> z;
   for (std::size_t i = 0; i < data.size(); ++i) {
-    const Eigen::Vector3d m = predictMeasurement(model.robot(), parameters, data.command[i], data.load_torque[i],
-                                                 data.other_error[i], nullptr, data.setup[i]);
+    const Eigen::Vector3d m = KinematicCalibration::predict(model.robot(), parameters, data, i);
     z.push_back((base_from_instrument[static_cast<std::size_t>(data.setup[i])] * (data.measured[i] - m)).z());
   }
   return z;
@@ -202,23 +201,19 @@ namespace {
 // One run of discovery: the fitted data, the candidates, and the model as it grows step by step.
 class DiscoveryRun {
 public:
-  DiscoveryRun(const JointErrorModel& prior, const std::vector<MeasurementCampaign>& fitted,
-               const std::vector<int>& setup_of_campaign, const std::vector<MeasurementCampaign>& heldout,
-               const DiscoveryOptions& options)
+  DiscoveryRun(const JointErrorModel& prior, KinematicCalibration calibration,
+               const std::vector<MeasurementCampaign>& heldout, const DiscoveryOptions& options)
       : prior_(prior),
-        fitted_(fitted),
-        setup_of_campaign_(setup_of_campaign),
+        calibration_(std::move(calibration)),
         heldout_(heldout),
         options_(options),
-        campaign_(concatenateCampaigns(fitted)),
-        names_(geometricParameterNames(prior.robot(),
-                                       1 + *std::max_element(setup_of_campaign.begin(), setup_of_campaign.end()))),
-        data_(discoveryData(prior, campaign_, fittedRows(prior), options)),
+        names_(calibration_.parameterNames(prior.robot())),
+        data_(discoveryData(prior, calibration_.whole(), fittedRows(prior), options)),
         model_(prior),
         cuts_{options.folds, 6, options.min_group_share, options.angle_ranges},
         result_(prior) {
     std::size_t first = 0;
-    for (const auto& c : fitted) {
+    for (const auto& c : calibration_.fitted()) {
       first_row_.push_back(first);
       first += c.size();
       fitted_path_ = fitted_path_ || isPathCampaign(c);
@@ -308,7 +303,7 @@ private:
 
   double noiseFloor() const {
     if (options_.noise_floor > 0.0) return options_.noise_floor;
-    double sigma = campaign_.position_noise;
+    double sigma = calibration_.whole().position_noise;
     for (const auto& h : heldout_) sigma = std::max(sigma, h.position_noise);
     return std::sqrt(3.0) * sigma;  // 3-D RMS of the instrument noise
   }
@@ -320,19 +315,18 @@ private:
     const int dof = prior_.robot().dof();
     cal_options.fixed = fixedNames(names_, released_, options_, dof);
     cal_options.fit_instrument_scale = released_.count(GeometricParameterLayout(dof).instrumentScale()) > 0;
+    // Discovery's steps are judged on the prior geometry's load torques (its linearisation is); the final
+    // files' figures then differ from the reported by the geometry's change of the torques (micrometres).
+    cal_options.calibrated_torques = false;
     return cal_options;
   }
 
   GeometricCalibrationResult calibrate(const JointErrorModel& model) {
-    return calibrateGeometry(model, fitted_, setup_of_campaign_, calibrationOptions());
+    return calibration_.calibrate(model, calibrationOptions());
   }
 
   // The fitted rows as `model` predicts them: the campaigns' concatenation, each row with its set-up.
-  CalibrationData fittedRows(const JointErrorModel& model) const {
-    CalibrationData data = prepareCalibrationData(model, campaign_);
-    assignCampaigns(data, fitted_, setup_of_campaign_);
-    return data;
-  }
+  CalibrationData fittedRows(const JointErrorModel& model) const { return calibration_.fittedRows(model); }
 
   // Errors on the fitted rows, on every held-out campaign (frame re-fitted) and the paths' Ra and Rz.
   DiscoveryState evaluate(double cv_sse) const {
@@ -341,8 +335,8 @@ private:
     if (fitted_path_) {
       const CalibrationData data = fittedRows(model_);
       const std::vector<double> z = zErrors(model_, cal_.estimate, data);
-      for (std::size_t c = 0; c < fitted_.size(); ++c) {
-        if (!isPathCampaign(fitted_[c])) continue;
+      for (std::size_t c = 0; c < calibration_.fitted().size(); ++c) {
+        if (!isPathCampaign(calibration_.fitted()[c])) continue;
         std::vector<double> part;
         for (std::size_t i = 0; i < z.size(); ++i) {
           const std::size_t row = static_cast<std::size_t>(data.row[i]);
@@ -354,10 +348,10 @@ private:
     GeometricCalibrationOptions cal_options = calibrationOptions();
     cal_options.same_instrument = options_.heldout_same_instrument;
     for (std::size_t k = 0; k < heldout_.size(); ++k) {
-      const HoldoutEvaluation e = evaluateOnCampaign(model_, cal_.estimate, heldout_[k], true, cal_options);
+      const HoldoutEvaluation e = KinematicCalibration::evaluate(model_, cal_.estimate, heldout_[k], cal_options);
       state.heldout.push_back(e.statistics);
       if (isPathCampaign(heldout_[k])) {
-        state.paths.push_back(roughness(zErrors(model_, e.parameters, prepareCalibrationData(model_, heldout_[k])),
+        state.paths.push_back(roughness(zErrors(model_, e.parameters, KinematicCalibration::rows(model_, heldout_[k])),
                                         true, static_cast<int>(k)));
       }
     }
@@ -544,18 +538,14 @@ private:
     result_.final_state = state_;
     result_.fitted_rows = cal_.used_rows;
     std::vector<std::string> left_out;
-    const Robot& robot = prior_.robot();
-    result_.model = calibratedJointErrorModel(
-        model_, std::make_shared<const Robot>(correctedRobot(robot, cal_.estimate)), cal_, left_out);
+    result_.model = KinematicCalibration::calibratedModel(model_, cal_, left_out);
     result_.calibration = cal_;
   }
 
   const JointErrorModel& prior_;
-  const std::vector<MeasurementCampaign>& fitted_;
-  const std::vector<int> setup_of_campaign_;  // instrument set-up of each fitted campaign
+  const KinematicCalibration calibration_;  // the fitted campaigns with their instrument set-ups
   const std::vector<MeasurementCampaign>& heldout_;
   const DiscoveryOptions& options_;
-  const MeasurementCampaign campaign_;
   const std::vector<std::string> names_;
   DiscoveryData data_;
   Features features_;
@@ -604,10 +594,14 @@ DiscoveryResult discoverEffects(const JointErrorModel& prior, const std::vector<
   if (options.angle_ranges < 2 || options.angle_ranges > 50)
     throw InvalidArgument("discover: angle_ranges must lie in 2 .. 50");
   if (fitted.empty()) throw InvalidArgument("discover: no fitted campaign");
-  // Fitted campaigns from several tracker set-ups are fitted together, each set-up with its own frame.
-  const std::vector<int> setups =
-      fitted.size() == 1 ? std::vector<int>{0} : instrumentSetUps(prior, fitted, options.calibration).setup_of_campaign;
-  return DiscoveryRun(prior, fitted, setups, heldout, options).run();
+  std::size_t rows = 0;
+  for (const MeasurementCampaign& c : fitted) rows += c.size();
+  if (rows > kMaxDiscoveryRows) {
+    throw InvalidArgument("discover: the fitted campaigns have " + std::to_string(rows) +
+                          " rows, more than discovery takes (" + std::to_string(kMaxDiscoveryRows) +
+                          " rows, about 50 KB of memory each)");
+  }
+  return DiscoveryRun(prior, KinematicCalibration(prior, fitted, options.calibration), heldout, options).run();
 }
 
 }  // namespace jointcomp

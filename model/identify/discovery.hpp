@@ -29,15 +29,21 @@
 // Library code: never prints; throws InvalidArgument for unusable inputs, with the campaign's name.
 #pragma once
 
+#include <cstddef>
 #include <string>
 #include <vector>
 
 #include "model/effects/registry.hpp"
-#include "model/identify/geometric_calibration.hpp"
 #include "model/identify/joint_coverage.hpp"
+#include "model/identify/kinematic_calibration.hpp"
 #include "model/identify/residual_analysis.hpp"
 
 namespace jointcomp {
+
+// The most fitted rows discovery takes, all campaigns together: its candidates' columns and the
+// linearised problem grow by about 50 KB a row (20,000 rows: about 1 GB), so 100,000 rows need about 5 GB.
+// Beyond it discoverEffects refuses, naming the number.
+constexpr std::size_t kMaxDiscoveryRows = 100000;
 
 struct DiscoveryOptions {
   DiscoveryOptions();  // out of line: GCC 12 warns falsely of the inlined defaults of its std::function

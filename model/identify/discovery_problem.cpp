@@ -70,8 +70,7 @@ Linearised linearise(const JointErrorModel& model, const CalibrationData& data, 
   }
   Eigen::MatrixXd J;
   for (int i = 0; i < rows; ++i) {
-    const Eigen::Vector3d m = predictMeasurement(robot, cal.estimate, data.command[i], data.load_torque[i],
-                                                 data.other_error[i], &J, data.setup[i]);
+    const Eigen::Vector3d m = KinematicCalibration::predict(robot, cal.estimate, data, static_cast<std::size_t>(i), &J);
     if (i == 0) lin.layout_jacobian.resize(3 * rows, J.cols());
     const double w = std::sqrt(i < static_cast<int>(cal.weight.size()) ? cal.weight[i] : 1.0);
     lin.problem.r.segment<3>(3 * i) = w * (m - data.measured[i]);

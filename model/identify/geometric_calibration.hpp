@@ -27,15 +27,19 @@
 // at that start point decides the identifiable subset (identifiability.hpp, priorities: frame, target,
 // offsets, placement translations, placement rotations, compliance); Levenberg-Marquardt fits the subset
 // by least squares, then again with the robust loss whose scale comes from the least-squares residuals;
-// a compliance fitted as not positive is fixed at its nominal value and the fit repeated; the covariance
-// is sigma^2 (J^T W J)^-1 with sigma^2 the weighted residual variance. "Before" is the nominal robot with
-// only its frame fitted (the same robust way), so that before and after differ by the robot alone.
+// a compliance fitted outside its physical constraint (ComplianceEffect::implausibility: not positive, too
+// soft, deflecting too far) is fixed at its nominal value and the fit repeated; then the fit is repeated with
+// the load torques of the calibrated geometry (calibrated_torques), so that the written URDF and parameter
+// file give the reported errors; the covariance is sigma^2 (J^T W J)^-1 with sigma^2 the weighted residual
+// variance. "Before" is the nominal robot with only its frame fitted (the same robust way; in the base
+// frame, no frame), so that before and after differ by the robot alone.
 //
 // Units inside are SI; the robust loss acts on each row's 3-D error norm (Huber by default, scale 3 robust
 // sigma), and the result counts the rows it weighed down. Library code: never prints, throws the typed
 // errors of model/common/errors.hpp with the campaign's name in the message.
 #pragma once
 
+#include <cstddef>
 #include <string>
 #include <vector>
 
@@ -198,6 +202,9 @@ struct GeometricCalibrationOptions {
   double loss_scale = 0.0;
   double loss_scale_sigmas = 3.0;
   int minimum_rows = 10;
+  // Refit with the load torques of the calibrated geometry (the written URDF's) and report the rows' errors
+  // with them, so that the written files give the reported figures; false: the prior's torques throughout.
+  bool calibrated_torques = true;
   LevenbergMarquardtOptions solver;  // loss and block size are set by the calibration
   Progress progress;                 // told the phases and each accepted step (may be empty)
 };
@@ -236,6 +243,7 @@ struct GeometricCalibrationResult {
   std::vector<double> weight;        // final IRLS weight per used row
   ErrorStatistics before, after;
   GeometricParameters nominal_frame_fit;         // the nominal robot with its frame fitted ("before")
+  bool frame_fitted = true;                      // false: campaigns in the base frame, no frame to fit
   std::vector<std::string> compliance_left_out;  // "<joint>: reason" for the compliances not written
   int iterations = 0;
   std::string stop_reason;
@@ -252,6 +260,11 @@ struct GeometricCalibrationResult {
 // of another robot, SolverError when Levenberg-Marquardt does not converge. Messages name the campaign.
 GeometricCalibrationResult calibrateGeometry(const JointErrorModel& prior, const MeasurementCampaign& campaign,
                                              const GeometricCalibrationOptions& options = {});
+
+// The most rows a calibration takes, all campaigns together: its memory grows by about 6 KB a row (100,000
+// rows of a six-joint arm: 601 MB; the Jacobian by every parameter and its copies), 1e6 rows about 6 GB.
+// Beyond it calibrateGeometry refuses, naming the number.
+constexpr std::size_t kMaxCalibrationRows = 1000000;
 
 // Campaigns in the instrument frame whose frames, each fitted alone on the prior, lie further apart than
 // this are from different set-ups (a nominal robot's frame fit moves by millimetres between campaigns of one).
@@ -323,6 +336,15 @@ HoldoutEvaluation evaluateOnCampaign(const JointErrorModel& prior, const Geometr
 // and `left_out` says why. The robot is `calibrated_robot`.
 JointErrorModel calibratedJointErrorModel(const JointErrorModel& prior, std::shared_ptr<const Robot> calibrated_robot,
                                           const GeometricCalibrationResult& result, std::vector<std::string>& left_out);
+
+// What the written files describe: the prior's effects on the corrected robot (correctedRobot), and the
+// parameters with their placement corrections moved into that robot (zero). Predicted with these, a row's
+// load torques are those of the calibrated geometry, as compensation with the written URDF computes them.
+struct CalibratedView {
+  JointErrorModel model;
+  GeometricParameters parameters;
+};
+CalibratedView asWritten(const JointErrorModel& prior, const GeometricParameters& estimate);
 
 // Simulated measurements for tests and planning: the instrument reading of every command under the given
 // true parameters, plus normal noise of `noise` (m, per axis), seeded. frame = instrument, target = the

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
+#include <string>
 
 #include <Eigen/Cholesky>
 
@@ -110,111 +112,167 @@ void checkProblem(const Eigen::VectorXd& x0, int residual_count, const Levenberg
 
 }  // namespace
 
-LevenbergMarquardtResult solveLevenbergMarquardt(const ResidualFunction& function, const Eigen::VectorXd& x0,
-                                                 int residual_count, const LevenbergMarquardtOptions& options) {
-  checkProblem(x0, residual_count, options);
-  const Eigen::Index n = x0.size();
+namespace {
 
-  LevenbergMarquardtResult result;
-  result.x = x0;
-  result.residual.resize(residual_count);
-  result.jacobian.resize(residual_count, n);
-  function(result.x, result.residual, &result.jacobian);
-  result.evaluations = 1;
-  if (!result.residual.allFinite())
-    throw SolverError("Levenberg-Marquardt: the residuals are not finite at the start point");
-  if (!result.jacobian.allFinite())
-    throw SolverError("Levenberg-Marquardt: the Jacobian is not finite at the start point");
-  Weighted current = weigh(result.residual, options);
-  result.initial_cost = current.cost;
+// One run of the solver: the current point with its weighted normal equations, the damping, and the
+// damped steps tried from there (Marquardt's scaling, Nielsen's update of the damping).
+class LevenbergMarquardtRun {
+public:
+  LevenbergMarquardtRun(const ResidualFunction& function, const Eigen::VectorXd& x0, int residual_count,
+                        const LevenbergMarquardtOptions& options)
+      : function_(function),
+        options_(options),
+        n_(x0.size()),
+        trial_residual_(residual_count),
+        trial_jacobian_(residual_count, x0.size()),
+        lambda_(options.initial_lambda) {
+    result_.x = x0;
+    result_.residual.resize(residual_count);
+    result_.jacobian.resize(residual_count, n_);
+    function_(result_.x, result_.residual, &result_.jacobian);
+    result_.evaluations = 1;
+    if (!result_.residual.allFinite())
+      throw SolverError("Levenberg-Marquardt: the residuals are not finite at the start point");
+    if (!result_.jacobian.allFinite())
+      throw SolverError("Levenberg-Marquardt: the Jacobian is not finite at the start point");
+    current_ = weigh(result_.residual, options_);
+    result_.initial_cost = current_.cost;
+    normalEquations(result_.jacobian, result_.residual, current_.block_weight, options_.block_size, a_, g_);
+  }
 
-  Eigen::MatrixXd a;
-  Eigen::VectorXd g;
-  normalEquations(result.jacobian, result.residual, current.block_weight, options.block_size, a, g);
-  Eigen::VectorXd trial_residual(residual_count);
-  Eigen::MatrixXd trial_jacobian(residual_count, n);
-  double lambda = options.initial_lambda;
-  double nu = 2.0;
+  LevenbergMarquardtResult solve() {
+    while (true) {
+      const Scaled scaled = scaledSystem();
+      if (current_.weighted_norm == 0.0) return finish(true, "zero residual");
+      if (gradientCosine(scaled.d) <= options_.gradient_tolerance) return finish(true, "gradient below tolerance");
+      if (!takeStep(scaled)) return result_;
+    }
+  }
 
-  auto finish = [&](bool converged, const std::string& reason) {
-    result.converged = converged;
-    result.stop_reason = reason;
-    result.cost = current.cost;
-    result.block_weight = current.block_weight;
-    return result;
+private:
+  // The normal matrix with a unit diagonal (zero columns left alone), and the right-hand side to match.
+  struct Scaled {
+    Eigen::VectorXd d, d_inverse, rhs;
+    Eigen::MatrixXd matrix;
+    double x_scale = 0.0;
   };
-  auto gradientCosine = [&](const Eigen::VectorXd& d) {
+
+  Scaled scaledSystem() const {
+    Scaled s;
+    s.d = a_.diagonal().cwiseMax(0.0).cwiseSqrt();
+    s.d_inverse.resize(n_);
+    for (Eigen::Index j = 0; j < n_; ++j) s.d_inverse[j] = s.d[j] > 0.0 ? 1.0 / s.d[j] : 1.0;
+    s.matrix = s.d_inverse.asDiagonal() * a_ * s.d_inverse.asDiagonal();
+    s.rhs = -(s.d_inverse.asDiagonal() * g_);
+    s.x_scale = (s.d.asDiagonal() * result_.x).norm();
+    return s;
+  }
+
+  double gradientCosine(const Eigen::VectorXd& d) const {
     double worst = 0.0;
-    for (Eigen::Index j = 0; j < n; ++j) {
-      if (d[j] > 0.0) worst = std::max(worst, std::abs(g[j]) / (d[j] * current.weighted_norm));
+    for (Eigen::Index j = 0; j < n_; ++j) {
+      if (d[j] > 0.0) worst = std::max(worst, std::abs(g_[j]) / (d[j] * current_.weighted_norm));
     }
     return worst;
-  };
+  }
 
-  while (true) {
-    // Marquardt scaling: the normal matrix with a unit diagonal (zero columns left alone).
-    Eigen::VectorXd d = a.diagonal().cwiseMax(0.0).cwiseSqrt();
-    if (current.weighted_norm == 0.0) return finish(true, "zero residual");
-    if (gradientCosine(d) <= options.gradient_tolerance) return finish(true, "gradient below tolerance");
-    Eigen::VectorXd d_inverse(n);
-    for (Eigen::Index j = 0; j < n; ++j) d_inverse[j] = d[j] > 0.0 ? 1.0 / d[j] : 1.0;
-    const Eigen::MatrixXd scaled = d_inverse.asDiagonal() * a * d_inverse.asDiagonal();
-    const Eigen::VectorXd rhs = -(d_inverse.asDiagonal() * g);
-    const double x_scale = (d.asDiagonal() * result.x).norm();
+  LevenbergMarquardtResult finish(bool converged, const std::string& reason) {
+    result_.converged = converged;
+    result_.stop_reason = reason;
+    result_.cost = current_.cost;
+    result_.block_weight = current_.block_weight;
+    return result_;
+  }
 
-    bool accepted = false;
-    while (!accepted) {
-      if (result.iterations >= options.max_iterations) {
-        return finish(false, "no convergence within " + std::to_string(options.max_iterations) + " iterations");
+  void raiseDamping() {
+    lambda_ *= nu_;
+    nu_ *= 2.0;
+  }
+
+  // Damped steps from the current point until one lowers the cost (true), or the run ends (false, the
+  // result finished).
+  bool takeStep(const Scaled& s) {
+    while (true) {
+      if (result_.iterations >= options_.max_iterations) {
+        finish(false, "no convergence within " + std::to_string(options_.max_iterations) + " iterations");
+        return false;
       }
-      ++result.iterations;
-      Eigen::MatrixXd damped = scaled;
-      damped.diagonal().array() += lambda;
+      ++result_.iterations;
+      Eigen::MatrixXd damped = s.matrix;
+      damped.diagonal().array() += lambda_;
       const Eigen::LDLT<Eigen::MatrixXd> solver(damped);
-      const Eigen::VectorXd y = solver.solve(rhs);
+      const Eigen::VectorXd y = solver.solve(s.rhs);
       if (solver.info() != Eigen::Success || !y.allFinite()) {
-        lambda *= nu;
-        nu *= 2.0;
+        raiseDamping();
         continue;
       }
-      if (y.norm() <= options.step_tolerance * (x_scale + options.step_tolerance)) {
-        return finish(true, "step below tolerance");
+      if (y.norm() <= options_.step_tolerance * (s.x_scale + options_.step_tolerance)) {
+        finish(true, "step below tolerance");
+        return false;
       }
-      const Eigen::VectorXd dx = d_inverse.asDiagonal() * y;
-      const Eigen::VectorXd trial_x = result.x + dx;
-      function(trial_x, trial_residual, &trial_jacobian);
-      ++result.evaluations;
-      Weighted trial;
-      const bool finite = trial_residual.allFinite() && trial_jacobian.allFinite();
-      if (finite) trial = weigh(trial_residual, options);
-      const double actual = current.cost - trial.cost;
-      if (finite && actual > 0.0) {
-        const double predicted = -g.dot(dx) - 0.5 * dx.dot(a * dx);
-        const double ratio = predicted > 0.0 ? actual / predicted : 0.0;
-        lambda *= std::max(1.0 / 3.0, 1.0 - std::pow(2.0 * ratio - 1.0, 3));
-        lambda = std::max(lambda, 1e-15);
-        nu = 2.0;
-        const double previous_cost = current.cost;
-        result.x = trial_x;
-        result.residual.swap(trial_residual);
-        result.jacobian.swap(trial_jacobian);
-        current = trial;
-        normalEquations(result.jacobian, result.residual, current.block_weight, options.block_size, a, g);
-        accepted = true;
-        if (options.on_accepted_step) options.on_accepted_step(result.iterations, current.cost);
-        if (actual <= options.function_tolerance * previous_cost) return finish(true, "cost change below tolerance");
-      } else {
-        lambda *= nu;
-        nu *= 2.0;
-        if (lambda > 1e16) {
-          // No step lowers the cost any more: at a minimum to rounding error, or stuck.
-          const bool stationary = gradientCosine(d) <= 1e-6;
-          return finish(stationary, stationary ? "no further decrease (at a minimum to rounding error)"
-                                               : "no further decrease although the gradient is not small");
-        }
+      const Eigen::VectorXd dx = s.d_inverse.asDiagonal() * y;
+      const std::optional<bool> outcome = tryStep(dx);
+      if (outcome) return *outcome;
+      raiseDamping();
+      if (lambda_ > 1e16) {
+        // No step lowers the cost any more: at a minimum to rounding error, or stuck.
+        const bool stationary = gradientCosine(s.d) <= 1e-6;
+        finish(stationary, stationary ? "no further decrease (at a minimum to rounding error)"
+                                      : "no further decrease although the gradient is not small");
+        return false;
       }
     }
   }
+
+  // The point x + dx: taken when it lowers the cost (true; false when that ends the run by the cost
+  // tolerance), nothing when it does not.
+  std::optional<bool> tryStep(const Eigen::VectorXd& dx) {
+    const Eigen::VectorXd trial_x = result_.x + dx;
+    function_(trial_x, trial_residual_, &trial_jacobian_);
+    ++result_.evaluations;
+    Weighted trial;
+    const bool finite = trial_residual_.allFinite() && trial_jacobian_.allFinite();
+    if (finite) trial = weigh(trial_residual_, options_);
+    const double actual = current_.cost - trial.cost;
+    if (!finite || !(actual > 0.0)) return std::nullopt;
+    const double predicted = -g_.dot(dx) - 0.5 * dx.dot(a_ * dx);
+    const double ratio = predicted > 0.0 ? actual / predicted : 0.0;
+    lambda_ *= std::max(1.0 / 3.0, 1.0 - std::pow(2.0 * ratio - 1.0, 3));
+    lambda_ = std::max(lambda_, 1e-15);
+    nu_ = 2.0;
+    const double previous_cost = current_.cost;
+    result_.x = trial_x;
+    result_.residual.swap(trial_residual_);
+    result_.jacobian.swap(trial_jacobian_);
+    current_ = trial;
+    normalEquations(result_.jacobian, result_.residual, current_.block_weight, options_.block_size, a_, g_);
+    if (options_.on_accepted_step) options_.on_accepted_step(result_.iterations, current_.cost);
+    if (actual <= options_.function_tolerance * previous_cost) {
+      finish(true, "cost change below tolerance");
+      return false;
+    }
+    return true;
+  }
+
+  const ResidualFunction& function_;
+  const LevenbergMarquardtOptions& options_;
+  Eigen::Index n_;
+  LevenbergMarquardtResult result_;
+  Weighted current_;
+  Eigen::MatrixXd a_;
+  Eigen::VectorXd g_;
+  Eigen::VectorXd trial_residual_;
+  Eigen::MatrixXd trial_jacobian_;
+  double lambda_;
+  double nu_ = 2.0;
+};
+
+}  // namespace
+
+LevenbergMarquardtResult solveLevenbergMarquardt(const ResidualFunction& function, const Eigen::VectorXd& x0,
+                                                 int residual_count, const LevenbergMarquardtOptions& options) {
+  checkProblem(x0, residual_count, options);
+  return LevenbergMarquardtRun(function, x0, residual_count, options).solve();
 }
 
 }  // namespace jointcomp

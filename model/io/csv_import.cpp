@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 #include <sstream>
+#include <utility>
 #include <vector>
 
 #include "model/common/errors.hpp"
@@ -66,6 +67,8 @@ public:
     campaign.source = source_;
     campaign.robot = options_.robot;
     campaign.frame = options_.frame;
+    campaign.has_target = options_.has_target;
+    campaign.target_in_flange = options_.target_in_flange;
     campaign.metadata["imported_from"] = source_;
     campaign.metadata["imported_preamble_lines"] = std::to_string(header);
     campaign.metadata["separator"] = separatorName(separator_);
@@ -95,7 +98,10 @@ public:
       for (int j = 0; j < campaign.dof; ++j) q[j] = value(q_[static_cast<std::size_t>(j)], true) * angle;
       campaign.command.push_back(q);
       if (campaign.has_position) {
-        campaign.position.emplace_back(value(x_, false) * length, value(y_, false) * length, value(z_, false) * length);
+        const auto axis = [&](int column, int added) {
+          return (value(column, false) + (added >= 0 ? value(added, false) : 0.0)) * length;
+        };
+        campaign.position.emplace_back(axis(x_, x_add_), axis(y_, y_add_), axis(z_, z_add_));
       } else {
         campaign.position.push_back(Eigen::Vector3d::Constant(kNaN));
       }
@@ -169,22 +175,129 @@ private:
     }
   }
 
-  // The column of campaign column `name` in the header, -1 when absent (an error when it was mapped).
-  int columnOf(const std::vector<std::string>& names, const std::string& name, int line) const {
-    const auto mapped = options_.columns.find(name);
-    const std::string wanted = mapped != options_.columns.end() ? mapped->second : name;
-    for (std::size_t c = 0; c < names.size(); ++c) {
-      if (names[c] == wanted) return static_cast<int>(c);
-    }
-    for (std::size_t c = 0; c < names.size(); ++c) {
-      if (lower(names[c]) == lower(wanted)) return static_cast<int>(c);
-    }
-    if (mapped != options_.columns.end()) {
-      std::string list;
-      for (const std::string& n : names) list += (list.empty() ? "" : ", ") + shortExcerpt(n);
-      fail(line, "column '" + shortExcerpt(wanted) + "' (mapped to " + name + ") is not in the header (" + list + ")");
+  // The header column named `wanted` (exactly, else ignoring case), -1 when none; two columns of that name
+  // are refused (which one the user meant is not known).
+  int headerColumn(const std::vector<std::string>& names, const std::string& wanted, int line) const {
+    for (const bool exact : {true, false}) {
+      std::vector<int> found;
+      for (std::size_t c = 0; c < names.size(); ++c) {
+        if (exact ? names[c] == wanted : lower(names[c]) == lower(wanted)) found.push_back(static_cast<int>(c));
+      }
+      if (found.size() > 1) {
+        fail(line, "the header has " + std::to_string(found.size()) + " columns named '" + shortExcerpt(wanted) +
+                       "' (columns " + std::to_string(found[0] + 1) + " and " + std::to_string(found[1] + 1) +
+                       "): rename one so that it is clear which is meant");
+      }
+      if (found.size() == 1) return found[0];
     }
     return -1;
+  }
+
+  std::string headerList(const std::vector<std::string>& names) const {
+    std::string list;
+    for (const std::string& n : names) list += (list.empty() ? "" : ", ") + shortExcerpt(n);
+    return list;
+  }
+
+  // The columns of campaign column `name` (one, or the two of a derived "A+B"), empty when absent (an error
+  // when it was mapped). Joint K is also found as joint_K or jointK when not mapped.
+  std::vector<int> columnsOf(const std::vector<std::string>& names, const std::string& name, int line) const {
+    const auto mapped = options_.columns.find(name);
+    const std::string wanted = mapped != options_.columns.end() ? mapped->second : name;
+    if (const int column = headerColumn(names, wanted, line); column >= 0) return {column};
+    if (mapped == options_.columns.end()) {
+      if (name.size() > 1 && name[0] == 'q' && std::isdigit(static_cast<unsigned char>(name[1]))) {
+        for (const std::string& alias : {"joint_" + name.substr(1), "joint" + name.substr(1)}) {
+          if (const int column = headerColumn(names, alias, line); column >= 0) return {column};
+        }
+      }
+      return {};
+    }
+    const auto plus = wanted.find('+');
+    if (plus != std::string::npos && (name == "x" || name == "y" || name == "z")) {
+      const int first = headerColumn(names, trim(wanted.substr(0, plus)), line);
+      const int second = headerColumn(names, trim(wanted.substr(plus + 1)), line);
+      if (first >= 0 && second >= 0) return {first, second};
+    }
+    fail(line, "column '" + shortExcerpt(wanted) + "' (mapped to " + name + ") is not in the header (" +
+                   headerList(names) + ")" +
+                   (plus != std::string::npos ? "; a derived column is NAME+NAME of two header columns" : ""));
+  }
+
+  int columnOf(const std::vector<std::string>& names, const std::string& name, int line) {
+    const std::vector<int> columns = columnsOf(names, name, line);
+    if (columns.size() > 1) fail(line, "--columns: only x, y and z may be the sum of two columns, not " + name);
+    if (!columns.empty()) used_.emplace_back(name, columns[0]);
+    return columns.empty() ? -1 : columns[0];
+  }
+
+  void mapPositions(const std::vector<std::string>& names, int line) {
+    int* const axes[3] = {&x_, &y_, &z_};
+    int* const added[3] = {&x_add_, &y_add_, &z_add_};
+    for (int a = 0; a < 3; ++a) {
+      const std::string name(1, "xyz"[a]);
+      const std::vector<int> columns = columnsOf(names, name, line);
+      *axes[a] = columns.empty() ? -1 : columns[0];
+      *added[a] = columns.size() > 1 ? columns[1] : -1;
+      for (int column : columns) used_.emplace_back(name, column);
+    }
+    if ((x_ >= 0) != (y_ >= 0) || (x_ >= 0) != (z_ >= 0)) fail(line, "columns x, y and z go together");
+  }
+
+  // Every mapped campaign column must be used: a qK or qmK beyond the joints found (a gap in the mapping)
+  // would otherwise be dropped.
+  void checkMappingUsed(int line) const {
+    for (const auto& entry : options_.columns) {
+      const bool used = std::any_of(used_.begin(), used_.end(), [&](const auto& u) { return u.first == entry.first; });
+      if (!used) {
+        fail(line, "--columns maps " + entry.first + " but the joints before it are not all mapped (found " +
+                       std::to_string(q_.size()) + " joints: q1 .. q" + std::to_string(q_.size()) + ")");
+      }
+    }
+  }
+
+  // One header column for one campaign column: mapping it twice is a mistake in --columns.
+  void checkColumnsDistinct(const std::vector<std::string>& names, int line) const {
+    for (std::size_t i = 0; i < used_.size(); ++i) {
+      for (std::size_t k = i + 1; k < used_.size(); ++k) {
+        if (used_[i].second == used_[k].second && used_[i].first != used_[k].first) {
+          fail(line, "header column '" + shortExcerpt(names[static_cast<std::size_t>(used_[i].second)]) +
+                         "' is mapped to both " + used_[i].first + " and " + used_[k].first);
+        }
+      }
+    }
+  }
+
+  // A header column that looks like one more joint (the last joint's column name with its number one
+  // higher, or q/joint_ of the next number) is refused unless --joints says how many there are: a joint
+  // is never dropped silently.
+  void checkNoJointLeft(const std::vector<std::string>& names, int line) const {
+    const int n = static_cast<int>(q_.size());
+    if (options_.joints > 0) {
+      if (n != options_.joints) {
+        fail(line, "--joints " + std::to_string(options_.joints) + " but " + std::to_string(n) +
+                       " joint columns are mapped or found (q1 .. q" + std::to_string(n) + ")");
+      }
+      return;
+    }
+    const std::string last = names[static_cast<std::size_t>(q_.back())];
+    std::size_t digits = last.size();
+    while (digits > 0 && std::isdigit(static_cast<unsigned char>(last[digits - 1]))) --digits;
+    std::vector<std::string> next = {"q" + std::to_string(n + 1), "joint_" + std::to_string(n + 1),
+                                     "joint" + std::to_string(n + 1)};
+    if (digits < last.size() && last.size() - digits < 4 && std::stoi(last.substr(digits)) == n) {
+      next.push_back(last.substr(0, digits) + std::to_string(n + 1));
+    }
+    for (const std::string& candidate : next) {
+      for (std::size_t c = 0; c < names.size(); ++c) {
+        if (lower(names[c]) == lower(candidate)) {
+          fail(line, "the header has a column '" + shortExcerpt(names[c]) + "' that looks like joint " +
+                         std::to_string(n + 1) + ", but only " + std::to_string(n) +
+                         " joints are mapped: map it (--columns q" + std::to_string(n + 1) + "=" +
+                         shortExcerpt(names[c]) + ") or say --joints " + std::to_string(n));
+        }
+      }
+    }
   }
 
   void mapColumns(const std::vector<std::string>& names, int line) {
@@ -201,7 +314,8 @@ private:
       q_.push_back(column);
     }
     if (q_.empty()) {
-      fail(line, "no joint columns: the header has no q1 (map the export's names with --columns q1=NAME,q2=...)");
+      fail(line,
+           "no joint columns: the header has no q1 or joint_1 (map the export's names with --columns q1=NAME,q2=...)");
     }
     for (std::size_t j = 1; j <= q_.size(); ++j) {
       const int column = columnOf(names, "qm" + std::to_string(j), line);
@@ -209,15 +323,15 @@ private:
       qm_.push_back(column);
     }
     if (!qm_.empty() && qm_.size() != q_.size()) fail(line, "qm columns for some joints only");
-    x_ = columnOf(names, "x", line);
-    y_ = columnOf(names, "y", line);
-    z_ = columnOf(names, "z", line);
-    if ((x_ >= 0) != (y_ >= 0) || (x_ >= 0) != (z_ >= 0)) fail(line, "columns x, y and z go together");
+    mapPositions(names, line);
     if (x_ < 0 && qm_.empty()) {
       fail(line, "no measurement: the header has neither x, y, z nor qm1 .. (map them with --columns x=NAME,...)");
     }
     temperature_ = columnOf(names, "temp", line);
     payload_ = columnOf(names, "payload", line);
+    checkMappingUsed(line);
+    checkColumnsDistinct(names, line);
+    checkNoJointLeft(names, line);
   }
 
   double number(const std::string& cell, int line, const std::string& column, bool required) const {
@@ -244,7 +358,9 @@ private:
   char separator_ = ',';
   char decimal_ = '.';
   int time_ = -1, x_ = -1, y_ = -1, z_ = -1, temperature_ = -1, payload_ = -1;
+  int x_add_ = -1, y_add_ = -1, z_add_ = -1;  // the second column of a derived x, y, z (-1: none)
   std::vector<int> q_, qm_;
+  std::vector<std::pair<std::string, int>> used_;  // campaign column, header column
 };
 
 }  // namespace

@@ -13,7 +13,12 @@ namespace jointcomp {
 
 struct CsvImportOptions {
   // Campaign column -> the export's header name ("q1" -> "A1"). Columns not mapped are looked up under
-  // their own name, ignoring case. Without a time column the row index is the time (1 s per row).
+  // their own name, ignoring case (joint K also as joint_K or jointK). Without a time column the row index
+  // is the time (1 s per row). x, y and z may be derived: "X_target+dX" is the sum of two columns (a
+  // tracker's nominal position plus its deviation). A header column is mapped to one campaign column only,
+  // a name found twice in the header is refused, and a mapped qK needs q1 .. qK-1 mapped or found.
+  // A header column that looks like one more joint than those mapped is refused unless `joints` says
+  // how many there are.
   std::map<std::string, std::string> columns;
   bool angles_in_radians = false;  // q and qm columns: degrees unless this says radians
   bool lengths_in_metres = false;  // x, y, z: millimetres unless this says metres
@@ -21,6 +26,9 @@ struct CsvImportOptions {
   char decimal_mark = 0;           // 0: '.', or ',' when the separator is not ',' and the numbers use it
   std::string robot;               // the campaign's robot metadata ("" if not known)
   MeasurementFrame frame = MeasurementFrame::Base;
+  int joints = 0;  // 0: as many as mapped or found, refused when the header seems to hold one more
+  bool has_target = false;
+  Eigen::Vector3d target_in_flange = Eigen::Vector3d::Zero();  // m, the campaign's `# target:`
 };
 
 // Throws MeasurementError naming the file, line and column (and, for a column not found, the header's

@@ -42,6 +42,22 @@ void requireFiniteNumbers(const nlohmann::ordered_json& node, const std::string&
   }
 }
 
+ToolTarget toolFromJson(const nlohmann::json& node, const std::string& path) {
+  JsonFields fields(node, path);
+  ToolTarget tool;
+  tool.flange_link = fields.text("flange_link");
+  tool.link = fields.text("link");
+  const std::vector<double> target = fields.numbers("target_in_flange_m", 3);
+  for (int a = 0; a < 3; ++a) {
+    if (!(std::abs(target[static_cast<std::size_t>(a)]) <= 10.0)) {
+      fields.fail("target_in_flange_m", "a target more than 10 m from the flange");
+    }
+    tool.in_flange[a] = target[static_cast<std::size_t>(a)];
+  }
+  fields.rejectUnknownKeys();
+  return tool;
+}
+
 }  // namespace
 
 ParameterSet parseParameterSet(const std::string& json_text, const std::string& source_name,
@@ -60,6 +76,8 @@ ParameterSet parseParameterSet(const std::string& json_text, const std::string& 
   if (fields.has("plant")) drives = drivesFromJson(fields.object("plant"), *robot, source_name + ": plant");
   GearTrain gears = fields.has("gears") ? GearTrain::fromJson(fields.object("gears"), *robot, fields.pathOf("gears"))
                                         : GearTrain::direct(robot->dof());
+  std::optional<ToolTarget> tool;
+  if (fields.has("tool")) tool = toolFromJson(fields.object("tool"), source_name + ": tool");
   std::vector<std::unique_ptr<Effect>> effects;
   const nlohmann::json& list = fields.array("effects");
   for (std::size_t i = 0; i < list.size(); ++i) {
@@ -68,7 +86,7 @@ ParameterSet parseParameterSet(const std::string& json_text, const std::string& 
   fields.rejectUnknownKeys();
   JointErrorModel model(std::move(robot), std::move(gears), std::move(effects));
   model.notes = notes;
-  return ParameterSet{std::move(model), std::move(drives)};
+  return ParameterSet{std::move(model), std::move(drives), std::move(tool)};
 }
 
 ParameterSet loadParameterSet(const std::string& path, std::shared_ptr<const Robot> robot,
@@ -102,7 +120,8 @@ std::vector<DriveParameters> loadDriveParameters(const std::string& path, const 
   return parseDriveParameters(readParameterText(path), path, robot);
 }
 
-std::string parametersToJson(const JointErrorModel& model, const std::vector<DriveParameters>& drives) {
+std::string parametersToJson(const JointErrorModel& model, const std::vector<DriveParameters>& drives,
+                             const ToolTarget* tool) {
   nlohmann::ordered_json document;
   document["format"] = kFormat;
   document["robot"] = model.robot().name;
@@ -112,13 +131,18 @@ std::string parametersToJson(const JointErrorModel& model, const std::vector<Dri
   for (int i = 0; i < model.effectCount(); ++i) effects.push_back(model.effect(i).toJson());
   document["effects"] = effects;
   if (!drives.empty()) document["plant"] = drivesToJson(drives, model.robot());
+  if (tool) {
+    document["tool"] = {{"flange_link", tool->flange_link},
+                        {"link", tool->link},
+                        {"target_in_flange_m", {tool->in_flange.x(), tool->in_flange.y(), tool->in_flange.z()}}};
+  }
   requireFiniteNumbers(document, "parameters");
   return document.dump(2) + "\n";
 }
 
 void saveParameterFile(const JointErrorModel& model, const std::string& path,
-                       const std::vector<DriveParameters>& drives) {
-  writeFileAtomically(path, parametersToJson(model, drives));
+                       const std::vector<DriveParameters>& drives, const ToolTarget* tool) {
+  writeFileAtomically(path, parametersToJson(model, drives, tool));
 }
 
 }  // namespace jointcomp

@@ -3,10 +3,12 @@
 //   {"format": "jointcomp-parameters/1", "robot": "<URDF robot name>", "notes": "...",
 //    "gears": {"joints": [{"joint": "joint_1", "stage_ratios": [..]}, ..], "coupling": [..]},
 //    "effects": [{"type": "compliance", ..}, {"type": "spring_balancer", ..}, ..],
-//    "plant": {"joints": [{"joint": "joint_1", "motor_inertia_kgm2": .., ..}, ..]}}
+//    "plant": {"joints": [{"joint": "joint_1", "motor_inertia_kgm2": .., ..}, ..]},
+//    "tool": {"flange_link": "flange", "link": "flange_target", "target_in_flange_m": [x, y, z]}}
 #pragma once
 
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "model/effects/joint_error_model.hpp"
@@ -16,11 +18,21 @@ namespace jointcomp {
 
 class EffectRegistry;
 
+// The tool point a calibration fitted (the "tool" object): the target in the frame of the URDF's tip link
+// the campaigns were measured from (the flange), and the link the calibrated URDF carries it as, so that
+// compensation and the plant work at that point. A maker's file has none.
+struct ToolTarget {
+  std::string flange_link;
+  std::string link;
+  Eigen::Vector3d in_flange = Eigen::Vector3d::Zero();  // m, within 10 m
+};
+
 // Everything a parameter file says, read once: the joint-error model and, when the file has a "plant"
-// object, the drives and controller gains of the plant.
+// object, the drives and controller gains of the plant, and the tool point when it has a "tool" object.
 struct ParameterSet {
   JointErrorModel model;
   std::vector<DriveParameters> drives;  // empty when the file has no "plant" object
+  std::optional<ToolTarget> tool;
   bool hasDrives() const { return !drives.empty(); }
 };
 
@@ -45,10 +57,12 @@ std::vector<DriveParameters> loadDriveParameters(const std::string& path, const 
 std::vector<DriveParameters> parseDriveParameters(const std::string& json_text, const std::string& source_name,
                                                   const Robot& robot);
 
-// The file's text; the "plant" object is written when `drives` is not empty.
-std::string parametersToJson(const JointErrorModel& model, const std::vector<DriveParameters>& drives = {});
+// The file's text; the "plant" object is written when `drives` is not empty, the "tool" object when `tool`
+// is given.
+std::string parametersToJson(const JointErrorModel& model, const std::vector<DriveParameters>& drives = {},
+                             const ToolTarget* tool = nullptr);
 // Writes whole or not at all (temporary file, then rename).
 void saveParameterFile(const JointErrorModel& model, const std::string& path,
-                       const std::vector<DriveParameters>& drives = {});
+                       const std::vector<DriveParameters>& drives = {}, const ToolTarget* tool = nullptr);
 
 }  // namespace jointcomp

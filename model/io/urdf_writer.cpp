@@ -42,6 +42,22 @@ void requireFinite(bool finite, const std::string& robot, const std::string& wha
   if (!finite) throw InvalidArgument("robotToUrdf: robot '" + robot + "': " + what + " is not finite");
 }
 
+void writeToolLink(std::ostringstream& xml, const Robot& robot, const UrdfToolLink& tool) {
+  requireFinite(tool.offset.allFinite(), robot.name, "tool link '" + tool.name + "' offset");
+  bool taken = tool.name.empty() || tool.name == robot.root_link || tool.name == robot.tip_link;
+  for (const Joint& joint : robot.joints) taken = taken || tool.name == joint.child_link;
+  if (taken) {
+    throw InvalidArgument("robotToUrdf: robot '" + robot.name + "': the tool link's name '" + tool.name +
+                          "' is empty or that of a link of the robot");
+  }
+  xml << "  <joint name=\"" << escaped(tool.name) << "_joint\" type=\"fixed\">\n";
+  xml << "    <parent link=\"" << escaped(robot.tip_link) << "\"/>\n";
+  xml << "    <child link=\"" << escaped(tool.name) << "\"/>\n";
+  xml << "    <origin xyz=\"" << triple(tool.offset) << "\" rpy=\"0 0 0\"/>\n";
+  xml << "  </joint>\n";
+  xml << "  <link name=\"" << escaped(tool.name) << "\"/>\n";
+}
+
 }  // namespace
 
 Eigen::Vector3d rotationToRpy(const Eigen::Matrix3d& r) {
@@ -53,7 +69,7 @@ Eigen::Vector3d rotationToRpy(const Eigen::Matrix3d& r) {
   return {roll, std::atan2(-m(2, 0), m(2, 2)), std::atan2(-m(0, 1), m(1, 1))};
 }
 
-std::string robotToUrdf(const Robot& robot, const std::string& comment) {
+std::string robotToUrdf(const Robot& robot, const std::string& comment, const UrdfToolLink* tool_link) {
   if (robot.joints.empty()) throw InvalidArgument("robotToUrdf: robot '" + robot.name + "' has no joints");
   std::ostringstream xml;
   xml << "<?xml version=\"1.0\"?>\n";
@@ -113,12 +129,14 @@ std::string robotToUrdf(const Robot& robot, const std::string& comment) {
     throw InvalidArgument("robotToUrdf: robot '" + robot.name + "': the tool frame is offset from link '" + parent +
                           "' but the tip link is that link itself");
   }
+  if (tool_link) writeToolLink(xml, robot, *tool_link);
   xml << "</robot>\n";
   return xml.str();
 }
 
-void saveRobotUrdf(const Robot& robot, const std::string& path, const std::string& comment) {
-  writeFileAtomically(path, robotToUrdf(robot, comment));
+void saveRobotUrdf(const Robot& robot, const std::string& path, const std::string& comment,
+                   const UrdfToolLink* tool_link) {
+  writeFileAtomically(path, robotToUrdf(robot, comment, tool_link));
 }
 
 }  // namespace jointcomp

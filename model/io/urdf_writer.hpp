@@ -11,12 +11,22 @@
 
 namespace jointcomp {
 
+// A point on the tool (a calibration's target) written as one more link, fixed to the tip link at
+// `offset` (m, in the tip link's frame): loaded again, it is the chain's end, so that kinematics,
+// compensation and the plant work at that point.
+struct UrdfToolLink {
+  std::string name;
+  Eigen::Vector3d offset = Eigen::Vector3d::Zero();
+};
+
 // `comment` (optional) goes into an XML comment at the top. Throws InvalidArgument for a robot the
-// format cannot hold: no joints, non-finite values, a tool offset without a tip link of its own.
-std::string robotToUrdf(const Robot& robot, const std::string& comment = "");
+// format cannot hold: no joints, non-finite values, a tool offset without a tip link of its own, a tool
+// link named like a link of the robot.
+std::string robotToUrdf(const Robot& robot, const std::string& comment = "", const UrdfToolLink* tool_link = nullptr);
 
 // Writes whole or not at all (temporary file, then rename); throws Error naming the path.
-void saveRobotUrdf(const Robot& robot, const std::string& path, const std::string& comment = "");
+void saveRobotUrdf(const Robot& robot, const std::string& path, const std::string& comment = "",
+                   const UrdfToolLink* tool_link = nullptr);
 
 // The URDF roll-pitch-yaw angles of a rotation (R = Rz(yaw) Ry(pitch) Rx(roll)); they give back the
 // rotation to rounding error everywhere, at and near pitch = +-pi/2 too.

@@ -1,5 +1,8 @@
-// Discovery accepts only physical effects: a cubic compliance whose softening turns the joint's deflection back
-// inside the torques the fitted rows carried is refused, however well it fits (DiscoveryFamily::physicalProblem).
+// Discovery and calibration accept only physical effects: each family states its constraint
+// (DiscoveryFamily::physicalProblem, ComplianceEffect::implausibility) and a fit that crosses it is refused,
+// however well it fits: a cubic compliance whose softening turns the joint's deflection back inside the
+// torques the fitted rows carried, a deflection or lost motion beyond kMaxPlausibleJointError, a negative
+// lost motion, a stiffness below the plausible.
 #include <cmath>
 #include <cstdio>
 #include <string>
@@ -7,8 +10,12 @@
 
 #include <gtest/gtest.h>
 
+#include "model/effects/backlash.hpp"
+#include "model/effects/compliance.hpp"
+#include "model/effects/hysteresis.hpp"
 #include "model/effects/nonlinear_compliance.hpp"
 #include "model/identify/discovery.hpp"
+#include "model/identify/geometric_calibration.hpp"
 #include "tests/identify/identify_test_support.hpp"
 
 namespace jointcomp {
@@ -71,6 +78,114 @@ TEST(DiscoveryPhysical, AFitThatWouldTurnBackIsNotAccepted) {
   EXPECT_NE(rejected.find("not physical"), std::string::npos) << rejected;
   // Accepted at its selection, joint 2's cubic went beyond the physical in the joint refit: the step was undone.
   EXPECT_NE(r.rejected_at_stop.find("undone after its refit"), std::string::npos) << r.rejected_at_stop;
+}
+
+// Rows whose joint-2 torque runs over `torques` (the others zero).
+DiscoveryData joint2Data(const JointErrorModel& model, std::initializer_list<double> torques) {
+  DiscoveryData data;
+  data.robot = &model.robot();
+  data.gears = &model.gears();
+  for (double torque : torques) {
+    JointVector tau = JointVector::Zero(6);
+    tau[1] = torque;
+    data.load_torque.push_back(tau);
+    data.command.push_back(JointVector::Zero(6));
+    data.approach.push_back(JointVector::Zero(6));
+  }
+  return data;
+}
+
+TEST(DiscoveryPhysical, ACubicComplianceMayNotDeflectBeyondThePlausible) {
+  const JointErrorModel model = rx170Model();
+  const DiscoveryData data = joint2Data(model, {-100.0, 20.0, 60.0});
+  DiscoveryCandidate candidate;
+  candidate.type = "nonlinear_compliance";
+  candidate.joint = 1;
+  JointVector compliance = JointVector::Zero(6);
+  compliance[1] = 1e-6;  // rad/(N m): 1e-4 rad at 100 N m
+  const NonlinearComplianceDiscovery family;
+  auto problem = [&](double cubic) {
+    return family.physicalProblem(data, candidate, Eigen::VectorXd::Constant(1, cubic), compliance);
+  };
+  // Stiffening, monotone: 1e-6 * 100 + c3 * 100^3 reaches the bound at c3 = (0.01 - 1e-4) / 1e6.
+  const double boundary = (kMaxPlausibleJointError - 1e-4) / 1e6;
+  EXPECT_EQ(problem(boundary * 0.99), "");
+  const std::string message = problem(boundary * 1.01);
+  EXPECT_NE(message.find("beyond the plausible"), std::string::npos) << message;
+}
+
+TEST(DiscoveryPhysical, ALostMotionLagsAndStaysSmall) {
+  const JointErrorModel model = rx170Model();
+  const DiscoveryData data = joint2Data(model, {-50.0, 20.0, 40.0});
+  DiscoveryCandidate candidate;
+  candidate.joint = 1;
+  const BacklashDiscovery backlash;
+  const HysteresisDiscovery hysteresis;
+  const JointVector compliance = JointVector::Zero(6);
+  auto backlashProblem = [&](double width) {
+    return backlash.physicalProblem(data, candidate, Eigen::VectorXd::Constant(1, width), compliance);
+  };
+  auto hysteresisProblem = [&](double width) {
+    return hysteresis.physicalProblem(data, candidate, Eigen::VectorXd::Constant(1, width), compliance);
+  };
+  EXPECT_EQ(backlashProblem(1e-4), "");
+  EXPECT_NE(backlashProblem(-1e-5).find("negative"), std::string::npos);
+  // The joint moves by half the width each way: the bound is at twice kMaxPlausibleJointError.
+  EXPECT_EQ(backlashProblem(2.0 * kMaxPlausibleJointError * 0.99), "");
+  EXPECT_NE(backlashProblem(2.0 * kMaxPlausibleJointError * 1.01), "");
+  // Hysteresis moves it by h |tau| / 2, at most at the largest torque (50 N m).
+  const double bound = 2.0 * kMaxPlausibleJointError / 50.0;
+  EXPECT_EQ(hysteresisProblem(bound * 0.99), "");
+  EXPECT_NE(hysteresisProblem(bound * 1.01).find("beyond the plausible"), std::string::npos);
+  EXPECT_NE(hysteresisProblem(-1e-7).find("negative"), std::string::npos);
+}
+
+TEST(CalibrationPhysical, AComplianceIsPositiveStiffEnoughAndDeflectsLittle) {
+  const double min_stiffness = ComplianceEffect::kMinPlausibleStiffness;
+  EXPECT_EQ(ComplianceEffect::implausibility(1.0 / (min_stiffness * 1.01), 0.0, "j"), "");
+  EXPECT_NE(ComplianceEffect::implausibility(1.0 / (min_stiffness * 0.99), 0.0, "j").find("below the plausible"),
+            std::string::npos);
+  EXPECT_NE(ComplianceEffect::implausibility(-1e-6, 0.0, "j").find("not positive"), std::string::npos);
+  EXPECT_NE(ComplianceEffect::implausibility(0.0, 0.0, "j").find("not positive"), std::string::npos);
+  // 1e-4 rad/(N m) at 100 N m is 0.01 rad: the bound.
+  const double deflection = ComplianceEffect::kMaxPlausibleDeflection;
+  EXPECT_EQ(ComplianceEffect::implausibility(deflection / 100.0 * 0.99, 100.0, "j"), "");
+  const std::string message = ComplianceEffect::implausibility(deflection / 100.0 * 1.01, 100.0, "joint_9");
+  EXPECT_NE(message.find("deflects"), std::string::npos) << message;
+  EXPECT_NE(message.find("joint_9"), std::string::npos) << message;
+}
+
+TEST(CalibrationPhysical, AStiffnessBelowThePlausibleIsNotIdentified) {
+  // The truth's joint 5 is far softer than a real joint (60 N m/rad: it would turn by several 0.01 rad under
+  // the wrist's weight): the calibration, tempted by the data, holds that compliance at the nominal value and
+  // says why.
+  const JointErrorModel nominal = rx170Model();
+  std::vector<std::unique_ptr<Effect>> effects;
+  for (int i = 0; i < nominal.effectCount(); ++i) {
+    if (nominal.effect(i).type() != ComplianceEffect::kType) effects.push_back(nominal.effect(i).clone());
+  }
+  std::vector<double> stiffness;
+  for (int j = 0; j < 6; ++j) stiffness.push_back(stiffnessOf(nominal, j));
+  stiffness[4] = 60.0;
+  effects.push_back(std::make_unique<ComplianceEffect>(nominal.robot(), stiffness));
+  const JointErrorModel truth(rx170(), nominal.gears(), std::move(effects));
+  const GeometricCalibrationResult result = calibrateGeometry(nominal, randomCampaign(truth, 200, 81));
+  const std::string name = nominal.robot().joints[4].name + ".compliance_rad_per_nm";
+  bool found = false;
+  for (const ParameterEstimate& p : result.parameters) {
+    if (p.name != name) continue;
+    found = true;
+    EXPECT_FALSE(p.identified) << p.value;
+    EXPECT_NE(p.fixed_because.find("not physical"), std::string::npos) << p.fixed_because;
+    EXPECT_DOUBLE_EQ(p.value, p.nominal);
+  }
+  EXPECT_TRUE(found);
+  for (const ParameterEstimate& p : result.parameters) {
+    if (p.identified && p.name.find("compliance") != std::string::npos) {
+      EXPECT_GT(p.value, 0.0) << p.name;
+      EXPECT_LT(p.value, 1.0 / ComplianceEffect::kMinPlausibleStiffness) << p.name;
+    }
+  }
 }
 
 }  // namespace

@@ -110,5 +110,57 @@ TEST(CsvImport, MistakesNameTheLineTheColumnAndTheHeader) {
   EXPECT_THROW(parseColumnMapping("t=Time,q1"), MeasurementError);
 }
 
+TEST(CsvImport, JointKColumnsAndATargetPlusDeviationAreRead) {
+  // A tracker's export: joint_1..joint_3 (found as q1..q3), the nominal position and the deviation from it.
+  const std::string text =
+      "Point;joint_1;joint_2;joint_3;X_target;Y_target;Z_target;dX;dY;dZ\n"
+      "1;10;20;30;1000;200;300;0,25;-0,5;1,5\n"
+      "2;11;21;31;1001;201;301;-0,25;0,5;-1,5\n";
+  CsvImportOptions options;
+  options.columns = parseColumnMapping("t=Point,x=X_target+dX,y=Y_target+dY,z=Z_target+dZ");
+  options.has_target = true;
+  options.target_in_flange = Eigen::Vector3d(0.01, 0.0, 0.08);
+  const MeasurementCampaign c = importCsv(text, "tracker.csv", options);
+  ASSERT_EQ(c.dof, 3);
+  EXPECT_NEAR(c.command[1][2], 31 * kPi / 180, 1e-15);
+  EXPECT_NEAR(c.position[0].x(), 1.00025, 1e-12);
+  EXPECT_NEAR(c.position[1].z(), 0.2995, 1e-12);
+  EXPECT_TRUE(c.has_target);
+  EXPECT_EQ(c.target_in_flange, Eigen::Vector3d(0.01, 0.0, 0.08));
+  // Written and read back, the target is the campaign's `# target:`.
+  const MeasurementCampaign again = parseCampaign(campaignToText(c), "again.csv");
+  EXPECT_TRUE(again.has_target);
+  EXPECT_NEAR((again.target_in_flange - c.target_in_flange).norm(), 0.0, 1e-15);
+}
+
+TEST(CsvImport, NoJointIsDroppedAndNoColumnIsReadTwice) {
+  const std::string seven = "t,A1,A2,A3,A4,A5,A6,A7,x,y,z\n0,1,2,3,4,5,6,7,8,9,10\n1,1,2,3,4,5,6,7,8,9,10\n";
+  CsvImportOptions six;
+  six.columns = parseColumnMapping("q1=A1,q2=A2,q3=A3,q4=A4,q5=A5,q6=A6");
+  expectRefused(seven, six, "a column 'A7' that looks like joint 7, but only 6 joints are mapped");
+  six.joints = 6;  // said on purpose: six joints
+  EXPECT_EQ(importCsv(seven, "seven.csv", six).dof, 6);
+  six.joints = 7;
+  expectRefused(seven, six, "--joints 7 but 6 joint columns");
+  // The next joint's column by the pattern of the last one mapped (A1 -> A2).
+  CsvImportOptions one;
+  one.columns = parseColumnMapping("q1=A1");
+  expectRefused("t,A1,A2,x,y,z\n0,1,2,3,4,5\n1,1,2,3,4,5\n", one, "a column 'A2' that looks like joint 2");
+  // A gap in the mapping: q3 missing, q4 mapped.
+  CsvImportOptions gap;
+  gap.columns = parseColumnMapping("q1=A1,q2=A2,q4=A4");
+  expectRefused(seven, gap, "--columns maps q4 but the joints before it are not all mapped (found 2 joints");
+  // One header column mapped to two campaign columns.
+  CsvImportOptions twice;
+  twice.columns = parseColumnMapping("q1=A1,q2=A1");
+  expectRefused(seven, twice, "header column 'A1' is mapped to both q1 and q2");
+  // Two header columns of one name: which is meant is not known.
+  expectRefused("t,q1,x,x,y,z\n0,1,2,3,4,5\n1,1,2,3,4,5\n", {}, "the header has 2 columns named 'x' (columns 3 and 4)");
+  // A derived column needs both of its columns.
+  CsvImportOptions derived;
+  derived.columns = parseColumnMapping("x=X+dX");
+  expectRefused("t,q1,X,y,z\n0,1,2,3,4\n1,1,2,3,4\n", derived, "a derived column is NAME+NAME");
+}
+
 }  // namespace
 }  // namespace jointcomp
