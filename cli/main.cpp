@@ -23,7 +23,7 @@ void printDiscoveryTypes() {
     const std::string word = " " + types[i] + (i + 1 < types.size() ? "," : "");
     if (line.size() + word.size() > 110) {
       std::printf("%s\n", line.c_str());
-      line = indent;
+      line = std::string(indent) + "      ";  // under the first type
     }
     line += word;
   }
