@@ -4,13 +4,31 @@
 #include <exception>
 #include <new>
 #include <string>
+#include <vector>
 
 #include "cli/commands.hpp"
 #include "cli/file_locations.hpp"
 #include "cli/options.hpp"
 #include "cli/output_paths.hpp"
+#include "model/effects/registry.hpp"
 
 namespace {
+
+// The discovery types, as the effect registry names them, wrapped under the command's description.
+void printDiscoveryTypes() {
+  const char* indent = "                             ";
+  std::string line = std::string(indent) + "types:";
+  const std::vector<std::string> types = jointcomp::EffectRegistry::builtin().discoveryVocabulary();
+  for (std::size_t i = 0; i < types.size(); ++i) {
+    const std::string word = " " + types[i] + (i + 1 < types.size() ? "," : "");
+    if (line.size() + word.size() > 110) {
+      std::printf("%s\n", line.c_str());
+      line = std::string(indent) + "      ";  // under the first type
+    }
+    line += word;
+  }
+  std::printf("%s\n", line.c_str());
+}
 
 void printUsage() {
   std::printf(
@@ -48,9 +66,9 @@ void printUsage() {
       "        [--max-prior-weight X] [--max-ridge-weight X] [--transfer-significance X] [--no-pairs] [--no-plot]\n"
       "                             residual discovery: from the textbook calibration, adds the candidate\n"
       "                             effects the data ask for, one (or a pair) at a time (time-blocked CV + BIC,\n"
-      "                             a transfer check), and writes the extended parameter file;\n"
-      "                             types: offset, compliance, nonlinear_compliance, harmonic, backlash,\n"
-      "                             hysteresis, thermal, geometric, payload, periodic, instrument_scale\n"
+      "                             a transfer check), and writes the extended parameter file;\n");
+  printDiscoveryTypes();
+  std::printf(
       "  export-fmu --urdf FILE --params FILE --out ROBOT.fmu [--fmi 2|3] [--drives PARAMS.json]\n"
       "        [--base-link L] [--tip-link L] [--rigid-stiffness N_M_PER_RAD]\n"
       "                             an FMI 2.0 (default) or 3.0 co-simulation FMU of the robot: its flexible-joint\n"

@@ -9,7 +9,7 @@
 
 #include "model/experiment/paper_identification.hpp"
 #include "model/experiment/spiral_experiment.hpp"
-#include "model/plant/drive_parameters.hpp"
+#include "model/robot/drive_parameters.hpp"
 
 namespace jointcomp::cli {
 

@@ -13,8 +13,8 @@
 #include "model/common/errors.hpp"
 #include "model/common/progress.hpp"
 #include "model/effects/joint_error_model.hpp"
-#include "model/plant/drive_parameters.hpp"
 #include "model/plant/flexible_joint_plant.hpp"
+#include "model/robot/drive_parameters.hpp"
 #include "model/robot/inverse_kinematics.hpp"
 
 // Every handle starts with a magic number naming its kind; free overwrites it, so that a handle of the

@@ -6,8 +6,8 @@
 
 #include "fmu/fmu_plant_options.hpp"
 #include "model/common/errors.hpp"
-#include "model/plant/drive_parameters.hpp"
 #include "model/plant/plant_options_by_name.hpp"
+#include "model/robot/drive_parameters.hpp"
 
 namespace jointcomp::fmu {
 

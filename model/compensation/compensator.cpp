@@ -19,21 +19,17 @@ Compensator::Compensator(const JointErrorModel& model, EffectMask mask, FixedPoi
       continue;
     }
     iterate_ = true;
+    const Effect& effect = model.effect(i);
     command_effects_.push_back(i);
-    if (const auto* transmission = dynamic_cast<const TransmissionErrorEffect*>(&model.effect(i))) {
-      transmission_errors_.push_back({transmission, anchors_.size()});
-      anchors_.resize(anchors_.size() + transmission->harmonics().size());
-    } else {
-      other_command_effects_.push_back(i);
-    }
+    first_anchor_.push_back(anchors_.size());
+    anchors_.resize(anchors_.size() + effect.continuationSize());
+    derivatives_known_ = derivatives_known_ && effect.knowsMotorDerivatives();
   }
   loads_read_kinematics_ = loadsReadKinematics(model, mask);
-  std::array<bool, kMaxJoints> active{};
-  for (const Transmission& transmission : transmission_errors_) {
-    for (const Harmonic& h : transmission.effect->harmonics()) active[static_cast<std::size_t>(h.joint)] = true;
-  }
+  bool active[kMaxJoints] = {};
+  for (const int i : command_effects_) model.effect(i).markCommandJoints(model.robot().dof(), active);
   for (int j = 0; j < model.robot().dof(); ++j) {
-    if (active[static_cast<std::size_t>(j)] || !other_command_effects_.empty()) active_joints_[active_count_++] = j;
+    if (active[j]) active_joints_[active_count_++] = j;
   }
   // G's nonzero entries row by row (the diagonal and the few couplings of a 6 x 6 matrix).
   const JointMatrix& g = model.gears().motorFromJoint();
@@ -139,6 +135,26 @@ FixedPointReport Compensator::compensateFrom(JointContext& ctx, const JointVecto
   return iterate(ctx, reference, continue_anchors, false);
 }
 
+bool Compensator::evaluateCommandEffects(const JointContext& ctx, bool reuse_anchors, bool higher_order) {
+  const Robot& robot = model_.robot();
+  const int* active = active_joints_.data();
+  if (higher_order) {
+    for (int a = 0; a < active_count_; ++a) second_[active[a]] = third_[active[a]] = 0.0;
+  }
+  bool slopes_known = true;
+  for (std::size_t k = 0; k < command_effects_.size(); ++k) {
+    const Effect& effect = model_.effect(command_effects_[k]);
+    SinCosAnchor* anchors = anchors_.data() + first_anchor_[k];
+    if (higher_order) {
+      effect.continueJointErrorAndMotorDerivatives(robot, ctx, anchors, reuse_anchors, dq_, slope_, second_, third_);
+    } else {
+      slopes_known =
+          effect.continueJointErrorAndMotorSlope(robot, ctx, anchors, reuse_anchors, dq_, slope_) && slopes_known;
+    }
+  }
+  return slopes_known;
+}
+
 FixedPointReport Compensator::iterate(JointContext& ctx, JointVector& reference, bool continue_anchors,
                                       bool cold_start) {
   const Robot& robot = model_.robot();
@@ -171,34 +187,17 @@ FixedPointReport Compensator::iterate(JointContext& ctx, JointVector& reference,
       ctx.motor[i] = sum;
     }
     // The first step from a cold start is long (the whole command-dependent error, 1e-4 rad on the RX170): for
-    // it the error's second and third derivatives too, which transmission errors give at little cost (the
+    // it the error's second and third derivatives too, which harmonics give at little cost (the
     // higher-order step below). A later step, or the first from a near guess, is short enough for Newton.
-    const bool higher_order = cold_start && report.iterations == 1 && other_command_effects_.empty();
+    const bool higher_order = cold_start && report.iterations == 1 && derivatives_known_;
     for (int a = 0; a < active_count_; ++a) {
       const int j = active[a];
       dq_[j] = fixed_dq_[j];
       slope_[j] = 0.0;
     }
-    if (higher_order) {
-      for (int a = 0; a < active_count_; ++a) second_[active[a]] = third_[active[a]] = 0.0;
-    }
-    // The harmonics' sines near their anchors by the angle-addition formula: later iterates are within a small angle of
-    // the first, and along a path (continue_anchors) the first is within one of the previous point's.
-    const bool reuse_anchors = continue_anchors || report.iterations > 1;
-    for (const Transmission& transmission : transmission_errors_) {
-      TransmissionErrorEffect::Anchor* anchors = anchors_.data() + transmission.first_anchor;
-      if (higher_order) {
-        transmission.effect->addJointErrorAndMotorDerivatives(ctx, anchors, reuse_anchors, dq_, slope_, second_,
-                                                              third_);
-      } else {
-        transmission.effect->addJointErrorAndMotorSlope(ctx, anchors, reuse_anchors, dq_, slope_);
-      }
-    }
-    bool slopes_known = true;
-    for (const int i : other_command_effects_) {
-      model_.effect(i).addJointError(robot, ctx, dq_);
-      slopes_known = model_.effect(i).addMotorSlope(robot, ctx, slope_) && slopes_known;
-    }
+    // The continuations' sines near their anchors: later iterates are within a small angle of the first, and
+    // along a path (continue_anchors) the first is within one of the previous point's.
+    const bool slopes_known = evaluateCommandEffects(ctx, continue_anchors || report.iterations > 1, higher_order);
     // The stopping test of the plain fixed point: how far its map Q_theo - dQ(command) moves the command.
     // Their sum is finite when every change is (without a branch per joint); only when it is not are the
     // changes searched for the first that is not (a finite sum's overflow is no such change).

@@ -10,7 +10,6 @@
 #include <vector>
 
 #include "model/effects/joint_error_model.hpp"
-#include "model/effects/transmission_error.hpp"
 #include "model/robot/kinematics.hpp"
 
 namespace jointcomp {
@@ -27,20 +26,22 @@ public:
   // Allocates nothing. Throws UnreachableError when the
   // converged reference leaves a joint's limits (a result that cannot be commanded is no result).
   FixedPointReport compensate(JointContext& ctx, JointVector& reference);
-  // The same, starting from Q_theo - correction_guess (a guess of Q_theo - Q_ref) instead of from
-  // Q_theo less the command-independent errors (on the joints that iterate; the others need no guess). Along a dense
-  // path the previous point's correction is within a fraction of a microradian of this one's, and one Newton step then
-  // meets the tolerance: two evaluations, as compensate()'s higher-order first step takes, but with the sines continued
-  // from the previous point (on the RX170's spiral 3,576 instructions a point against 3,761). The stopping test is the
-  // same, so the result is compensate()'s up to rounding. The harmonics' sines, and the joint angles' in the forward
-  // kinematics, continue from those of the previous call where it was near, so the result depends on earlier calls at
-  // the rounding level (1e-19 rad in the error, 1e-19 in a sine of the pose), not beyond.
+  // The same, starting from Q_theo - correction_guess (a guess of Q_theo - Q_ref) instead of from Q_theo less
+  // the command-independent errors (on the joints that iterate; the others need no guess). Along a dense path
+  // the previous point's correction is within a fraction of a microradian of this one's, and one Newton step
+  // then meets the tolerance. The stopping test is the same, so the result is compensate()'s up to rounding:
+  // the effects' continuations (Effect::continuationSize) and the joint angles' sines in the forward
+  // kinematics continue from those of the previous call where it was near, so the result depends on earlier
+  // calls at the rounding level (1e-19 rad), not beyond.
   FixedPointReport compensateFrom(JointContext& ctx, const JointVector& correction_guess, JointVector& reference);
 
   const JointErrorModel& model() const { return model_; }
   EffectMask mask() const { return mask_; }
 
 private:
+  // Evaluates the command-dependent effects at ctx.motor into dq_ and slope_ (and second_, third_ with
+  // higher_order); false when one does not know its slope.
+  bool evaluateCommandEffects(const JointContext& ctx, bool reuse_anchors, bool higher_order);
   // Load torque at ctx.q and the command-independent errors into fixed_dq_; along_path: the forward
   // kinematics' sines from the joint angles' anchors (set by the previous call along the path, or here).
   void prepare(JointContext& ctx, bool along_path);
@@ -58,21 +59,17 @@ private:
   JointErrorWorkspace ws_;
   // The selected error effects, split once: those that do not read the command are summed once per point.
   std::vector<int> fixed_effects_, command_effects_;
-  // The command-dependent effects that are transmission errors, called directly for their value and slope
-  // together; the others (command_effects_ less these) through the Effect interface.
-  struct Transmission {
-    const TransmissionErrorEffect* effect;
-    std::size_t first_anchor;  // its harmonics' anchors in anchors_
-  };
-  std::vector<Transmission> transmission_errors_;
-  std::vector<TransmissionErrorEffect::Anchor> anchors_;
+  // Each command-dependent effect's continuation (Effect::continuationSize anchors) in anchors_.
+  std::vector<std::size_t> first_anchor_;
+  std::vector<SinCosAnchor> anchors_;
+  // Every command-dependent effect gives its second and third motor derivatives (the higher-order step).
+  bool derivatives_known_ = true;
   bool anchors_set_ = false;  // by an earlier call (each harmonic's sine and cosine at some phase, from sinCos)
   // No selected load reads the forward kinematics: with no payload or wrench in the context, the load
   // torque comes from the joints' sines and cosines alone (gravity in joint frames).
   bool loads_read_kinematics_ = true;
   JointAngleAnchors joint_anchors_;  // the joint angles' sines and cosines, by compensateFrom
   bool joint_anchors_set_ = false;
-  std::vector<int> other_command_effects_;
   JointVector fixed_dq_, dq_, slope_, second_, third_;  // slope_, second_, third_: dQ's derivatives by the motor angle
   // G's nonzero entries row by row, and its diagonal, in place: the iteration reads them without a pointer chase.
   int gear_entry_count_ = 0;
@@ -83,9 +80,9 @@ private:
   // The rows with an entry off the diagonal (a coupled wrist): the others are their diagonal term alone.
   int coupled_row_count_ = 0;
   std::array<int, kMaxJoints> coupled_rows_{};
-  // The joints whose error depends on the command (a harmonic's joint; every joint when another effect does):
-  // only they iterate. Each other joint's reference is Q_theo less its command-independent errors from the
-  // first evaluation on, where the plain map leaves it (its change is exactly zero).
+  // The joints whose error depends on the command (Effect::markCommandJoints): only they iterate. Each other joint's
+  // reference is Q_theo less its command-independent errors from the first evaluation on, where the plain map leaves it
+  // (its change is exactly zero).
   int active_count_ = 0;
   std::array<int, kMaxJoints> active_joints_{};
 };

@@ -28,6 +28,8 @@ public:
   std::unique_ptr<Effect> clone() const override { return std::make_unique<ComplianceEffect>(*this); }
 
   double stiffness(int joint) const { return field(0)[static_cast<std::size_t>(joint)]; }
+  bool isJointSpring() const override { return true; }
+  double jointStiffness(int joint) const override { return stiffness(joint); }
 
   // The physical constraint of a joint's compliance c (rad/(N m)), which the calibration and discovery
   // respect: positive, a stiffness 1/c of at least kMinPlausibleStiffness, and a deflection c |tau| of at

@@ -13,6 +13,7 @@
 
 #include <nlohmann/json_fwd.hpp>
 
+#include "model/robot/sin_cos_near.hpp"
 #include "model/robot/workspace.hpp"
 
 namespace jointcomp {
@@ -88,6 +89,41 @@ public:
   // of joint j depends on motor j only) and returns true; false when the effect does not know its slope
   // (the plant then differentiates it numerically). The plant needs it at every right-hand side.
   virtual bool addMotorSlope(const Robot& robot, const JointContext& ctx, JointVector& slope) const;
+  // addJointError and addMotorSlope in one pass, with the same bits as the two calls (the plant's right-hand
+  // side asks for both at every evaluation); returns addMotorSlope's answer. The default makes the two calls.
+  virtual bool addJointErrorAndMotorSlope(const Robot& robot, const JointContext& ctx, JointVector& dq,
+                                          JointVector& slope) const;
+  // The joints whose error depends on the command: sets joints[j] for each (dof values). The default marks
+  // every joint; an effect of a few joints marks those, so that compensation iterates on them alone.
+  virtual void markCommandJoints(int dof, bool* joints) const;
+
+  // The continuation, for a caller that evaluates a command-dependent effect again and again at nearby
+  // commands (the compensator's iterations, a dense path): the effect keeps continuationSize() sines with
+  // their angles in caller-owned `anchors` between calls. With `reuse` false the anchors are set afresh;
+  // with true an angle near its anchor continues from it (sinCosNear), so the result matches the plain
+  // evaluation to rounding (a few 1e-20 rad). Returns addMotorSlope's answer. The default keeps no anchors
+  // and calls addJointErrorAndMotorSlope.
+  virtual std::size_t continuationSize() const { return 0; }
+  virtual bool continueJointErrorAndMotorSlope(const Robot& robot, const JointContext& ctx, SinCosAnchor* anchors,
+                                               bool reuse, JointVector& dq, JointVector& slope) const;
+  // True when continueJointErrorAndMotorDerivatives gives the error's second and third derivatives by the
+  // motor angle too (the compensator's higher-order first step needs them of every command-dependent effect).
+  virtual bool knowsMotorDerivatives() const { return false; }
+  // The continued evaluation with those derivatives added to `second` and `third`; only where
+  // knowsMotorDerivatives() (the default throws InvalidArgument).
+  virtual void continueJointErrorAndMotorDerivatives(const Robot& robot, const JointContext& ctx, SinCosAnchor* anchors,
+                                                     bool reuse, JointVector& dq, JointVector& slope,
+                                                     JointVector& second, JointVector& third) const;
+
+  // The joints' linear springs, dq = -tau / K: the effect that is them says so and gives each joint's K
+  // (N m/rad, +infinity for a rigid joint). The plant integrates them as its elastic joints; the simulated
+  // campaigns and the reports read K from them. Found by JointErrorModel::jointSprings().
+  virtual bool isJointSpring() const { return false; }
+  virtual double jointStiffness(int joint) const;
+
+  // Load effects that store energy (a spring): its potential energy at ctx.q (J), for the plant's energy
+  // balance; 0 by default.
+  virtual double loadPotentialEnergy(const Robot& robot, const JointContext& ctx) const;
 
   // An effect whose per-joint values are one of the calibration's own parameters says which, and gives
   // them in the calibration's units, so that calibration starts from them and writes them back.

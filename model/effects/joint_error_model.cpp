@@ -1,6 +1,7 @@
 #include "model/effects/joint_error_model.hpp"
 
 #include <cmath>
+#include <limits>
 
 #include "model/common/errors.hpp"
 #include "model/robot/dynamics.hpp"
@@ -30,6 +31,21 @@ void JointErrorModel::addEffect(std::unique_ptr<Effect> effect) {
   if (!effect) throw InvalidArgument("joint-error model: null effect");
   if (effectCount() >= kMaxEffects) throw InvalidArgument("joint-error model: more than 64 effects");
   effects_.push_back(std::move(effect));
+}
+
+int JointErrorModel::jointSprings() const {
+  for (int i = 0; i < effectCount(); ++i) {
+    if (effects_[static_cast<std::size_t>(i)]->isJointSpring()) return i;
+  }
+  return -1;
+}
+
+JointVector JointErrorModel::jointStiffness() const {
+  const int dof = robot_->dof();
+  JointVector stiffness = JointVector::Constant(dof, std::numeric_limits<double>::infinity());
+  const int springs = jointSprings();
+  for (int j = 0; j < dof && springs >= 0; ++j) stiffness[j] = effect(springs).jointStiffness(j);
+  return stiffness;
 }
 
 int JointErrorModel::findEffect(const std::string& type) const {

@@ -34,6 +34,10 @@ public:
   void addEffect(std::unique_ptr<Effect> effect);
   // Index of the first effect of that type, -1 if none.
   int findEffect(const std::string& type) const;
+  // Index of the effect that is the joints' linear springs (Effect::isJointSpring), -1 if none.
+  int jointSprings() const;
+  // Each joint's spring stiffness from that effect (N m/rad); +infinity (rigid) without one.
+  JointVector jointStiffness() const;
 
   EffectMask allEffects() const;
   // Every load effect plus the joint-error effects of the given types (the paper's runs: {} for none,

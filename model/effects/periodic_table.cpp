@@ -182,6 +182,29 @@ bool PeriodicTableEffect::addMotorSlope(const Robot&, const JointContext& ctx, J
   return true;
 }
 
+bool PeriodicTableEffect::addJointErrorAndMotorSlope(const Robot&, const JointContext& ctx, JointVector& dq,
+                                                     JointVector& slope) const {
+  for (const PeriodicTable& table : tables_) {
+    const std::vector<double>& c = table.coefficients_rad;
+    const int knots = static_cast<int>(c.size());
+    const PeriodicSplineWeights w =
+        periodicSplineWeights(knots, gears_.stageInputAngle(table.joint, table.stage, ctx.motor));
+    double value = 0.0, per_angle = 0.0;
+    for (int k = 0; k < 4; ++k) {
+      const double coefficient = c[static_cast<std::size_t>((w.first + k) % knots)];
+      value += w.weight[k] * coefficient;
+      per_angle += w.slope[k] * coefficient;
+    }
+    dq[table.joint] += value;
+    slope[table.joint] += per_angle * gears_.stageInputPerMotor(table.joint, table.stage);
+  }
+  return true;
+}
+
+void PeriodicTableEffect::markCommandJoints(int, bool* joints) const {
+  for (const PeriodicTable& table : tables_) joints[table.joint] = true;
+}
+
 std::vector<std::string> PeriodicTableEffect::parameterNames() const {
   std::vector<std::string> names;
   for (const PeriodicTable& t : tables_) {

@@ -53,6 +53,10 @@ public:
   bool dependsOnCommand() const override { return true; }
   void addJointError(const Robot& robot, const JointContext& ctx, JointVector& dq) const override;
   bool addMotorSlope(const Robot& robot, const JointContext& ctx, JointVector& slope) const override;
+  // Each table's spline weights once for both (the same bits as the two calls).
+  bool addJointErrorAndMotorSlope(const Robot& robot, const JointContext& ctx, JointVector& dq,
+                                  JointVector& slope) const override;
+  void markCommandJoints(int dof, bool* joints) const override;  // the tables' joints
   std::vector<std::string> parameterNames() const override;
   std::vector<double> parameters() const override;
   void setParameters(const std::vector<double>& values) override;

@@ -40,6 +40,9 @@ public:
   int joint() const { return joint_; }
   double springLength(double q) const;
   double potentialEnergy(double q) const;
+  double loadPotentialEnergy(const Robot&, const JointContext& ctx) const override {
+    return potentialEnergy(ctx.q[joint_]);
+  }
   // dV/dq: what the spring adds to the torque the joint carries.
   double torque(double q) const;
   // d(torque)/dq.

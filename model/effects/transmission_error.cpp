@@ -89,7 +89,7 @@ bool TransmissionErrorEffect::addMotorSlope(const Robot&, const JointContext& ct
   return true;
 }
 
-void TransmissionErrorEffect::addJointErrorAndMotorSlope(const JointContext& ctx, JointVector& dq,
+bool TransmissionErrorEffect::addJointErrorAndMotorSlope(const Robot&, const JointContext& ctx, JointVector& dq,
                                                          JointVector& slope) const {
   for (const Harmonic& h : harmonics_) {
     const double angle = gears_.stageInputAngle(h.joint, h.stage, ctx.motor);
@@ -98,24 +98,32 @@ void TransmissionErrorEffect::addJointErrorAndMotorSlope(const JointContext& ctx
     dq[h.joint] += h.amplitude_rad * sine;
     slope[h.joint] += h.amplitude_rad * h.cycles_per_revolution * gears_.stageInputPerMotor(h.joint, h.stage) * cosine;
   }
+  return true;
 }
 
-void TransmissionErrorEffect::addJointErrorAndMotorSlope(const JointContext& ctx, Anchor* anchors, bool reuse_anchors,
-                                                         JointVector& dq, JointVector& slope) const {
+void TransmissionErrorEffect::markCommandJoints(int, bool* joints) const {
+  for (const Harmonic& h : harmonics_) joints[h.joint] = true;
+}
+
+bool TransmissionErrorEffect::continueJointErrorAndMotorSlope(const Robot&, const JointContext& ctx,
+                                                              SinCosAnchor* anchors, bool reuse_anchors,
+                                                              JointVector& dq, JointVector& slope) const {
   for (std::size_t i = 0; i < harmonics_.size(); ++i) {
     const Harmonic& h = harmonics_[i];
-    Anchor& anchor = anchors[i];
+    SinCosAnchor& anchor = anchors[i];
     const double phase = ctx.motor[h.joint] * phase_per_motor_[i] + h.phase_rad;
     double sine, cosine;
     sinCosNear(phase, reuse_anchors, anchor, sine, cosine);
     dq[h.joint] += h.amplitude_rad * sine;
     slope[h.joint] += h.amplitude_rad * phase_per_motor_[i] * cosine;
   }
+  return true;
 }
 
-void TransmissionErrorEffect::addJointErrorAndMotorDerivatives(const JointContext& ctx, Anchor* anchors,
-                                                               bool reuse_anchors, JointVector& dq, JointVector& slope,
-                                                               JointVector& second, JointVector& third) const {
+void TransmissionErrorEffect::continueJointErrorAndMotorDerivatives(const Robot&, const JointContext& ctx,
+                                                                    SinCosAnchor* anchors, bool reuse_anchors,
+                                                                    JointVector& dq, JointVector& slope,
+                                                                    JointVector& second, JointVector& third) const {
   for (std::size_t i = 0; i < harmonics_.size(); ++i) {
     const Harmonic& h = harmonics_[i];
     const double rate = phase_per_motor_[i];

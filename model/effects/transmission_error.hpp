@@ -39,24 +39,19 @@ public:
   bool dependsOnCommand() const override { return true; }
   void addJointError(const Robot& robot, const JointContext& ctx, JointVector& dq) const override;
   bool addMotorSlope(const Robot& robot, const JointContext& ctx, JointVector& slope) const override;
-  // For the compensator's iterations, whose commands move by small angles: addJointError and
-  // addMotorSlope in one pass, keeping each harmonic's phase (argument of the sine) with its sine and cosine
-  // in `anchors` (harmonics().size() of them, caller-owned). With reuse_anchors false, sinCos
-  // at every harmonic (the anchors are set); with true, a harmonic whose phase stayed within kNearAnchor of
-  // its anchor gets its sine and cosine by the angle-addition formula with Taylor series of the difference
-  // (no sinCos call), the others are re-anchored. The same values as addJointError and addMotorSlope to
-  // rounding (a few 1e-20 rad).
-  using Anchor = SinCosAnchor;                              // its angle is the harmonic's phase
-  static constexpr double kNearAnchor = kSinCosNearAnchor;  // rad of phase
-  void addJointErrorAndMotorSlope(const JointContext& ctx, Anchor* anchors, bool reuse_anchors, JointVector& dq,
-                                  JointVector& slope) const;
-  // The same, and the error's second and third derivatives with respect to the motor angle (a harmonic's are
-  // its sine and cosine again, times powers of its phase rate): the compensator's higher-order step.
-  void addJointErrorAndMotorDerivatives(const JointContext& ctx, Anchor* anchors, bool reuse_anchors, JointVector& dq,
-                                        JointVector& slope, JointVector& second, JointVector& third) const;
-  // For the plant's right-hand side: addJointError and addMotorSlope in one pass with their own arithmetic
-  // (the same bits as the two calls), each harmonic's phase once and its sine and cosine together.
-  void addJointErrorAndMotorSlope(const JointContext& ctx, JointVector& dq, JointVector& slope) const;
+  // Each harmonic's phase once, its sine and cosine together: the same bits as the two calls.
+  bool addJointErrorAndMotorSlope(const Robot& robot, const JointContext& ctx, JointVector& dq,
+                                  JointVector& slope) const override;
+  void markCommandJoints(int dof, bool* joints) const override;  // the harmonics' joints
+  // One anchor per harmonic, its angle the harmonic's phase (Effect's continuation).
+  std::size_t continuationSize() const override { return harmonics_.size(); }
+  bool continueJointErrorAndMotorSlope(const Robot& robot, const JointContext& ctx, SinCosAnchor* anchors, bool reuse,
+                                       JointVector& dq, JointVector& slope) const override;
+  // A harmonic's higher derivatives are its sine and cosine again, times powers of its phase rate.
+  bool knowsMotorDerivatives() const override { return true; }
+  void continueJointErrorAndMotorDerivatives(const Robot& robot, const JointContext& ctx, SinCosAnchor* anchors,
+                                             bool reuse, JointVector& dq, JointVector& slope, JointVector& second,
+                                             JointVector& third) const override;
   std::vector<std::string> parameterNames() const override;
   std::vector<double> parameters() const override;
   void setParameters(const std::vector<double>& values) override;

@@ -13,7 +13,6 @@
 #include "model/common/random.hpp"
 #include "model/compensation/joint_trajectory.hpp"
 #include "model/effects/backlash.hpp"
-#include "model/effects/compliance.hpp"
 #include "model/experiment/spiral_experiment.hpp"
 #include "model/identify/identification_support.hpp"
 #include "model/robot/kinematics.hpp"
@@ -67,12 +66,7 @@ public:
     campaign_.target_in_flange = spec.target_in_flange;
     campaign_.dof = robot_.dof();
     campaign_.has_position = true;
-    const int compliance = truth.findEffect(ComplianceEffect::kType);
-    stiffness_ = JointVector::Constant(robot_.dof(), std::numeric_limits<double>::infinity());
-    if (compliance >= 0) {
-      const auto& effect = static_cast<const ComplianceEffect&>(truth.effect(compliance));
-      for (int j = 0; j < robot_.dof(); ++j) stiffness_[j] = effect.stiffness(j);
-    }
+    stiffness_ = truth.jointStiffness();
   }
 
   const Robot& robot() const { return robot_; }

@@ -12,6 +12,21 @@
 namespace jointcomp {
 namespace {
 
+// The paper's runs: no correction; the loads and the joint springs (stiffness); and the gears' errors that
+// follow the command too (kinematic: transmission errors, periodic tables), each effect found by its role.
+void paperRunMasks(const JointErrorModel& nominal, EffectMask masks[3]) {
+  EffectMask stiffness = nominal.loadsAnd({});
+  if (nominal.jointSprings() >= 0) stiffness |= EffectMask(1) << nominal.jointSprings();
+  EffectMask kinematic = stiffness;
+  for (int i = 0; i < nominal.effectCount(); ++i) {
+    const Effect& effect = nominal.effect(i);
+    if (effect.role() == EffectRole::JointError && effect.dependsOnCommand()) kinematic |= EffectMask(1) << i;
+  }
+  masks[0] = 0;
+  masks[1] = stiffness;
+  masks[2] = kinematic;
+}
+
 constexpr double kDegree = 3.14159265358979323846 / 180.0;
 
 void tell(const std::function<void(const std::string&)>& progress, const std::string& what) {
@@ -62,8 +77,8 @@ PreparedSpiral prepareSpiralRuns(const JointErrorModel& nominal, const SpiralExp
   PreparedSpiral prepared;
   tell(progress, "planning the spiral (feed rate, inverse kinematics)");
   prepared.planned = planSpiralTrajectory(robot, spec.spiral, spec.feed_rate, spec.seed_posture);
-  const EffectMask run_masks[3] = {0, nominal.loadsAnd({"compliance"}),
-                                   nominal.loadsAnd({"compliance", "transmission_error"})};
+  EffectMask run_masks[3];
+  paperRunMasks(nominal, run_masks);
   const char* run_names[4] = {"without correction", "stiffness correction", "stiffness and kinematic correction",
                               "stiffness, kinematic and dynamic correction"};
   const int run_count = spec.dynamic_correction ? 4 : 3;

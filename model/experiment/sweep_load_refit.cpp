@@ -14,9 +14,11 @@ struct Candidate {
   std::size_t parameter = 0;
 };
 
-// The swept joint's deflection (link minus command) at each row's command, by the model's loads and compliance.
+// The swept joint's deflection (link minus command) at each row's command, by the model's loads and joint
+// springs (found by their role, Effect::isJointSpring).
 Eigen::VectorXd deflections(const JointErrorModel& model, const MeasurementCampaign& sweep, int joint) {
-  const EffectMask mask = model.loadsAnd({"compliance"});
+  EffectMask mask = model.loadsAnd({});
+  if (model.jointSprings() >= 0) mask |= EffectMask(1) << model.jointSprings();
   JointErrorWorkspace ws(model.robot());
   JointContext ctx(model.robot().dof());
   Eigen::VectorXd d(static_cast<Eigen::Index>(sweep.size()));

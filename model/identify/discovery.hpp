@@ -17,9 +17,9 @@
 // Candidates: every discovery family of the effect registry (model/effects/registry.hpp) offers its own,
 // per joint and for the whole robot, with the columns they bring and the calibration parameters they free;
 // the family turns the accepted coefficients into its effect and names their estimates. The built-in
-// vocabulary: offset, compliance and geometric (the calibration's own parameters of a joint), backlash,
-// hysteresis, payload, nonlinear_compliance, thermal, harmonic; each family's comment (model/effects) says
-// what its columns are. A user's effect type joins through its own registry (DiscoveryOptions::registry).
+// vocabulary is EffectRegistry::builtin().discoveryVocabulary() (`jointcomp help` prints it); each family's
+// comment (model/effects) says what its columns are. A user's effect type joins through its own registry
+// (DiscoveryOptions::registry).
 //
 // Ra and Rz on paths: for every fitted or held-out campaign that is a path (isPathCampaign), each state
 // gives Ra = mean |z_k| and Rz = max z_k - min z_k (metrics.hpp) of the Z component, in the robot's base

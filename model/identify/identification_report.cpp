@@ -4,7 +4,6 @@
 #include <cstdio>
 #include <sstream>
 
-#include "model/effects/compliance.hpp"
 #include "model/effects/transmission_error.hpp"
 
 namespace jointcomp {
@@ -35,9 +34,9 @@ nlohmann::ordered_json finiteOrNull(double value) {
 
 double trueStiffness(const JointErrorModel* truth, int joint) {
   if (!truth) return std::nan("");
-  const int index = truth->findEffect(ComplianceEffect::kType);
+  const int index = truth->jointSprings();
   if (index < 0 || joint >= truth->robot().dof()) return std::nan("");
-  return static_cast<const ComplianceEffect&>(truth->effect(index)).stiffness(joint);
+  return truth->effect(index).jointStiffness(joint);
 }
 
 nlohmann::ordered_json estimateJson(const StiffnessEstimate& e, bool local, double truth) {

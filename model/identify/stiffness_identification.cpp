@@ -587,7 +587,7 @@ JointErrorModel withIdentifiedStiffness(const JointErrorModel& nominal, const St
     throw InvalidArgument("stiffness update: the result is for another robot");
   }
   JointErrorModel updated = nominal;
-  const int index = updated.findEffect(ComplianceEffect::kType);
+  const int index = updated.jointSprings();
   std::vector<double> values(n, std::numeric_limits<double>::quiet_NaN());
   if (index >= 0) values = updated.effect(index).parameters();
   std::vector<std::string> kept;

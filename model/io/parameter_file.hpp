@@ -12,7 +12,7 @@
 #include <string>
 
 #include "model/effects/joint_error_model.hpp"
-#include "model/plant/drive_parameters.hpp"
+#include "model/robot/drive_parameters.hpp"
 
 namespace jointcomp {
 

@@ -7,7 +7,6 @@
 
 #include "model/common/errors.hpp"
 #include "model/compensation/compensator.hpp"
-#include "model/effects/compliance.hpp"
 #include "model/robot/dynamics.hpp"
 #include "model/robot/workspace.hpp"
 
@@ -216,7 +215,7 @@ void invertModel(const JointErrorModel& nominal, const std::vector<DriveParamete
   ctx.tool_wrench = options.tool_wrench;
   JointVector with_motion, at_rest;
   std::vector<JointVector> motor_reaction(count);
-  const int compliance = nominal.findEffect(ComplianceEffect::kType);
+  const int compliance = nominal.jointSprings();
   reference.resize(count);
   for (std::size_t k = 0; k < count; ++k) {
     const FixedPointReport fixed_point =
@@ -318,7 +317,7 @@ OnlineDynamicCompensator::OnlineDynamicCompensator(const JointErrorModel& nomina
       load_ws_(nominal.robot()),
       ctx_(nominal.robot().dof()),
       at_reference_(nominal.robot().dof()),
-      compliance_(nominal.findEffect(ComplianceEffect::kType)) {
+      compliance_(nominal.jointSprings()) {
   const int n = nominal.robot().dof();
   if (static_cast<int>(drives.size()) != n) {
     throw InvalidArgument("dynamic compensation: " + std::to_string(drives.size()) + " drives for a robot with " +

@@ -22,8 +22,8 @@
 #include "model/compensation/compensator.hpp"
 #include "model/compensation/joint_trajectory.hpp"
 #include "model/effects/joint_error_model.hpp"
-#include "model/plant/drive_parameters.hpp"
 #include "model/plant/flexible_joint_plant.hpp"
+#include "model/robot/drive_parameters.hpp"
 #include "model/robot/workspace.hpp"
 
 namespace jointcomp {

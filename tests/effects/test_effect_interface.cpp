@@ -248,6 +248,79 @@ std::vector<std::vector<double>> allParameters(const JointErrorModel& model) {
   return result;
 }
 
+// An effect type that overrides none of the fast paths (as a user's new type may not): the defaults give
+// its value and slope as the two calls do, keep no continuation, mark every joint, and refuse the higher
+// derivatives with a message naming it.
+class RippleOfTheCommand : public Effect {
+public:
+  std::string type() const override { return "ripple"; }
+  EffectRole role() const override { return EffectRole::JointError; }
+  bool dependsOnCommand() const override { return true; }
+  void addJointError(const Robot&, const JointContext& ctx, JointVector& dq) const override {
+    for (int j = 0; j < dq.size(); ++j) dq[j] += 1e-5 * std::sin(3.0 * ctx.motor[j]);
+  }
+  bool addMotorSlope(const Robot&, const JointContext& ctx, JointVector& slope) const override {
+    for (int j = 0; j < slope.size(); ++j) slope[j] += 3e-5 * std::cos(3.0 * ctx.motor[j]);
+    return true;
+  }
+  std::vector<std::string> parameterNames() const override { return {}; }
+  std::vector<double> parameters() const override { return {}; }
+  void setParameters(const std::vector<double>&) override {}
+  nlohmann::json toJson() const override { return {{"type", "ripple"}}; }
+  std::unique_ptr<Effect> clone() const override { return std::make_unique<RippleOfTheCommand>(*this); }
+};
+
+TEST(EffectInterface, DefaultsOfTheFastPathsAreTheTwoCalls) {
+  const JointErrorModel model = effects_test::rx170Model();
+  const RippleOfTheCommand ripple;
+  const Effect& effect = ripple;
+  JointContext ctx(6);
+  for (int j = 0; j < 6; ++j) ctx.motor[j] = 10.0 * j - 17.0;
+  JointVector dq = JointVector::Constant(6, 1e-3), slope = JointVector::Constant(6, -2e-3);
+  JointVector direct = dq, direct_slope = slope;
+  EXPECT_TRUE(effect.continueJointErrorAndMotorSlope(model.robot(), ctx, nullptr, true, dq, slope));
+  effect.addJointError(model.robot(), ctx, direct);
+  effect.addMotorSlope(model.robot(), ctx, direct_slope);
+  EXPECT_EQ(dq, direct);
+  EXPECT_EQ(slope, direct_slope);
+  EXPECT_EQ(effect.continuationSize(), 0u);
+  EXPECT_FALSE(effect.knowsMotorDerivatives());
+  bool joints[kMaxJoints] = {};
+  effect.markCommandJoints(6, joints);
+  for (int j = 0; j < 6; ++j) EXPECT_TRUE(joints[j]);
+  JointVector second = JointVector::Zero(6), third = JointVector::Zero(6);
+  try {
+    effect.continueJointErrorAndMotorDerivatives(model.robot(), ctx, nullptr, false, dq, slope, second, third);
+    FAIL() << "no error";
+  } catch (const InvalidArgument& e) {
+    EXPECT_THAT(e.what(), HasSubstr("ripple"));
+  }
+}
+
+// The joint springs are found by their role, wherever they stand in the model's list: their stiffness is
+// the compliance effect's; a model without them has rigid joints (+infinity) and says so with -1.
+TEST(EffectInterface, TheJointSpringsAreFoundByTheirRole) {
+  const JointErrorModel model = effects_test::rx170Model();
+  const int springs = model.jointSprings();
+  ASSERT_GE(springs, 0);
+  EXPECT_EQ(model.effect(springs).type(), ComplianceEffect::kType);
+  const auto& compliance = static_cast<const ComplianceEffect&>(model.effect(springs));
+  const JointVector stiffness = model.jointStiffness();
+  for (int j = 0; j < 6; ++j) EXPECT_EQ(stiffness[j], compliance.stiffness(j));
+  // The same effects in reverse order, and without the springs.
+  std::vector<std::unique_ptr<Effect>> reversed, without;
+  for (int i = model.effectCount() - 1; i >= 0; --i) {
+    reversed.push_back(model.effect(i).clone());
+    if (i != springs) without.push_back(model.effect(i).clone());
+  }
+  const JointErrorModel turned(model.sharedRobot(), model.gears(), std::move(reversed));
+  EXPECT_EQ(turned.jointSprings(), model.effectCount() - 1 - springs);
+  EXPECT_EQ(turned.jointStiffness(), stiffness);
+  const JointErrorModel rigid(model.sharedRobot(), model.gears(), std::move(without));
+  EXPECT_EQ(rigid.jointSprings(), -1);
+  EXPECT_EQ(rigid.jointStiffness(), JointVector::Constant(6, kInf));
+}
+
 TEST(Perturbation, SameSeedSameParametersOtherSeedOthers) {
   const JointErrorModel nominal = effects_test::rx170Model();
   PerturbationSpec spec;

@@ -124,6 +124,42 @@ TEST(PeriodicTable, JointErrorIsTheSplineOfThePartsAngle) {
   }
 }
 
+// Through the Effect interface alone (as the plant and the compensator call it): the one-pass value and
+// slope are addJointError's and addMotorSlope's bits, added onto values already there, and the joints whose
+// error follows the command are the tables' joints, no others.
+TEST(PeriodicTable, OnePassValueAndSlopeAreTheTwoCallsAndOnlyItsJointsFollowTheCommand) {
+  JointErrorModel model = rx170Model();
+  std::vector<PeriodicTable> tables(2);
+  for (int t = 0; t < 2; ++t) {
+    tables[t].joint = 1 + 2 * t;
+    tables[t].stage = 1 + t;
+    for (int k = 0; k < 24; ++k) tables[t].coefficients_rad.push_back(1e-4 * std::cos(0.3 * k * (t + 1)));
+  }
+  const PeriodicTableEffect table(model.robot(), model.gears(), tables);
+  const Effect& effect = table;
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> start(-1e-3, 1e-3);
+  for (int trial = 0; trial < 50; ++trial) {
+    JointContext ctx(6);
+    ctx.command = randomConfiguration(model.robot(), rng);
+    model.gears().motorAngles(ctx.command, ctx.motor);
+    JointVector dq(6), slope(6);
+    for (int j = 0; j < 6; ++j) {
+      dq[j] = start(rng);
+      slope[j] = start(rng);
+    }
+    JointVector direct = dq, direct_slope = slope;
+    ASSERT_TRUE(effect.addJointErrorAndMotorSlope(model.robot(), ctx, dq, slope));
+    effect.addJointError(model.robot(), ctx, direct);
+    ASSERT_TRUE(effect.addMotorSlope(model.robot(), ctx, direct_slope));
+    EXPECT_EQ(dq, direct) << "trial " << trial;
+    EXPECT_EQ(slope, direct_slope) << "trial " << trial;
+  }
+  bool joints[kMaxJoints] = {};
+  effect.markCommandJoints(6, joints);
+  for (int j = 0; j < 6; ++j) EXPECT_EQ(joints[j], j == 1 || j == 3) << "joint " << j;
+}
+
 TEST(PeriodicTable, RoundTripsThroughTheParameterFileAndRefusesBadTables) {
   nlohmann::json json = rx170Json();
   std::vector<double> c(12);

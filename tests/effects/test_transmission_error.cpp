@@ -228,14 +228,14 @@ TEST(TransmissionError, ParametersAreAmplitudesInRadiansAndPhases) {
 
 // The compensator's evaluation: libm at the anchors, then the angle-addition formula at commands moved by
 // 1e-9 .. 1e-1 rad of motor angle, which moves the phases by 1/3 to 0.8 times that: up to 1e-3 the short
-// Taylor series, 5e-2 the long one, 1e-1 re-anchors some (beyond kNearAnchor); against addJointError and
+// Taylor series, 5e-2 the long one, 1e-1 re-anchors some (beyond kSinCosNearAnchor); against addJointError and
 // addMotorSlope at each command.
 TEST(TransmissionError, AnchoredValueAndSlopeMatchTheDirectSums) {
   const JointErrorModel model = effects_test::rx170Model();
   const Robot& robot = model.robot();
   const auto& effect =
       dynamic_cast<const TransmissionErrorEffect&>(model.effect(model.findEffect(TransmissionErrorEffect::kType)));
-  std::vector<TransmissionErrorEffect::Anchor> anchors(effect.harmonics().size());
+  std::vector<SinCosAnchor> anchors(effect.harmonics().size());
   std::mt19937 rng(29u);
   std::uniform_real_distribution<double> motor_angle(-300.0, 300.0);
   int reanchored = 0;
@@ -245,9 +245,9 @@ TEST(TransmissionError, AnchoredValueAndSlopeMatchTheDirectSums) {
     for (const double move : {0.0, 1e-9, 1e-6, 1e-3, 1e-2, 5e-2, 1e-1}) {
       JointContext moved = ctx;
       for (int j = 0; j < robot.dof(); ++j) moved.motor[j] += (j % 2 == 0 ? move : -move);
-      const std::vector<TransmissionErrorEffect::Anchor> before = anchors;
+      const std::vector<SinCosAnchor> before = anchors;
       JointVector dq = JointVector::Zero(robot.dof()), slope = JointVector::Zero(robot.dof());
-      effect.addJointErrorAndMotorSlope(moved, anchors.data(), move != 0.0, dq, slope);
+      effect.continueJointErrorAndMotorSlope(robot, moved, anchors.data(), move != 0.0, dq, slope);
       for (std::size_t i = 0; i < anchors.size(); ++i) reanchored += move != 0.0 && anchors[i].angle != before[i].angle;
       JointVector direct = JointVector::Zero(robot.dof()), direct_slope = JointVector::Zero(robot.dof());
       effect.addJointError(robot, moved, direct);
@@ -272,13 +272,13 @@ TEST(TransmissionError, SecondAndThirdDerivativesAreDifferencesOfTheSlopeAndTheS
   const auto& effect =
       dynamic_cast<const TransmissionErrorEffect&>(model.effect(model.findEffect(TransmissionErrorEffect::kType)));
   const int n = robot.dof();
-  std::vector<TransmissionErrorEffect::Anchor> anchors(effect.harmonics().size());
+  std::vector<SinCosAnchor> anchors(effect.harmonics().size());
   struct Derivatives {
     JointVector dq, slope, second, third;
   };
   const auto derivatives = [&](const JointContext& ctx) {
     Derivatives d{JointVector::Zero(n), JointVector::Zero(n), JointVector::Zero(n), JointVector::Zero(n)};
-    effect.addJointErrorAndMotorDerivatives(ctx, anchors.data(), false, d.dq, d.slope, d.second, d.third);
+    effect.continueJointErrorAndMotorDerivatives(robot, ctx, anchors.data(), false, d.dq, d.slope, d.second, d.third);
     return d;
   };
   std::mt19937 rng(41u);
@@ -289,7 +289,7 @@ TEST(TransmissionError, SecondAndThirdDerivativesAreDifferencesOfTheSlopeAndTheS
     for (int j = 0; j < n; ++j) ctx.motor[j] = motor_angle(rng);
     const Derivatives at = derivatives(ctx);
     JointVector dq = JointVector::Zero(n), slope = JointVector::Zero(n);
-    effect.addJointErrorAndMotorSlope(ctx, anchors.data(), false, dq, slope);
+    effect.continueJointErrorAndMotorSlope(robot, ctx, anchors.data(), false, dq, slope);
     EXPECT_EQ(at.dq, dq) << "sample " << sample;
     EXPECT_EQ(at.slope, slope) << "sample " << sample;
     for (int j = 0; j < n; ++j) {
@@ -325,7 +325,7 @@ TEST(TransmissionError, OnePassValueAndSlopeAreTheTwoCallsBitForBit) {
       start[j] = 1e-3 * motor_angle(rng);
     }
     JointVector dq = start, slope = -start;
-    effect.addJointErrorAndMotorSlope(ctx, dq, slope);
+    effect.addJointErrorAndMotorSlope(robot, ctx, dq, slope);
     JointVector direct = start, direct_slope = -start;
     effect.addJointError(robot, ctx, direct);
     ASSERT_TRUE(effect.addMotorSlope(robot, ctx, direct_slope));

@@ -11,7 +11,7 @@
 
 #include "model/common/errors.hpp"
 #include "model/io/parameter_file.hpp"
-#include "model/plant/drive_parameters.hpp"
+#include "model/robot/drive_parameters.hpp"
 #include "tests/plant/plant_test_support.hpp"
 
 namespace jointcomp {

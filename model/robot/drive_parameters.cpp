@@ -1,4 +1,4 @@
-#include "model/plant/drive_parameters.hpp"
+#include "model/robot/drive_parameters.hpp"
 
 #include <nlohmann/json.hpp>
 
