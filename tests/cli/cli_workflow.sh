@@ -17,7 +17,11 @@ fail() { echo "cli_workflow: $*" >&2; exit 1; }
 
 # grep -c, not grep -q: -q stops at the first match, and under pipefail the writer's SIGPIPE then fails the
 # pipe at random (seen in CI); -c reads everything.
-"$jointcomp" help | grep -c "hysteresis, thermal, geometric, payload" >/dev/null || fail "help does not list the discovery types"
+help_text=$("$jointcomp" help)
+for type in offset compliance nonlinear_compliance harmonic backlash hysteresis thermal geometric payload periodic \
+  instrument_scale link_bending; do
+  grep -c "\b$type\b" <<<"$help_text" >/dev/null || fail "help does not list the discovery type $type"
+done
 
 # A joint-2 sweep while the robot warms up: the temperature column rises.
 "$jointcomp" simulate --protocol joint2-sweep --truth "$params" --seed 3 --step 0.2 --warm-up 5,600 \
