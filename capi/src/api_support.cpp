@@ -26,24 +26,6 @@ std::string describe(double value) {
   return value > 0 ? "+infinity" : "-infinity";
 }
 
-std::uint64_t magicOf(const void* handle) {
-  // Read as bytes: the pointer may point at a handle of another kind.
-  std::uint64_t magic = 0;
-  std::memcpy(&magic, handle, sizeof magic);
-  return magic;
-}
-
-[[noreturn]] void wrongHandle(const void* handle, const char* expected) {
-  const std::uint64_t magic = magicOf(handle);
-  std::string found = "a pointer that is not a live jointcomp handle (already freed, or never one)";
-  if (magic == kRobotMagic) found = "a jc_robot";
-  if (magic == kPlantMagic) found = "a jc_plant";
-  if (magic == kReportMagic) found = "a jc_report";
-  if (magic == kSpiralJobMagic) found = "a jc_spiral_job";
-  if (magic == kFreedMagic) found = "a handle that was already freed";
-  throw ApiError(JC_ERROR_WRONG_HANDLE, std::string("expected a ") + expected + ", got " + found);
-}
-
 }  // namespace
 
 void invalid(const std::string& message) { throw ApiError(JC_ERROR_INVALID_ARGUMENT, message); }
@@ -65,29 +47,6 @@ jc_status fail(const char* function, jc_status status, const char* message) noex
     last_error.clear();
   }
   return status;
-}
-
-void requireHandleKind(const void* handle, std::uint64_t magic, const char* expected, const char* name) {
-  if (!handle) invalid(std::string(name) + " is NULL");
-  if (magicOf(handle) != magic) wrongHandle(handle, expected);
-}
-
-jc_robot& robotHandle(jc_robot* robot, const char* name) {
-  if (!robot) invalid(std::string(name) + " is NULL");
-  if (magicOf(robot) != kRobotMagic) wrongHandle(robot, "jc_robot");
-  return *robot;
-}
-
-jc_plant& plantHandle(jc_plant* plant) {
-  if (!plant) invalid("plant is NULL");
-  if (magicOf(plant) != kPlantMagic) wrongHandle(plant, "jc_plant");
-  return *plant;
-}
-
-jc_report& reportHandle(jc_report* report) {
-  if (!report) invalid("report is NULL");
-  if (magicOf(report) != kReportMagic) wrongHandle(report, "jc_report");
-  return *report;
 }
 
 void requirePointer(const void* pointer, const char* name) {
@@ -270,6 +229,7 @@ const char* jc_status_name(jc_status status) {
     case JC_ERROR_OUT_OF_MEMORY: return "JC_ERROR_OUT_OF_MEMORY";
     case JC_ERROR_INTERNAL: return "JC_ERROR_INTERNAL";
     case JC_ERROR_PLANT_LIMIT: return "JC_ERROR_PLANT_LIMIT";
+    case JC_ERROR_BUSY: return "JC_ERROR_BUSY";
     default: return "JC_UNKNOWN_STATUS";
   }
 }

@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "handle_registry.hpp"
 #include "jointcomp/jointcomp.h"
 #include "model/common/errors.hpp"
 #include "model/common/progress.hpp"
@@ -17,20 +18,14 @@
 #include "model/robot/drive_parameters.hpp"
 #include "model/robot/inverse_kinematics.hpp"
 
-// Every handle starts with a magic number naming its kind; free overwrites it, so that a handle of the
-// wrong kind or an already freed one is recognised as long as its memory has not been reused.
-constexpr std::uint64_t kRobotMagic = 0x6a63'726f'626f'7431ULL;      // "jcrobot1"
-constexpr std::uint64_t kPlantMagic = 0x6a63'706c'616e'7431ULL;      // "jcplant1"
-constexpr std::uint64_t kReportMagic = 0x6a63'7265'706f'7274ULL;     // "jcreport"
-constexpr std::uint64_t kSpiralJobMagic = 0x6a63'7370'6a6f'6231ULL;  // "jcspjob1"
-constexpr std::uint64_t kFreedMagic = 0x6a63'6672'6565'6421ULL;      // "jcfreed!"
-
-struct jc_robot {
+// Handles are looked up in the table of live handles (handle_registry.hpp) before they are trusted, and are
+// busy while a call uses them.
+struct jc_robot : jointcomp::capi::HandleHeader {
+  static constexpr jointcomp::capi::HandleKind kKind = jointcomp::capi::HandleKind::Robot;
   jc_robot(std::shared_ptr<const jointcomp::Robot> loaded, jointcomp::JointErrorModel nominal,
            std::vector<jointcomp::DriveParameters> drive_parameters);
 
-  std::uint64_t magic = kRobotMagic;  // first member: read before anything else is trusted
-  std::mutex mutex;                   // serialises calls on this handle
+  std::mutex mutex;  // serialises calls on this handle
   const std::shared_ptr<const jointcomp::Robot> robot;
   const jointcomp::JointErrorModel model;
   const std::vector<jointcomp::DriveParameters> drives;  // empty when the parameters have no "plant"
@@ -43,19 +38,19 @@ struct jc_robot {
   jointcomp::Vector6 tool_wrench = jointcomp::Vector6::Zero();
 };
 
-struct jc_plant {
+struct jc_plant : jointcomp::capi::HandleHeader {
+  static constexpr jointcomp::capi::HandleKind kKind = jointcomp::capi::HandleKind::Plant;
   explicit jc_plant(std::unique_ptr<jointcomp::FlexibleJointPlant> created) : plant(std::move(created)) {}
 
-  std::uint64_t magic = kPlantMagic;
   std::mutex mutex;
   const std::unique_ptr<jointcomp::FlexibleJointPlant> plant;
 };
 
-struct jc_report {
+struct jc_report : jointcomp::capi::HandleHeader {
+  static constexpr jointcomp::capi::HandleKind kKind = jointcomp::capi::HandleKind::Report;
   jc_report(std::string json_text, std::string summary_text)
       : json(std::move(json_text)), summary(std::move(summary_text)) {}
 
-  std::uint64_t magic = kReportMagic;
   const std::string json;  // immutable once made: no lock needed
   const std::string summary;
 };
@@ -84,6 +79,7 @@ jc_status fail(const char* function, jc_status status, const char* message) noex
 template <class Body>
 jc_status guarded(const char* function, Body&& body) noexcept {
   clearLastError();
+  const EntryScope scope;  // releases the handles the call marked busy
   try {
     body();
     return JC_OK;
@@ -116,13 +112,23 @@ jc_status guarded(const char* function, Body&& body) noexcept {
 
 #define CAPI_ENTRY(...) ::jointcomp::capi::guarded(__func__, [&]() __VA_ARGS__)
 
-// The handle behind a pointer, after checking that it is one of the expected kind and still alive.
-// `name`: the parameter's name in the header, for the message.
-jc_robot& robotHandle(jc_robot* robot, const char* name = "robot");
-jc_plant& plantHandle(jc_plant* plant);
-jc_report& reportHandle(jc_report* report);
-// The magic number of a live handle at `handle` must be `magic`, else the error names what was found.
-void requireHandleKind(const void* handle, std::uint64_t magic, const char* expected, const char* name);
+// The handle behind a pointer, after checking that it is a live one of the expected kind; it stays busy
+// (cannot be freed) until the entry point returns. `name`: the parameter's name in the header.
+template <class Handle>
+Handle& useHandle(Handle* handle, const char* name) {
+  acquireHandle(handle, Handle::kKind, name);
+  return *handle;
+}
+inline jc_robot& robotHandle(jc_robot* robot, const char* name = "robot") { return useHandle(robot, name); }
+inline jc_plant& plantHandle(jc_plant* plant) { return useHandle(plant, "plant"); }
+inline jc_report& reportHandle(jc_report* report) { return useHandle(report, "report"); }
+// Frees a handle no call is using (NULL: nothing); JC_ERROR_BUSY while one is.
+template <class Handle>
+void freeHandle(Handle* handle, const char* name) {
+  if (!handle) return;
+  retireHandle(handle, Handle::kKind, name);
+  delete handle;
+}
 
 // Argument checks; `name` is the parameter's name in the header.
 void requirePointer(const void* pointer, const char* name);

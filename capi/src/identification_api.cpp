@@ -81,8 +81,8 @@ std::string robotSource(const jc_robot& handle) { return handle.robot->name + " 
 // untouched.
 void deliver(std::unique_ptr<jc_robot> robot, jc_robot** robot_out, std::unique_ptr<jc_report> report,
              jc_report** report_out) {
-  if (robot_out) *robot_out = robot.release();
-  if (report_out) *report_out = report.release();
+  if (robot_out) *robot_out = publish(std::move(robot));
+  if (report_out) *report_out = publish(std::move(report));
 }
 
 // The tables' knots, the priors' largest weights and the transfer check's settings (discovery.hpp); the
@@ -345,12 +345,7 @@ jc_status jc_report_summary(jc_report* report, char* buffer, int32_t capacity, i
 }
 
 jc_status jc_report_free(jc_report* report) {
-  return CAPI_ENTRY({
-    if (!report) return;
-    jc_report& handle = reportHandle(report);
-    *static_cast<volatile std::uint64_t*>(&handle.magic) = kFreedMagic;
-    delete &handle;
-  });
+  return CAPI_ENTRY({ freeHandle(report, "report"); });
 }
 
 }  // extern "C"

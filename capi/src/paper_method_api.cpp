@@ -98,8 +98,8 @@ jc_status jc_identify_and_compensate(jc_robot* nominal, jc_robot* truth, const c
       made = std::make_unique<jc_report>(r.both.dump(2), r.summary);
     }
     // Handed over only now, when nothing can fail any more.
-    if (identified) *identified = identified_robot.release();
-    if (report) *report = made.release();
+    if (identified) *identified = publish(std::move(identified_robot));
+    if (report) *report = publish(std::move(made));
   });
 }
 

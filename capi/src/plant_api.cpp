@@ -54,7 +54,7 @@ void createPlant(jc_robot* robot, const char* options_json, jc_plant** plant) {
     }
   });
   auto created = std::make_unique<FlexibleJointPlant>(source.model, source.drives, options);
-  *plant = new jc_plant(std::move(created));
+  *plant = publish(std::make_unique<jc_plant>(std::move(created)));
 }
 
 }  // namespace
@@ -70,12 +70,7 @@ jc_status jc_plant_create_with_options(jc_robot* robot, const char* options_json
 }
 
 jc_status jc_plant_free(jc_plant* plant) {
-  return CAPI_ENTRY({
-    if (!plant) return;
-    jc_plant& handle = plantHandle(plant);
-    *static_cast<volatile std::uint64_t*>(&handle.magic) = kFreedMagic;  // see jc_robot_free
-    delete &handle;
-  });
+  return CAPI_ENTRY({ freeHandle(plant, "plant"); });
 }
 
 jc_status jc_plant_dof(jc_plant* plant, int32_t* dof) {

@@ -13,22 +13,28 @@ using namespace jointcomp::capi;
 namespace {
 
 // The "plant" object is optional in a parameter file; present, it must be valid (the set is read once).
-jc_robot* robotFromParameters(const std::shared_ptr<const Robot>& robot, const std::string& json_text,
-                              const std::string& source_name) {
+std::unique_ptr<jc_robot> robotFromParameters(const std::shared_ptr<const Robot>& robot, const std::string& json_text,
+                                              const std::string& source_name) {
   ParameterSet parameters = parseParameterSet(json_text, source_name, robot, EffectRegistry::builtin());
-  return new jc_robot(robot, std::move(parameters.model), std::move(parameters.drives));
+  return std::make_unique<jc_robot>(robot, std::move(parameters.model), std::move(parameters.drives));
+}
+
+// Kinematics and dynamics only: no joint errors, no drives.
+std::unique_ptr<jc_robot> withoutParameters(const std::shared_ptr<const Robot>& robot) {
+  return std::make_unique<jc_robot>(robot, JointErrorModel(robot, GearTrain::direct(robot->dof()), {}),
+                                    std::vector<DriveParameters>{});
 }
 
 // The chain of the URDF between the links named (NULL or "": the URDF's root, the end of its longest moving
 // chain), with the parameters of a file or JSON text (neither: kinematics and dynamics only).
-jc_robot* loadRobot(const char* urdf_path, const char* base_link, const char* tip_link, const char* parameter_path,
-                    const char* parameters_json) {
+std::unique_ptr<jc_robot> loadRobot(const char* urdf_path, const char* base_link, const char* tip_link,
+                                    const char* parameter_path, const char* parameters_json) {
   UrdfChainOptions chain;
   if (base_link) chain.root_link = base_link;
   if (tip_link) chain.tip_link = tip_link;
   const auto loaded = std::make_shared<const Robot>(loadRobotFromUrdfFile(requireText(urdf_path, "urdf_path"), chain));
   if (parameters_json) return robotFromParameters(loaded, parameters_json, "parameters_json");
-  if (!parameter_path) return new jc_robot(loaded, JointErrorModel(loaded, GearTrain::direct(loaded->dof()), {}), {});
+  if (!parameter_path) return withoutParameters(loaded);
   std::string text;
   try {
     text = readTextFile(parameter_path, "parameter file", kMaxJsonFileBytes);
@@ -47,7 +53,7 @@ extern "C" {
 jc_status jc_robot_load(const char* urdf_path, const char* parameter_path, jc_robot** robot) {
   return CAPI_ENTRY({
     requirePointer(robot, "robot");
-    *robot = loadRobot(urdf_path, nullptr, nullptr, parameter_path, nullptr);
+    *robot = publish(loadRobot(urdf_path, nullptr, nullptr, parameter_path, nullptr));
   });
 }
 
@@ -55,7 +61,7 @@ jc_status jc_robot_load_json(const char* urdf_path, const char* parameters_json,
   return CAPI_ENTRY({
     requirePointer(robot, "robot");
     requireText(parameters_json, "parameters_json");
-    *robot = loadRobot(urdf_path, nullptr, nullptr, nullptr, parameters_json);
+    *robot = publish(loadRobot(urdf_path, nullptr, nullptr, nullptr, parameters_json));
   });
 }
 
@@ -64,8 +70,8 @@ jc_status jc_robot_load_text(const char* urdf_text, const char* parameters_json,
     requirePointer(robot, "robot");
     const auto loaded =
         std::make_shared<const Robot>(loadRobotFromUrdfString(requireText(urdf_text, "urdf_text"), "urdf_text"));
-    *robot = parameters_json ? robotFromParameters(loaded, parameters_json, "parameters_json")
-                             : new jc_robot(loaded, JointErrorModel(loaded, GearTrain::direct(loaded->dof()), {}), {});
+    *robot = publish(parameters_json ? robotFromParameters(loaded, parameters_json, "parameters_json")
+                                     : withoutParameters(loaded));
   });
 }
 
@@ -74,18 +80,12 @@ jc_status jc_robot_load_chain(const char* urdf_path, const char* base_link, cons
   return CAPI_ENTRY({
     requirePointer(robot, "robot");
     if (parameter_path && parameters_json) invalid("give parameter_path or parameters_json, not both");
-    *robot = loadRobot(urdf_path, base_link, tip_link, parameter_path, parameters_json);
+    *robot = publish(loadRobot(urdf_path, base_link, tip_link, parameter_path, parameters_json));
   });
 }
 
 jc_status jc_robot_free(jc_robot* robot) {
-  return CAPI_ENTRY({
-    if (!robot) return;
-    jc_robot& handle = robotHandle(robot);
-    // Volatile, so that the compiler keeps a store into an object about to be destroyed.
-    *static_cast<volatile std::uint64_t*>(&handle.magic) = kFreedMagic;
-    delete &handle;
-  });
+  return CAPI_ENTRY({ freeHandle(robot, "robot"); });
 }
 
 jc_status jc_robot_dof(jc_robot* robot, int32_t* dof) {

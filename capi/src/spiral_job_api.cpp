@@ -28,7 +28,8 @@ const char* const kGeometryNames[7] = {"offset_rad",       "placement_dx_m",   "
 
 }  // namespace
 
-struct jc_spiral_job {
+struct jc_spiral_job : HandleHeader {
+  static constexpr HandleKind kKind = HandleKind::SpiralJob;
   jc_spiral_job(const jc_robot& nominal, bool use_plant)
       : model(nominal.model), drives(use_plant ? nominal.drives : std::vector<DriveParameters>{}) {
     spec.drives = drives;
@@ -36,7 +37,6 @@ struct jc_spiral_job {
     listParameters();
   }
 
-  std::uint64_t magic = kSpiralJobMagic;
   const JointErrorModel model;
   const std::vector<DriveParameters> drives;
   SpiralExperimentSpec spec;
@@ -118,10 +118,7 @@ JointErrorModel jc_spiral_job::truth(const double* values) const {
 
 namespace {
 
-jc_spiral_job& jobHandle(jc_spiral_job* job) {
-  requireHandleKind(job, kSpiralJobMagic, "jc_spiral_job", "job");
-  return *job;
-}
+jc_spiral_job& jobHandle(jc_spiral_job* job) { return useHandle(job, "job"); }
 
 }  // namespace
 
@@ -139,17 +136,12 @@ jc_status jc_spiral_job_create(jc_robot* nominal, int32_t use_plant, jc_spiral_j
     if (static_cast<std::int64_t>(created->prepared.planned.size()) > INT32_MAX / 16) {
       invalid("the spiral has too many samples for int32_t lengths");
     }
-    *job = created.release();
+    *job = publish(std::move(created));
   });
 }
 
 jc_status jc_spiral_job_free(jc_spiral_job* job) {
-  return CAPI_ENTRY({
-    if (!job) return;
-    jc_spiral_job& handle = jobHandle(job);
-    *static_cast<volatile std::uint64_t*>(&handle.magic) = kFreedMagic;
-    delete &handle;
-  });
+  return CAPI_ENTRY({ freeHandle(job, "job"); });
 }
 
 jc_status jc_spiral_job_sizes(jc_spiral_job* job, int32_t* samples, int32_t* parameters) {

@@ -105,6 +105,8 @@ static void test_job(jc_robot* robot) {
   EXPECT_STATUS(JC_ERROR_WRONG_HANDLE, "got a jc_spiral_job", jc_robot_dof((jc_robot*)(void*)job, &m));
   EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "use_plant is 2", jc_spiral_job_create(robot, 2, &job));
   EXPECT_OK(jc_spiral_job_free(job));
+  EXPECT_STATUS(JC_ERROR_WRONG_HANDLE, "already freed", jc_spiral_job_sizes(job, &m, &p));
+  EXPECT_STATUS(JC_ERROR_WRONG_HANDLE, "already freed", jc_spiral_job_free(job));
   EXPECT_OK(jc_spiral_job_free(NULL));
   free(json);
   free(errors);

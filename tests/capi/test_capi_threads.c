@@ -1,11 +1,14 @@
 /* Two handles in two threads give the same results, bit for bit, as one after the other; and one handle
- * shared by two threads stays consistent (its lock serialises the calls; calibration needs no lock). Built with
- * -DJOINTCOMP_SANITIZE=thread, ThreadSanitizer checks that nothing is shared without synchronisation. */
+ * shared by two threads stays consistent (its lock serialises the calls; calibration needs no lock). A handle
+ * freed while a call uses it (from another thread, or from the call's own progress callback) is refused with
+ * JC_ERROR_BUSY, and calls made after a free are JC_ERROR_WRONG_HANDLE, never a use of freed memory. Built
+ * with -DJOINTCOMP_SANITIZE=thread, ThreadSanitizer checks that nothing is shared without synchronisation. */
 #define _POSIX_C_SOURCE 200809L
 
 #include <jointcomp/jointcomp.h>
 
 #include <pthread.h>
+#include <sched.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -36,6 +39,7 @@ typedef struct {
   Results results;
 } Work;
 
+static jc_robot* load(void);
 static int32_t sample_count = 0;
 static char campaign_path[64]; /* a simulated campaign every thread calibrates on (read only) */
 static double* spiral_q = NULL;
@@ -103,6 +107,170 @@ static void* work(void* argument) {
     CALL(out, jc_plant_free(plant));
   }
   return NULL;
+}
+
+/* ---- Freed while busy ---------------------------------------------------------------------------------- */
+
+typedef struct {
+  pthread_mutex_t mutex;
+  pthread_cond_t changed;
+  jc_robot* robot;
+  int inside;         /* the calibration's callback has been entered */
+  int may_leave;      /* the main thread has tried to free the robot */
+  jc_status own_free; /* jc_robot_free(robot) from inside the callback */
+  char own_message[512];
+  jc_status calibrate_status;
+} CallbackFree;
+
+static void free_from_callback(const char* message, void* user_data) {
+  CallbackFree* c = (CallbackFree*)user_data;
+  (void)message;
+  pthread_mutex_lock(&c->mutex);
+  if (!c->inside) {
+    /* The callback frees the robot of the call that runs it: refused, and the call goes on. */
+    c->own_free = jc_robot_free(c->robot);
+    snprintf(c->own_message, sizeof c->own_message, "%s", jc_last_error());
+    c->inside = 1;
+    pthread_cond_broadcast(&c->changed);
+    while (!c->may_leave) pthread_cond_wait(&c->changed, &c->mutex);
+  }
+  pthread_mutex_unlock(&c->mutex);
+}
+
+static void* calibrate_with_callback(void* argument) {
+  CallbackFree* c = (CallbackFree*)argument;
+  jc_robot* calibrated = NULL;
+  jc_set_progress_callback(free_from_callback, c);
+  c->calibrate_status = jc_calibrate(c->robot, campaign_path, NULL, NULL, &calibrated, NULL);
+  jc_set_progress_callback(NULL, NULL);
+  jc_robot_free(calibrated);
+  return NULL;
+}
+
+/* A robot freed while jc_calibrate runs on it, from the callback and from another thread: both refused. */
+static int freed_during_calibration(void) {
+  CallbackFree c;
+  pthread_t thread;
+  jc_status busy;
+  int failures = 0;
+  memset(&c, 0, sizeof c);
+  pthread_mutex_init(&c.mutex, NULL);
+  pthread_cond_init(&c.changed, NULL);
+  c.robot = load();
+  if (pthread_create(&thread, NULL, calibrate_with_callback, &c) != 0) return 1;
+  pthread_mutex_lock(&c.mutex);
+  while (!c.inside) pthread_cond_wait(&c.changed, &c.mutex);
+  busy = jc_robot_free(c.robot); /* the calibration is inside its callback: the robot is busy */
+  if (busy != JC_ERROR_BUSY || !strstr(jc_last_error(), "on other threads")) {
+    fprintf(stderr, "free during jc_calibrate: %s (%s), expected JC_ERROR_BUSY\n", jc_status_name(busy),
+            jc_last_error());
+    ++failures;
+  }
+  c.may_leave = 1;
+  pthread_cond_broadcast(&c.changed);
+  pthread_mutex_unlock(&c.mutex);
+  pthread_join(thread, NULL);
+  if (c.own_free != JC_ERROR_BUSY || !strstr(c.own_message, "on this thread")) {
+    fprintf(stderr, "free from jc_calibrate's callback: %s (%s), expected JC_ERROR_BUSY\n", jc_status_name(c.own_free),
+            c.own_message);
+    ++failures;
+  }
+  if (c.calibrate_status != JC_OK) {
+    fprintf(stderr, "jc_calibrate failed after the refused frees\n");
+    ++failures;
+  }
+  if (jc_robot_free(c.robot) != JC_OK) { /* idle now: freed */
+    fprintf(stderr, "free after jc_calibrate returned: %s\n", jc_last_error());
+    ++failures;
+  }
+  pthread_cond_destroy(&c.changed);
+  pthread_mutex_destroy(&c.mutex);
+  return failures;
+}
+
+typedef struct {
+  pthread_mutex_t mutex;
+  jc_robot* robot;
+  jc_plant* plant;
+  int calls; /* made so far */
+  int freed; /* set by the main thread once both frees succeeded */
+  int ok, refused, wrong;
+} Race;
+
+/* Calls on a robot and a plant while the main thread frees them: each call is JC_OK or, once the handle is
+   gone, JC_ERROR_WRONG_HANDLE; none may succeed after the free returned. */
+static void* call_while_freed(void* argument) {
+  Race* r = (Race*)argument;
+  double q[6], reference[6];
+  int k;
+  posture(1, q);
+  for (k = 0; k < 400; ++k) {
+    int freed;
+    jc_status a, b;
+    pthread_mutex_lock(&r->mutex);
+    freed = r->freed;
+    ++r->calls;
+    pthread_mutex_unlock(&r->mutex);
+    a = jc_compensate_point(r->robot, NULL, q, 6, NULL, 0, reference, 6, NULL);
+    b = jc_plant_advance(r->plant, 0.001 * (k + 1));
+    if (a == JC_OK && b == JC_OK && !freed)
+      ++r->ok;
+    else if ((a == JC_OK || a == JC_ERROR_WRONG_HANDLE) && (b == JC_OK || b == JC_ERROR_WRONG_HANDLE) &&
+             (!freed || (a != JC_OK && b != JC_OK)))
+      ++r->wrong;
+    else
+      ++r->refused; /* counted as a failure below */
+    if (freed) break;
+  }
+  return NULL;
+}
+
+static int freed_during_calls(void) {
+  Race r;
+  pthread_t thread;
+  double start[6];
+  int robot_freed = 0, plant_freed = 0, busy = 0, bad = 0;
+  memset(&r, 0, sizeof r);
+  pthread_mutex_init(&r.mutex, NULL);
+  r.robot = load();
+  posture(1, start);
+  if (jc_plant_create(r.robot, &r.plant) != JC_OK || jc_plant_reset(r.plant, start, 6, 0.0) != JC_OK) return 1;
+  if (pthread_create(&thread, NULL, call_while_freed, &r) != 0) return 1;
+  for (;;) { /* the frees begin while the calls are under way */
+    int calls;
+    pthread_mutex_lock(&r.mutex);
+    calls = r.calls;
+    pthread_mutex_unlock(&r.mutex);
+    if (calls >= 20) break;
+    sched_yield();
+  }
+  while (!robot_freed || !plant_freed) {
+    jc_status status;
+    if (!robot_freed) {
+      status = jc_robot_free(r.robot);
+      robot_freed = status == JC_OK;
+      busy += status == JC_ERROR_BUSY;
+      bad += status != JC_OK && status != JC_ERROR_BUSY;
+    }
+    if (!plant_freed) {
+      status = jc_plant_free(r.plant);
+      plant_freed = status == JC_OK;
+      busy += status == JC_ERROR_BUSY;
+      bad += status != JC_OK && status != JC_ERROR_BUSY;
+    }
+    if (bad) break;
+  }
+  pthread_mutex_lock(&r.mutex);
+  r.freed = 1;
+  pthread_mutex_unlock(&r.mutex);
+  pthread_join(thread, NULL);
+  pthread_mutex_destroy(&r.mutex);
+  if (bad || r.refused) {
+    fprintf(stderr, "freed during calls: %d frees neither OK nor busy, %d calls out of the rules\n", bad, r.refused);
+    return 1;
+  }
+  printf("freed during calls: %d frees refused as busy, %d calls before and %d after the frees\n", busy, r.ok, r.wrong);
+  return 0;
 }
 
 static int same_results(const Results* a, const Results* b, int with_experiment) {
@@ -202,6 +370,8 @@ int main(void) {
     free(shared[i].results.trajectory_references);
   }
   jc_robot_free(shared_robot);
+  failures += freed_during_calibration();
+  failures += freed_during_calls();
   remove(campaign_path);
   free(spiral_q);
   free(spiral_qd);

@@ -13,10 +13,19 @@
  *   [r * C + c]. Poses are 4 x 4 homogeneous transforms (16 values, row-major).
  * - Inputs must be finite: NaN and infinities are rejected with JC_ERROR_INVALID_ARGUMENT.
  * - Outputs marked "optional" may be NULL with length 0 when not wanted.
- * - Handles (jc_robot, jc_plant, jc_report) are created by jc_*_load / jc_*_create and released by jc_*_free;
- *   freeing NULL is a no-op. A handle of the wrong kind, or one already freed, is reported as
- *   JC_ERROR_WRONG_HANDLE as long as its memory has not been reused; a freed handle whose memory was
- *   reused cannot be detected, so never use a handle after freeing it.
+ * - Handles (jc_robot, jc_plant, jc_report, jc_spiral_job) are created by jc_*_load / jc_*_create (and the
+ *   identification calls) and released by jc_*_free; freeing NULL is a no-op. The rules of their lifetime,
+ *   which the library enforces:
+ *   1. A handle is busy while a call that was given it runs (on any thread, including the call whose
+ *      progress callback is running). jc_*_free of a busy handle returns JC_ERROR_BUSY and frees nothing:
+ *      free it after those calls have returned (join your threads first). A progress callback may use the
+ *      handles of the call that runs it, but not free them.
+ *   2. A pointer is checked against the library's table of live handles before it is read, so a handle of
+ *      the wrong kind, one already freed, or a pointer that never was a handle is JC_ERROR_WRONG_HANDLE
+ *      (never a crash). Only when a new handle of the same kind was since created at the same address is a
+ *      freed handle taken for that new one: so never use a handle after freeing it.
+ *   3. A handle freed on one thread while another thread is only about to pass it to a call is the race
+ *      of rule 2: synchronise the free with the threads that use the handle.
  * - Threads: every handle may be used from any thread. Calls on one handle are serialised by a lock
  *   inside it; separate handles share nothing mutable, so calls on them run in parallel. The last-error
  *   message is per thread.
@@ -53,6 +62,7 @@ typedef int32_t jc_status;
 #define JC_ERROR_OUT_OF_MEMORY (-6)
 #define JC_ERROR_INTERNAL (-7)    /* a bug: please report it with the message */
 #define JC_ERROR_PLANT_LIMIT (-8) /* a simulation that left its joint limits or its tracking envelope */
+#define JC_ERROR_BUSY (-9)        /* a *_free of a handle that a call in progress still uses: not freed */
 
 /* Opaque handles. */
 typedef struct jc_robot jc_robot;   /* a robot, its joint-error model and (optionally) its drives */

@@ -17,7 +17,7 @@ environment variable).
 """
 
 from . import _native
-from .errors import (FileError, InternalError, InvalidArgumentError, JointcompError, OutOfMemoryError,
+from .errors import (BusyError, FileError, InternalError, InvalidArgumentError, JointcompError, OutOfMemoryError,
                      PlantLimitError, SolverError, UnreachableError, WrongHandleError)
 from .identification import (Report, calibrate, discover, identify_and_compensate, identify_stiffness,
                              identify_transmission_error, simulate_campaign)
@@ -84,7 +84,7 @@ def last_error():
 
 
 __all__ = [
-    "ABI_VERSION", "__version__", "DynamicCompensation", "DistributedError", "FleetResult", "MonteCarloResult", "fleet", "monte_carlo", "FileError", "InternalError", "InvalidArgumentError", "JointcompError", "Metrics",
+    "ABI_VERSION", "__version__", "BusyError", "DynamicCompensation", "DistributedError", "FleetResult", "MonteCarloResult", "fleet", "monte_carlo", "FileError", "InternalError", "InvalidArgumentError", "JointcompError", "Metrics",
     "OutOfMemoryError", "Plant", "PlantLimitError", "PlantStatistics", "RUN_NAMES", "Report", "Robot", "SolverError", "SpiralExperiment",
     "SpiralJob", "SpiralPlan", "TrajectoryCompensation", "UnreachableError", "WrongHandleError", "abi_version",
     "accuracy_metrics", "average_absolute_deviation", "calibrate", "discover", "identify_and_compensate",

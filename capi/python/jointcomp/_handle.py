@@ -2,11 +2,14 @@
 the options_json text of keyword options."""
 
 import json
+import threading
 
 import numpy as np
 
 from . import _native
-from .errors import InvalidArgumentError
+from .errors import BusyError, InvalidArgumentError
+
+_closing = threading.Lock()  # one close at a time, so that two threads never free one handle twice
 
 
 def float_array(values):
@@ -24,10 +27,18 @@ class OwnedHandle:
         raise NotImplementedError
 
     def close(self):
-        """Releases the library's handle; the object cannot be used afterwards."""
-        if self._handle is not None:
-            handle, self._handle = self._handle, None
-            _native.check(self._release(handle))
+        """Releases the library's handle; the object cannot be used afterwards.
+
+        While a call on it runs in another thread (or this thread's progress callback runs inside a call on
+        it), the library refuses: :class:`jointcomp.BusyError`, and the object stays open and usable; close
+        it again when that call has returned."""
+        with _closing:
+            if self._handle is None:
+                return
+            status = self._release(self._handle)
+            if status != BusyError.status:
+                self._handle = None
+            _native.check(status)
 
     def __enter__(self):
         return self

@@ -61,8 +61,16 @@ class PlantLimitError(JointcompError):
     status, status_name = -8, "JC_ERROR_PLANT_LIMIT"
 
 
+class BusyError(JointcompError):
+    """JC_ERROR_BUSY: a handle closed while a call (another thread's, or the one whose progress callback is
+    running) still uses it; it was not freed, close it again when that call has returned."""
+
+    status, status_name = -9, "JC_ERROR_BUSY"
+
+
 _BY_STATUS = {cls.status: cls for cls in (InvalidArgumentError, FileError, UnreachableError, SolverError,
-                                          WrongHandleError, OutOfMemoryError, InternalError, PlantLimitError)}
+                                          WrongHandleError, OutOfMemoryError, InternalError, PlantLimitError,
+                                          BusyError)}
 
 
 def error_for(status, message):

@@ -20,7 +20,7 @@ def test_status_names():
     assert jointcomp.status_name(0) == "JC_OK"
     for cls in (jointcomp.InvalidArgumentError, jointcomp.FileError, jointcomp.UnreachableError,
                 jointcomp.SolverError, jointcomp.WrongHandleError, jointcomp.OutOfMemoryError,
-                jointcomp.InternalError, jointcomp.PlantLimitError):
+                jointcomp.InternalError, jointcomp.PlantLimitError, jointcomp.BusyError):
         assert jointcomp.status_name(cls.status) == cls.status_name
     assert jointcomp.status_name(-99) == "JC_UNKNOWN_STATUS"
 
@@ -29,7 +29,8 @@ def test_every_status_becomes_its_exception():
     for status, cls in [(-1, jointcomp.InvalidArgumentError), (-2, jointcomp.FileError),
                         (-3, jointcomp.UnreachableError), (-4, jointcomp.SolverError),
                         (-5, jointcomp.WrongHandleError), (-6, jointcomp.OutOfMemoryError),
-                        (-7, jointcomp.InternalError), (-8, jointcomp.PlantLimitError)]:
+                        (-7, jointcomp.InternalError), (-8, jointcomp.PlantLimitError),
+                        (-9, jointcomp.BusyError)]:
         with pytest.raises(cls) as raised:
             _native.check(status)
         assert raised.value.status == status
