@@ -43,6 +43,15 @@ const std::vector<Unit>& knownUnits() {
   return units;
 }
 
+// The inputs an output can depend on directly, as groups of variables (bits of JointRow::depends).
+enum InputGroup : unsigned {
+  kNoInputs = 0,
+  kDependsOnQDesired = 1u << 0,
+  kDependsOnQdDesired = 1u << 1,
+  kDependsOnQddDesired = 1u << 2,
+  kDependsOnWrench = 1u << 3,
+};
+
 // Per-joint inputs and outputs, one variable per joint each: role, name prefix, causality, unit, the
 // description with %s for the joint's name, and the inputs it depends on directly.
 struct JointRow {
@@ -51,41 +60,42 @@ struct JointRow {
   Causality causality;
   const char* unit;
   const char* description;
-  const char* depends;  // space-separated: q_desired qd_desired qdd_desired wrench
+  unsigned depends;  // the input groups it depends on directly (InputGroup bits)
 };
 const JointRow kInputRows[] = {
     {&Roles::q_desired, "q_desired", Causality::Input, "rad",
-     "Desired (planned) position of joint %s, Q_theo, held over the communication step", ""},
+     "Desired (planned) position of joint %s, Q_theo, held over the communication step", kNoInputs},
     {&Roles::qd_desired, "qd_desired", Causality::Input, "rad/s",
-     "Desired velocity of joint %s; used only when use_velocity_inputs is true", ""},
+     "Desired velocity of joint %s; used only when use_velocity_inputs is true", kNoInputs},
     {&Roles::qdd_desired, "qdd_desired", Causality::Input, "rad/s2",
      "Desired acceleration of joint %s; used by compensation = dynamic when use_velocity_inputs is true (else "
      "the curvature of the parabola through q_desired at the last three communication points, zero before "
      "there are three)",
-     ""},
+     kNoInputs},
 };
 const JointRow kOutputRows[] = {
     {&Roles::q_motor, "q_motor", Causality::Output, "rad",
-     "Motor position of joint %s in joint units (motor angle divided by the gear ratio)", ""},
-    {&Roles::qd_motor, "qd_motor", Causality::Output, "rad/s", "Motor velocity of joint %s in joint units", ""},
-    {&Roles::q_link, "q_link", Causality::Output, "rad", "Link position of joint %s: where the robot actually is", ""},
-    {&Roles::qd_link, "qd_link", Causality::Output, "rad/s", "Link velocity of joint %s", ""},
+     "Motor position of joint %s in joint units (motor angle divided by the gear ratio)", kNoInputs},
+    {&Roles::qd_motor, "qd_motor", Causality::Output, "rad/s", "Motor velocity of joint %s in joint units", kNoInputs},
+    {&Roles::q_link, "q_link", Causality::Output, "rad", "Link position of joint %s: where the robot actually is",
+     kNoInputs},
+    {&Roles::qd_link, "qd_link", Causality::Output, "rad/s", "Link velocity of joint %s", kNoInputs},
     {&Roles::dq_predicted, "dq_predicted", Causality::Output, "rad",
      "Joint error of joint %s (link minus motor position) that the nominal model predicts at the current link "
      "and motor positions",
-     ""},
+     kNoInputs},
     {&Roles::dq_actual, "dq_actual", Causality::Output, "rad",
      "Actual joint error of joint %s in the plant: link minus motor position (joint compliance, transmission "
      "error and every other effect)",
-     ""},
+     kNoInputs},
     {&Roles::q_ref, "q_ref", Causality::Output, "rad",
      "Command sent to the controller for joint %s: Q_ref = Q_theo - dQ from the current inputs (Q_theo when "
      "compensation is none)",
-     "q_desired qd_desired qdd_desired wrench"},
+     kDependsOnQDesired | kDependsOnQdDesired | kDependsOnQddDesired | kDependsOnWrench},
     {&Roles::q_planned, "q_planned", Causality::Output, "rad",
      "Planned position of joint %s (Q_theo) that the compensation works on: its q_desired input, or the demo "
      "move",
-     "q_desired"},
+     kDependsOnQDesired},
 };
 
 std::string format(const char* pattern, const std::string& joint) {
@@ -204,13 +214,12 @@ void TableBuilder::addWrenchAndTool() {
 
 void TableBuilder::addDependencies(const JointRow& row) {
   std::vector<int> inputs;
-  const std::string depends = row.depends;
   const Roles& r = table_.roles;
   auto append = [&inputs](const auto& indices) { inputs.insert(inputs.end(), indices.begin(), indices.end()); };
-  if (depends.find("q_desired") != std::string::npos) append(r.q_desired);
-  if (depends.find("qd_desired") != std::string::npos) append(r.qd_desired);
-  if (depends.find("qdd_desired") != std::string::npos) append(r.qdd_desired);
-  if (depends.find("wrench") != std::string::npos) append(r.wrench);
+  if (row.depends & kDependsOnQDesired) append(r.q_desired);
+  if (row.depends & kDependsOnQdDesired) append(r.qd_desired);
+  if (row.depends & kDependsOnQddDesired) append(r.qdd_desired);
+  if (row.depends & kDependsOnWrench) append(r.wrench);
   std::sort(inputs.begin(), inputs.end());
   for (int index : table_.roles.*row.role) table_.variables[static_cast<std::size_t>(index)].depends = inputs;
 }
