@@ -5,7 +5,7 @@
 //
 // Per step, as a master does it: set the 6 desired joint positions, doStep(t, 1 ms), read the 6 link
 // positions and the tool position. "Direct" does the same work on FlexibleJointPlant + Compensator
-// (the sequence fmu/instance.hpp documents). "AllOutputs" reads all 45 outputs per step.
+// (the sequence fmu/robot/robot_model.hpp documents). "AllOutputs" reads all 45 outputs per step.
 // Targets (issue 17): at least 500x real time through the FMU with a 1 ms step, 1000x with a 10 ms step.
 #include <dlfcn.h>
 
@@ -309,7 +309,7 @@ void BM_FmuCallsOnly(benchmark::State& state) {
 BENCHMARK(BM_FmuCallsOnly)->ArgName("fmi")->Arg(2)->Arg(3)->Unit(benchmark::kNanosecond);
 
 // fmuStep's work without the FMI layer, on the plant and the compensator: the FMU's velocity estimate
-// (fmu/instance.cpp: the slope now of the parabola through the last three inputs, the difference quotient
+// (fmu/robot/held_steps.cpp: the slope now of the parabola through the last three inputs, the difference quotient
 // after the first step, zero at the first), compensation, the plant's update and advance, and the outputs.
 // Not inlined, for bench/count-instructions.sh.
 [[gnu::noinline]] void directStep(FlexibleJointPlant& plant, Compensator& compensator, JointContext& ctx,

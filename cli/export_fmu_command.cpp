@@ -20,7 +20,7 @@
 #include "fmu/description/fmu_archive.hpp"
 #include "fmu/description/model_description_xml.hpp"
 #include "fmu/description/variable_table.hpp"
-#include "fmu/fmu_plant_options.hpp"
+#include "fmu/robot/fmu_plant_options.hpp"
 #include "model/common/errors.hpp"
 #include "model/effects/registry.hpp"
 #include "model/io/atomic_file.hpp"

@@ -1,5 +1,5 @@
 // FMI 2.0 for Co-Simulation: every function of the FMI 2.0 API (declared in fmi2_api.hpp, written from
-// the standard document), exported over fmu/instance.hpp. Functions of model exchange, and co-simulation
+// the standard document), exported over fmu/core/instance.hpp. Functions of model exchange, and co-simulation
 // functions this FMU does not provide (canInterpolateInputs, maxOutputDerivativeOrder and asynchronous
 // steps are declared false / 0), return fmi2Error with a message, as the standard asks.
 #include <cctype>
@@ -9,8 +9,8 @@
 #include <memory>
 #include <string>
 
+#include "fmu/core/instance.hpp"
 #include "fmu/fmi2_api.hpp"
-#include "fmu/instance.hpp"
 
 // Declared in fmi2_api.hpp with default visibility: the only symbols the binary exports.
 #define FMI2_EXPORT extern "C"
@@ -18,6 +18,7 @@
 namespace {
 
 using jointcomp::fmu::Instance;
+using jointcomp::fmu::loadModel;
 using jointcomp::fmu::Snapshot;
 using jointcomp::fmu::Status;
 namespace fmu = jointcomp::fmu;
@@ -188,8 +189,8 @@ FMI2_EXPORT fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuT
     auto component = std::make_unique<Component>();
     component->callbacks = *functions;
     component->name = instanceName;
-    component->instance =
-        std::make_unique<Instance>(instanceName, path, fmuGUID, logToImporter, component.get(), loggingOn != 0);
+    component->instance = std::make_unique<Instance>(instanceName, loadModel(path, fmuGUID), logToImporter,
+                                                     component.get(), loggingOn != 0);
     return component.release();
   } catch (const std::exception& error) {
     return refuse(error.what());

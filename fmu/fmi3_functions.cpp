@@ -1,5 +1,5 @@
 // FMI 3.0 for Co-Simulation: every function of the FMI 3.0 API (declared in fmi3_api.hpp, written from
-// the standard document), exported over fmu/instance.hpp. What this FMU does not provide (model exchange,
+// the standard document), exported over fmu/core/instance.hpp. What this FMU does not provide (model exchange,
 // scheduled execution, event mode, early return, clocks, configuration mode, derivatives, types it has no
 // variables of) returns fmi3Error with a message; an importer asking for event mode or early return at
 // instantiation is told that they are not used, and the instance works without them.
@@ -12,8 +12,8 @@
 #include <string>
 #include <vector>
 
+#include "fmu/core/instance.hpp"
 #include "fmu/fmi3_api.hpp"
-#include "fmu/instance.hpp"
 
 // Declared in fmi3_api.hpp with default visibility: the only symbols the binary exports.
 #define FMI3_EXPORT extern "C"
@@ -21,6 +21,7 @@
 namespace {
 
 using jointcomp::fmu::Instance;
+using jointcomp::fmu::loadModel;
 using jointcomp::fmu::Snapshot;
 using jointcomp::fmu::Status;
 namespace fmu = jointcomp::fmu;
@@ -177,8 +178,8 @@ fmi3InstantiateCoSimulation(fmi3String instanceName, fmi3String instantiationTok
     auto component = std::make_unique<Component>();
     component->environment = instanceEnvironment;
     component->log = logMessage;
-    component->instance = std::make_unique<Instance>(instanceName, resourcePath, instantiationToken, logToImporter,
-                                                     component.get(), loggingOn);
+    component->instance = std::make_unique<Instance>(instanceName, loadModel(resourcePath, instantiationToken),
+                                                     logToImporter, component.get(), loggingOn);
     Instance& self = *component->instance;
     // Declined, gracefully: the instance works without them.
     if (eventModeUsed) {

@@ -4,7 +4,7 @@
 #include <limits>
 #include <string>
 
-#include "fmu/fmu_plant_options.hpp"
+#include "fmu/robot/fmu_plant_options.hpp"
 #include "model/common/errors.hpp"
 #include "model/plant/plant_options_by_name.hpp"
 #include "model/robot/drive_parameters.hpp"

@@ -271,7 +271,7 @@ void setEnumerationRanges(VariableTable& table) {
 
 }  // namespace
 
-int VariableTable::indexOfName(const std::string& name) const {
+int ModelVariables::indexOfName(const std::string& name) const {
   for (const Variable& v : variables) {
     if (v.name == name) return static_cast<int>(v.vr);
   }
@@ -385,7 +385,7 @@ std::string structuredNamePart(const std::string& text) {
   return quoted + "'";
 }
 
-std::string describeVariable(const VariableTable& table, int index) {
+std::string describeVariable(const ModelVariables& table, int index) {
   return "vr " + std::to_string(index) + " (" + table.variables[static_cast<std::size_t>(index)].name + ")";
 }
 

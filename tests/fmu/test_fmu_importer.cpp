@@ -4,7 +4,7 @@
 // error (and say why in the log), never crash.
 //
 // The numbers through the FMU are compared with the same sequence run on FlexibleJointPlant and
-// Compensator directly (the sequence fmu/instance.hpp documents): they must agree bit for bit.
+// Compensator directly (the sequence fmu/robot/robot_model.hpp documents): they must agree bit for bit.
 #include <dlfcn.h>
 
 #include <algorithm>
@@ -35,7 +35,7 @@
 #include "fmu/description/variable_table.hpp"
 #include "fmu/fmi2_api.hpp"
 #include "fmu/fmi3_api.hpp"
-#include "fmu/fmu_plant_options.hpp"
+#include "fmu/robot/fmu_plant_options.hpp"
 #include "model/compensation/compensator.hpp"
 #include "model/compensation/feed_rate.hpp"
 #include "model/compensation/joint_trajectory.hpp"
@@ -180,7 +180,7 @@ Record run(Master& m, std::size_t from, std::size_t to, bool varying) {
 }
 
 // The FMU's estimate of the desired velocity from q_desired at the last three communication points
-// (fmu/instance.cpp), written out again: the slope now of the parabola through them.
+// (fmu/robot/held_steps.cpp), written out again: the slope now of the parabola through them.
 JointVector parabolaSlope(const JointVector& q, double t, const JointVector& last_q, double last_t,
                           const JointVector& earlier_q, double earlier_t) {
   const double last = t - last_t, earlier = last_t - earlier_t, both = last + earlier;
@@ -188,7 +188,7 @@ JointVector parabolaSlope(const JointVector& q, double t, const JointVector& las
          earlier_q * (last / (earlier * both));
 }
 
-// The same sequence on the plant and the compensator directly (fmu/instance.hpp, steps 1-4).
+// The same sequence on the plant and the compensator directly (fmu/robot/robot_model.hpp, steps 1-4).
 Record runDirectly(long mode, const JointErrorModel& truth, std::size_t to, bool varying,
                    const PlantOptions& options = fmuPlantOptions()) {
   const Spiral& s = spiral();
@@ -839,7 +839,7 @@ TEST_P(FmuTest, BadValuesAreRefusedAndChangeNothing) {
 }
 
 // get and set resolve a list of value references once and reuse that while the importer passes the same
-// list (fmu/instance.hpp, ValuePlan). What the reuse skips must still be checked when the phase, the list or
+// list (fmu/core/instance.hpp, ValuePlan). What the reuse skips must still be checked when the phase, the list or
 // the function changes, and a bad value in a list seen before must still be refused with nothing set.
 TEST_P(FmuTest, AListSeenBeforeIsCheckedAsAFreshOne) {
   auto m = makeMaster(GetParam());

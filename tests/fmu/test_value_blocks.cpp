@@ -10,7 +10,7 @@
 
 #include <gtest/gtest.h>
 
-#include "fmu/value_blocks.hpp"
+#include "fmu/core/value_blocks.hpp"
 
 namespace jointcomp::fmu {
 namespace {

@@ -26,7 +26,7 @@ namespace {
 // The FMU's own resources/ folder (robot.json and parameters.json), from the build tree.
 constexpr const char* kResourceDir = JOINTCOMP_FUZZ_FMU_RESOURCES;
 
-// Offsets in the serialised state (fmu/instance.cpp, writeSnapshot): 8 magic bytes, a 4-byte format
+// Offsets in the serialised state (fmu/core/state_bytes.cpp, serializeState): 8 magic bytes, a 4-byte format
 // number, the 8-byte total size; the last 8 bytes are the FNV-1a checksum of everything before them.
 constexpr std::size_t kSizeOffset = 12;
 constexpr std::size_t kChecksumSize = 8;

@@ -9,7 +9,8 @@ compiler on its own. So every include form counts: quotes or angle brackets, rel
 
 The order: model/<layer> for the layers of JOINTCOMP_LAYERS in model/CMakeLists.txt, lowest first; then the
 tools capi, fmu (with modelDescription, its variable table) and cli, each on top of the whole model and none
-of another's but cli of fmu's (export-fmu); tests/, bench/ and examples/ are no one's dependency. Fails naming each file, the header it
+of another's but cli of fmu's (export-fmu); tests/, bench/ and examples/ are no one's dependency. Inside fmu,
+the generic FMI core (fmu/core, fmu/description/variables.hpp) reaches nothing but itself and model/common. Fails naming each file, the header it
 should not reach and both layers.
 
 usage: check_layers_deps.py SOURCE_ROOT BUILD_DIR
@@ -26,6 +27,10 @@ TOOLS = {"capi": "capi", "fmu": "fmu", "modelDescription": "fmu", "cli": "cli"}
 # The one step between tools: the command-line tool exports FMUs (jointcomp export-fmu) from the FMU's sources.
 TOOL_USES = {("cli", "fmu")}
 NOBODYS = ("tests", "bench", "examples")
+# Inside the FMU: the generic FMI core knows nothing of robots. It and the variables' description it builds on
+# reach only each other and model/common.
+FMU_CORE = ("fmu/core/", "fmu/description/variables.hpp")
+FMU_CORE_MAY_REACH = FMU_CORE + ("model/common/",)
 
 
 def read_layers(root):
@@ -78,6 +83,13 @@ def compiler_headers(command, directory, source, language=None):
     if result.returncode != 0:
         raise RuntimeError(f"{source}: the compiler's -MM failed: {result.stderr.strip()[:400]}")
     return depfile_headers(result.stdout)
+
+
+def core_violation(source, header):
+    """Why the FMU core's file `source` may not reach `header` (paths relative to the root), or None."""
+    if source.startswith(FMU_CORE) and not header.startswith(FMU_CORE_MAY_REACH):
+        return "the generic FMI core reaches beyond fmu/core, fmu/description/variables.hpp and model/common"
+    return None
 
 
 def violation(source_class, header_class):
@@ -159,7 +171,7 @@ def main():
             hc = classify(d, root, ranks)
             if hc is None or os.path.realpath(d) == source:
                 continue
-            why = violation(c, hc)
+            why = violation(c, hc) or core_violation(os.path.relpath(source, root), os.path.relpath(d, root))
             if why:
                 problems.append(f"{os.path.relpath(source, root)}: depends on {os.path.relpath(d, root)}: {why}")
     if not checked:

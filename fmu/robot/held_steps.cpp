@@ -1,10 +1,10 @@
-#include "fmu/held_steps.hpp"
+#include "fmu/robot/held_steps.hpp"
 
 #include <cmath>
 
 namespace jointcomp::fmu {
 
-void holdSteppedJoints(const InstanceState& s, double time, const Robot& robot, const double q[], double velocity[],
+void holdSteppedJoints(const RobotState& s, double time, const Robot& robot, const double q[], double velocity[],
                        double acceleration[]) {
   // What the FMU extrapolated q_desired to `time` from the samples before it, in Newton's form
   // last + (last - earlier) * line + ((last - earlier) / (t2 - t1) - (earlier - earliest) / (t1 - t0)) * bend,
@@ -37,7 +37,7 @@ void holdSteppedJoints(const InstanceState& s, double time, const Robot& robot, 
   }
 }
 
-void estimateDesiredMotion(const InstanceState& s, double time, const Robot& robot, const double q[],
+void estimateDesiredMotion(const RobotState& s, double time, const Robot& robot, const double q[],
                            bool with_acceleration, double velocity[], double acceleration[]) {
   // Joint by joint in scalars: the same arithmetic as the vector expressions it replaces, without their
   // temporaries.

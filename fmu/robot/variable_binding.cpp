@@ -1,9 +1,9 @@
-#include "fmu/variable_binding.hpp"
+#include "fmu/robot/variable_binding.hpp"
 
 #include <algorithm>
 #include <cstdio>
 
-#include "fmu/fmu_plant_options.hpp"
+#include "fmu/robot/fmu_plant_options.hpp"
 #include "model/common/errors.hpp"
 
 namespace jointcomp::fmu {

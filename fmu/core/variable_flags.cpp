@@ -1,4 +1,6 @@
-#include "fmu/variable_flags.hpp"
+#include "fmu/core/variable_flags.hpp"
+
+#include "model/common/errors.hpp"
 
 namespace jointcomp::fmu {
 
@@ -12,37 +14,29 @@ unsigned typeBit(VariableType type) {
   return 0;
 }
 
-VariableFlags::VariableFlags(const VariableTable& table) {
+VariableFlags::VariableFlags(const Model& model) {
+  const ModelVariables& table = model.table();
   const std::size_t count = table.variables.size();
-  std::vector<unsigned> group(count, 0u);
-  desired_input.assign(count, false);
-  fixed_parameter.assign(count, false);
+  watched.assign(count, false);
+  held_when_restricted.assign(count, false);
   packed.assign(count, 0u);
-  const Roles& r = table.roles;
-  for (int j = 0; j < table.dof(); ++j) {
-    group[r.q_link[j]] = kLinkOutputs;
-    group[r.qd_link[j]] = kLinkVelocityOutputs;
-    for (int index : {r.q_motor[j], r.qd_motor[j], r.dq_actual[j]}) group[index] = kMotorOutputs;
-    group[r.dq_predicted[j]] = kPredictedOutputs;
-    group[r.q_ref[j]] = kReferenceOutputs;
-    group[r.q_planned[j]] = kReferenceOutputs;
-    for (int index : {r.q_desired[j], r.qd_desired[j], r.qdd_desired[j]}) desired_input[index] = true;
-  }
-  for (int index : r.tool_position) group[index] = kToolOutputs;
   for (std::size_t i = 0; i < count; ++i) {
     const Variable& v = table.variables[i];
+    const VariableTraits traits = model.traits(static_cast<int>(i));
+    if (traits.output_group > 0xFFu) throw Error("FMU variables: output groups are 8 bits");
+    watched[i] = traits.watched;
+    held_when_restricted[i] = traits.held_when_restricted;
     const bool computed = v.causality == Causality::Output || v.causality == Causality::Independent;
     const bool input = v.causality == Causality::Input;
     const bool parameter = v.causality == Causality::Parameter;
     const bool tunable = parameter && v.variability == Variability::Tunable;
-    fixed_parameter[i] = parameter && v.variability == Variability::Fixed;
     unsigned settable = 0;
     if (v.type == VariableType::Real) {
       if (input || parameter) settable |= kSettableBeforeSteps;
       if (input || tunable) settable |= kSettableInSteps;
-      if ((input && !desired_input[i]) || tunable) settable |= kSettableInDemoSteps;
+      if ((input && !traits.held_when_restricted) || tunable) settable |= kSettableInRestrictedSteps;
     }
-    packed[i] = typeBit(v.type) | (computed ? kPackedComputed : 0u) | group[i] << kPackedGroupShift |
+    packed[i] = typeBit(v.type) | (computed ? kPackedComputed : 0u) | traits.output_group << kPackedGroupShift |
                 settable << kPackedSettableShift;
   }
 }

@@ -6,7 +6,7 @@
 // over the coming communication step instead.
 #pragma once
 
-#include "fmu/instance_state.hpp"
+#include "fmu/robot/robot_state.hpp"
 #include "model/robot/robot.hpp"
 
 namespace jointcomp::fmu {
@@ -23,7 +23,7 @@ inline constexpr double kHeldStepTolerance = 1e-5;  // rad
 //   communication points after it while the step is among the three samples the parabola goes through;
 // - or would leave the joint's limits when extrapolated over a step as long as the last one.
 // `s` holds the samples of the communication points before `time` (has_last_step at least).
-void holdSteppedJoints(const InstanceState& s, double time, const Robot& robot, const double q[], double velocity[],
+void holdSteppedJoints(const RobotState& s, double time, const Robot& robot, const double q[], double velocity[],
                        double acceleration[]);
 
 // The velocity and acceleration of q_desired at `time` that the FMU extrapolates with when
@@ -31,7 +31,7 @@ void holdSteppedJoints(const InstanceState& s, double time, const Robot& robot, 
 // of the parabola through q at `time` and the last two samples of `s`, the difference quotient after the
 // first step, then holdSteppedJoints. `s` has a last step before `time`; velocity and acceleration come in
 // zeroed.
-void estimateDesiredMotion(const InstanceState& s, double time, const Robot& robot, const double q[],
+void estimateDesiredMotion(const RobotState& s, double time, const Robot& robot, const double q[],
                            bool with_acceleration, double velocity[], double acceleration[]);
 
 }  // namespace jointcomp::fmu

@@ -1,31 +1,7 @@
-// The FMU's instance, independent of the FMI version: the state machine and the stepping of the
-// flexible-joint plant with the compensator in front of it, and every variable of
-// modelDescription/variables.csv by value reference. Beside it: the binding of the parameters to the model
-// (variable_binding.hpp) and the instance's mutable state as one value, the FMU state, with its bytes
-// (instance_state.hpp). fmi2_functions.cpp and fmi3_functions.cpp are thin glue over it.
-//
-// What one communication step does (the C++ sequence a test can replay on FlexibleJointPlant and
-// Compensator directly, bit for bit):
-//   at time t (the importer's currentCommunicationPoint) with inputs q_desired, qd_desired, tool_wrench:
-//   1. v = qd_desired if use_velocity_inputs, else the slope at t of the parabola through q_desired at the
-//      last three communication points (after the first step the change over that step; 0 on the first),
-//      and 0 (with the acceleration of step 2) for a joint whose q_desired stepped (held_steps.hpp);
-//   2. Q_ref = q_desired when compensation is none, else Compensator(nominal, mask).compensate() with
-//      ctx.q = q_desired, ctx.velocity = v, ctx.time = t, ctx.tool_wrench = tool_wrench if
-//      compensate_wrench else 0; mask = nominal.loadsAnd({"compliance"}) (mode 1, the paper's stiffness
-//      correction) or nominal.allEffects() (mode 2: every effect of the parameter file, the paper's
-//      compliance and transmission error for the shipped RX170, and what discovery added to a file);
-//      compensation = dynamic (3): OnlineDynamicCompensator(nominal, drives).compensate() from the state
-//      after the previous steps' samples, with q_desired, v and a = qdd_desired if use_velocity_inputs, else
-//      the second derivative of the parabola through q_desired at the last three communication points (0
-//      before there are three); it gives Q_ref and
-//      its velocity, which replaces v below; its state moves on only when the step succeeds;
-//   3. plant.setToolWrench(tool_wrench) if it differs from the wrench last applied;
-//   4. plant.setReference(Q_ref, v); plant.advance(t + h).
-// Initialisation (exitInitializationMode): plant.setToolWrench(tool_wrench); plant.reset(Q_ref, t0), Q_ref
-// as in 1-2 with no previous step (v = 0 unless use_velocity_inputs).
-// The plant's truth is the parameter file with the plant.* parameters applied; the compensator's nominal
-// model is the same file with the compensator.* parameters applied.
+// The FMU's instance, generic over its model and independent of the FMI version: the state machine of the
+// calling sequence, logging, every variable's value by value reference (with plans for the lists importers
+// repeat), and FMU states with their bytes. What the variables mean is the model's (model.hpp; the robot's
+// is fmu/robot/robot_model.hpp). fmi2_functions.cpp and fmi3_functions.cpp are thin glue over it.
 #pragma once
 
 #include <cstddef>
@@ -35,28 +11,26 @@
 #include <string>
 #include <vector>
 
-#include "fmu/description/variable_table.hpp"
-#include "fmu/instance_state.hpp"
-#include "fmu/variable_flags.hpp"
-#include "model/compensation/compensator.hpp"
-#include "model/plant/flexible_joint_plant.hpp"
+#include "fmu/core/core_state.hpp"
+#include "fmu/core/model.hpp"
+#include "fmu/core/state_bytes.hpp"
+#include "fmu/core/variable_flags.hpp"
+#include "fmu/description/variables.hpp"
 
 namespace jointcomp::fmu {
-
-// The status values of FMI 2 and FMI 3 agree for these five.
-enum class Status : int { OK = 0, Warning = 1, Discard = 2, Error = 3, Fatal = 4 };
 
 // The log channel to the importer: the FMI glue turns these into its logger's calls.
 using LogSink = void (*)(void* context, Status status, const char* category, const char* message);
 
-class Instance {
+// The model of the FMU from its resources folder (the robot's: robot_model.cpp). Throws jointcomp::Error with
+// a message naming what is at fault: missing or malformed resources, resources that are not those
+// `instantiation_token` was made for (another export's modelDescription.xml), a model the FMU cannot run.
+std::unique_ptr<Model> loadModel(const std::string& resource_dir, const std::string& instantiation_token);
+
+class Instance final : private ModelLog {
 public:
-  // Loads <resource_dir>/robot.json and <resource_dir>/parameters.json and builds the robot's variable table
-  // from them (fmu/description). Throws jointcomp::Error with a message naming what is at fault: missing or
-  // malformed resources, resources that are not those `instantiation_token` was made for (another export's
-  // modelDescription.xml), a robot the FMU cannot represent.
-  Instance(std::string name, const std::string& resource_dir, const std::string& instantiation_token, LogSink sink,
-           void* sink_context, bool logging_on);
+  // The instance of `model` (loadModel).
+  Instance(std::string name, std::unique_ptr<Model> model, LogSink sink, void* sink_context, bool logging_on);
   ~Instance();
   Instance(const Instance&) = delete;
   Instance& operator=(const Instance&) = delete;
@@ -114,7 +88,7 @@ public:
              const T values[]) noexcept;
   // Index into the table of a value reference, -1 if unknown (value references are the table's indices).
   int indexOf(std::uint32_t vr) const { return vr < count_ ? static_cast<int>(vr) : -1; }
-  const VariableTable& table() const { return *table_; }
+  const ModelVariables& table() const { return *table_; }
 
   // FMU state. Snapshots belong to the instance that made them (or deserialised them); a pointer that
   // is not one of this instance's live snapshots is refused without being dereferenced.
@@ -140,29 +114,22 @@ private:
   template <typename T>
   Status setUnguarded(const char* function, unsigned types, const std::uint32_t vrs[], std::size_t count,
                       const T values[]);
-  // A step the plant could not finish (solver failure, limits left): the state it stopped in, discarded.
-  Status discardStep(const char* function, const char* why, double* last_successful_time);
   // internalError for the exception being handled (called in a catch (...) block).
   Status internalErrorOfCurrentException(const char* function) noexcept;
   enum LogCategory { kLogWarning, kLogDiscard, kLogError, kLogCalls, kLogCategoryCount };
-  struct RobotModels;
 
   bool ownsState(const Snapshot* state) const;
-  // Builds the models, the plant and the compensator from the fixed parameters when they changed since
-  // the last build (or were never built). Throws jointcomp::Error naming the parameter at fault.
-  void ensureModels();
-  void ensureCompensator();
-  // Initialises the plant at the start time from the current inputs (initialisation mode, lazily).
-  void ensureInitialized();
-  // Q_ref and v for the current inputs, cached until an input or the compensation mode changes.
-  Status ensureReference(const char* function);
-  Status updateOutputs(const char* function, unsigned groups);
-  Status fail(Status status, const char* function, const std::string& what);
+  // The model initialised from the current values, when it is not (initialisation mode, lazily).
+  void ensureInitialized() {
+    if (!state_.initialized) model_->initialize(state_);
+  }
+  Status fail(Status status, const char* function, const std::string& what) override;
+  // Checks of doStep's arguments against the FMU's time and stop time: OK, or the refusal naming them.
+  Status checkStep(const char* function, double current_time, double step);
   Status checkValue(const char* function, int index, double value);
   // Every check of set for one value (`index`: of `vr`, -1 if unknown): OK, or the refusal naming it.
   Status checkSettable(const char* function, unsigned types, std::uint32_t vr, int index, double value,
                        bool before_step);
-  bool fixedParametersDiffer(const std::vector<double>& values) const;
 
   // A list of value references resolved once. Importers pass the same list at every step (the inputs to
   // set, the outputs to read), so get and set look its variables up and check what does not depend on the
@@ -187,26 +154,18 @@ private:
   void storeReals(const double values[], std::size_t count);
 
   std::string name_;
-  std::shared_ptr<const VariableTable> table_;  // the robot's variables, from the resources
-  const Variable* variables_ = nullptr;         // table_->variables.data()
-  const Roles* roles_ = nullptr;                // &table_->roles
-  std::uint32_t count_ = 0;                     // variables
-  int dof_ = 0;                                 // joints
+  std::unique_ptr<Model> model_;
+  const ModelVariables* table_ = nullptr;  // the model's variables
+  const Variable* variables_ = nullptr;    // table_->variables.data()
+  std::uint32_t count_ = 0;                // variables
+  int time_index_ = -1;                    // the independent variable
   std::unique_ptr<VariableFlags> flags_;
   LogSink sink_;
   void* sink_context_;
   bool logging_[kLogCategoryCount];
 
-  InstanceState state_;                  // everything an FMU state carries
-  std::unique_ptr<RobotModels> models_;  // the loaded robot and parameter set, and what is built from them
-  // Derived from state_, cached:
-  bool reference_valid_ = false;
-  unsigned outputs_valid_ = 0;        // OutputGroup bits
-  JointVector reference_;             // Q_ref for the current inputs
-  JointVector reference_velocity_;    // v for the current inputs
-  JointVector planned_;               // Q_theo: the q_desired inputs, or the demo move
-  OnlineDynamicState dynamic_after_;  // compensation = dynamic: the filter with the current sample
-  ValuePlan get_plan_, set_plan_;     // the last lists of get and of set (of reals)
+  CoreState state_;                // the core's part of what an FMU state carries (the model holds its own)
+  ValuePlan get_plan_, set_plan_;  // the last lists of get and of set (of reals)
 
   std::vector<std::unique_ptr<Snapshot>> states_;
 };

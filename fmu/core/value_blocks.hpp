@@ -1,4 +1,4 @@
-// Checks and copies of a block of doubles for the FMU's planned set (fmu/instance.cpp): two values per
+// Checks and copies of a block of doubles for the FMU's planned set (fmu/core/instance.cpp): two values per
 // instruction with SSE2 (every x86-64 has it), one at a time elsewhere. A set of the 6 desired joint
 // positions, the importer's call at every communication step, spent 126 instructions in these two loops
 // one value at a time, and 46 two at a time. The scalar forms are always compiled: they define the result,

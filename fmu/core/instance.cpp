@@ -1,4 +1,4 @@
-#include "fmu/instance.hpp"
+#include "fmu/core/instance.hpp"
 
 #include <algorithm>
 #include <array>
@@ -10,16 +10,9 @@
 #include <type_traits>
 #include <vector>
 
-#include "fmu/robot_models.hpp"
-#include "fmu/value_blocks.hpp"
+#include "fmu/core/value_blocks.hpp"
 #include "model/common/bits.hpp"
 #include "model/common/errors.hpp"
-#include "model/common/input_file.hpp"
-#include "model/effects/registry.hpp"
-#include "model/io/parameter_file.hpp"
-#include "model/io/robot_file.hpp"
-#include "model/plant/plant_options_by_name.hpp"
-#include "model/robot/kinematics.hpp"
 
 namespace jointcomp::fmu {
 
@@ -47,6 +40,30 @@ double tableValue(const Variable* variables, int index, T value) {
 }
 
 }  // namespace
+
+Instance::Instance(std::string name, std::unique_ptr<Model> model, LogSink sink, void* sink_context, bool logging_on)
+    : name_(std::move(name)), model_(std::move(model)), sink_(sink), sink_context_(sink_context) {
+  // The status categories (logStatusWarning, logStatusDiscard, logStatusError) are what FMI lets an FMU
+  // report whether or not debug logging is on: the reason of a Discard or an Error reaches every user, and
+  // the importer decides what to show. The one debug category, logCalls, is verbose and is switched on
+  // only by name (fmi2SetDebugLogging / fmi3SetDebugLogging), whatever loggingOn says; so is a status
+  // category switched off.
+  for (bool& on : logging_) on = true;
+  logging_[kLogCalls] = false;
+  (void)logging_on;
+  table_ = &model_->table();
+  variables_ = table_->variables.data();
+  count_ = static_cast<std::uint32_t>(table_->variables.size());
+  for (std::uint32_t i = 0; i < count_; ++i) {
+    if (variables_[i].causality == Causality::Independent) time_index_ = static_cast<int>(i);
+  }
+  if (time_index_ < 0) throw Error("FMU variables: the table has no independent variable (time)");
+  if (count_ > 32767) throw Error("FMU variables: more than 32767 variables");  // ValuePlan's int16 indices
+  flags_ = std::make_unique<VariableFlags>(*model_);
+  state_ = CoreState::atStart(*table_);
+}
+
+Instance::~Instance() = default;
 
 // ------------------------------------------------------------------------------------------------
 // Logging and the state machine.
@@ -146,11 +163,7 @@ Status Instance::setupExperiment(const char* function, bool tolerance_defined, d
     if (!(std::isfinite(tolerance) && tolerance > 0.0)) {
       return fail(Status::Error, function, "the tolerance must be positive and finite");
     }
-    // The importer's tolerance becomes the integrator's relative tolerance (and its parameter's value).
-    for (int i = 0; i < static_cast<int>(count_); ++i) {
-      const PlantOptionByName* option = models_->binding.option(i);
-      if (option && std::strcmp(option->name, "relative_tolerance") == 0) state_.values[i] = tolerance;
-    }
+    model_->setTolerance(state_, tolerance);
   }
   state_.start_time = start_time;
   state_.time = start_time;
@@ -169,13 +182,11 @@ Status Instance::enterInitializationMode(const char*) {
 Status Instance::exitInitializationMode(const char* function) {
   try {
     ensureInitialized();
+    model_->startSteps(state_);
   } catch (const std::exception& error) {
     state_.phase = kErrorState;
     return fail(Status::Error, function, std::string("cannot initialise: ") + error.what());
   }
-  state_.has_last_step = false;
-  state_.has_earlier_step = false;
-  state_.has_earliest_step = false;
   state_.phase = kStepMode;
   return Status::OK;
 }
@@ -196,9 +207,8 @@ Status Instance::terminate(const char*) {
 }
 
 Status Instance::reset(const char*) {
-  state_ = InstanceState::atStart(*table_);
-  reference_valid_ = false;
-  outputs_valid_ = 0;
+  state_ = CoreState::atStart(*table_);
+  model_->reset(state_);
   return Status::OK;
 }
 
@@ -301,10 +311,10 @@ template <typename T>
       }
     }
     if (state_.initialized) {
-      const Status status = updateOutputs(function, groups);
+      const Status status = model_->computeOutputs(state_, groups, function, *this);
       if (status != Status::OK) return status;
     }
-    state_.values[roles_->time] = state_.time;
+    state_.values[time_index_] = state_.time;
   }
   // The table holds a Boolean as 0 or 1 (its start values, set's tableValue, a deserialised state's check), so
   // every value converts as it is.
@@ -341,14 +351,8 @@ Status Instance::checkSettable(const char* function, unsigned types, std::uint32
       }
       break;
     case Causality::Input:
-      if (!before_step && state_.demo && flags_->desired_input[index]) {
-        return fail(Status::Error, function,
-                    describeVariable(*table_, index) + ": the robot follows the built-in demo move (reference = " +
-                        (state_.values[roles_->reference] == kReferenceDemo
-                             ? std::string("demo")
-                             : std::string("auto, and no q_desired or qd_desired input was set before the end "
-                                           "of initialisation")) +
-                        "); set reference = inputs, or the inputs during initialisation");
+      if (!before_step && model_->restrictsInputs() && flags_->held_when_restricted[index]) {
+        return fail(Status::Error, function, describeVariable(*table_, index) + ": " + model_->restriction(state_));
       }
       break;
   }
@@ -370,8 +374,7 @@ Status Instance::checkSettable(const char* function, unsigned types, std::uint32
   }
   if (changed) {
     if (state_.phase == kInitializationMode) state_.initialized = false;
-    reference_valid_ = false;
-    outputs_valid_ &= ~kReferenceOutputs;
+    model_->valuesChanged();
   }
 }
 
@@ -394,17 +397,17 @@ template <typename T>
   if (!values) return nullArgument(function, "value[]");
   const bool before_step = state_.phase == kInstantiated || state_.phase == kInitializationMode;
   // Everything is checked before anything is set: a refused call changes nothing. The common case is a list
-  // of reals that may all be set now, finite and within their ranges, with the desired inputs already marked
-  // (so that storing is all there is to do: no Boolean to convert, no enumeration such as the compensation
-  // mode). It passes on one lookup and three compares per value, and a list seen before on two compares per
-  // value; anything else goes through the full checks, which name what is wrong.
-  const unsigned char settable_now = !(types & kReal) ? 0
-                                     : before_step    ? kSettableBeforeSteps
-                                     : state_.demo    ? kSettableInDemoSteps
-                                                      : kSettableInSteps;
+  // of reals that may all be set now, finite and within their ranges, none of them watched by the model any
+  // more (so that storing is all there is to do: no Boolean to convert, no enumeration, nothing to tell the
+  // model but that values changed). It passes on one lookup and three compares per value, and a list seen before on two
+  // compares per value; anything else goes through the full checks, which name what is wrong.
+  const unsigned char settable_now = !(types & kReal)            ? 0
+                                     : before_step               ? kSettableBeforeSteps
+                                     : model_->restrictsInputs() ? kSettableInRestrictedSteps
+                                                                 : kSettableInSteps;
   const unsigned settable_bits = unsigned{settable_now} << VariableFlags::kPackedSettableShift;
   if constexpr (std::is_same_v<T, double>) {
-    if (settable_bits != 0 && state_.desired_inputs_set && set_plan_.matches(vrs, count, settable_bits)) {
+    if (settable_bits != 0 && !model_->watchesReals() && set_plan_.matches(vrs, count, settable_bits)) {
       if (allWithin(values, set_plan_.lowest, set_plan_.highest, count)) {
         storeReals(values, count);
         return Status::OK;
@@ -426,7 +429,7 @@ template <typename T>
     if (status != Status::OK) return status;
   }
   if constexpr (std::is_same_v<T, double>) {
-    if (common && state_.desired_inputs_set && count <= ValuePlan::kCapacity) {
+    if (common && !model_->watchesReals() && count <= ValuePlan::kCapacity) {
       set_plan_.count = count;
       set_plan_.key = settable_bits;
       set_plan_.first = static_cast<int>(vrs[0]);
@@ -446,24 +449,15 @@ template <typename T>
   for (std::size_t i = 0; i < count; ++i) {
     const int index = vrs[i];  // checked by the first pass
     const double x = tableValue(variables_, index, values[i]);
-    if (!state_.desired_inputs_set && flags_->desired_input[index]) {
-      // Setting a desired input, even to its start value, makes reference = auto follow the inputs.
-      state_.desired_inputs_set = true;
-      if (state_.phase == kInitializationMode) state_.initialized = false;
-    }
-    if (sameBits(state_.values[index], x)) continue;
+    const bool differs = !sameBits(state_.values[index], x);
     state_.values[index] = x;
-    changed = true;
-    if (index == roles_->compensation) {
-      // Another compensation mode: the dynamic mode's drive filter starts afresh from the next sample.
-      state_.dynamic.started = false;
-      if (models_->built && !before_step) ensureCompensator();
-    }
+    changed |= differs;
+    // Told even of the same value: setting an input may be what counts (a robot's desired inputs).
+    if (flags_->watched[index]) model_->onSet(state_, index, differs, before_step);
   }
   if (changed) {
     if (state_.phase == kInitializationMode) state_.initialized = false;
-    reference_valid_ = false;
-    outputs_valid_ &= ~kReferenceOutputs;
+    model_->valuesChanged();
   }
   return Status::OK;
 }
@@ -499,6 +493,69 @@ Status Instance::dependencies(const char* function, std::uint32_t vr, std::vecto
 }
 
 // ------------------------------------------------------------------------------------------------
+// Steps.
+
+Status Instance::checkStep(const char* function, double current_time, double step) {
+  if (!std::isfinite(current_time) || !std::isfinite(step) || !(step > 0.0)) {
+    char text[160];
+    std::snprintf(text, sizeof text,
+                  "currentCommunicationPoint (%g) and communicationStepSize (%g) must be finite, "
+                  "the step size positive",
+                  current_time, step);
+    return fail(Status::Error, function, text);
+  }
+  const double tolerance = 1e-9 * std::max(1.0, std::abs(state_.time));
+  if (std::abs(current_time - state_.time) > tolerance) {
+    char text[160];
+    std::snprintf(text, sizeof text, "currentCommunicationPoint %.17g is not the FMU's time %.17g", current_time,
+                  state_.time);
+    return fail(Status::Error, function, text);
+  }
+  const double end = current_time + step;
+  if (!(end > current_time && end > state_.time)) {
+    return fail(Status::Error, function, "the step is too small to advance the time");
+  }
+  if (state_.stop_time_defined && end > state_.stop_time + tolerance) {
+    char text[160];
+    std::snprintf(text, sizeof text, "the step to %.17g s goes beyond the stop time %.17g s", end, state_.stop_time);
+    return fail(Status::Error, function, text);
+  }
+  return Status::OK;
+}
+
+Status Instance::doStep(const char* function, double current_time, double step, double* last_successful_time) noexcept {
+  try {
+    return doStepUnguarded(function, current_time, step, last_successful_time);
+  } catch (...) {
+    return internalErrorOfCurrentException(function);
+  }
+}
+
+// Inlined into doStep, which is then the only frame between the glue and the model.
+[[gnu::always_inline]] inline Status Instance::doStepUnguarded(const char* function, double current_time, double step,
+                                                               double* last_successful_time) {
+  const Status checked = checkStep(function, current_time, step);
+  if (checked != Status::OK) return checked;
+  if (!sameBits(current_time, state_.time)) {
+    // Within rounding of the FMU's time: the importer's clock is the one to follow.
+    state_.time = current_time;
+    model_->valuesChanged();
+  }
+  if (logging_[kLogCalls]) log(Status::OK, "%s(%.17g, %.17g)", function, current_time, step);
+  const double end = current_time + step;
+  const Status status = model_->doStep(state_, end, function, *this);
+  // After a discarded step the FMU's time stays at its start: the end of the last successful one (FMI 2.0,
+  // fmi2LastSuccessfulTime), whatever time the model stopped at.
+  if (status == Status::OK) {
+    state_.time = end;
+  } else if (status == Status::Discard) {
+    state_.phase = kStepDiscarded;
+  }
+  if (last_successful_time) *last_successful_time = state_.time;
+  return status;
+}
+
+// ------------------------------------------------------------------------------------------------
 // FMU state.
 
 bool Instance::ownsState(const Snapshot* state) const {
@@ -515,12 +572,9 @@ Status Instance::getState(const char* function, Snapshot** state) {
     states_.push_back(std::make_unique<Snapshot>());
     target = states_.back().get();
   }
-  InstanceState& s = target->state;
-  s = state_;
-  if (s.initialized) s.plant = models_->plant->saveState();
-  if (!s.has_last_step) s.last_q_desired = JointVector::Zero(dof_);  // not used: written as zeros
-  if (!s.has_earlier_step) s.earlier_q_desired = JointVector::Zero(dof_);
-  if (!s.has_earliest_step) s.earliest_q_desired = JointVector::Zero(dof_);
+  target->core = state_;
+  if (!target->model) target->model = model_->newState();
+  model_->saveState(state_, *target->model);
   *state = target;
   return Status::OK;
 }
@@ -528,23 +582,12 @@ Status Instance::getState(const char* function, Snapshot** state) {
 Status Instance::setState(const char* function, const Snapshot* state) {
   if (!state) return nullArgument(function, "FMUstate");
   if (!ownsState(state)) return fail(Status::Error, function, "FMUstate is not a state of this instance");
-  const InstanceState& s = state->state;
-  const std::vector<double> previous = state_.values;
-  state_.values = s.values;
   try {
-    if (s.initialized) {
-      ensureModels();
-      models_->plant->restoreState(s.plant);
-    } else if (models_->built) {
-      ensureCompensator();
-    }
+    model_->restoreState(state->core, *state->model);
   } catch (const std::exception& error) {
-    state_.values = previous;
     return fail(Status::Error, function, std::string("cannot restore the state: ") + error.what());
   }
-  state_ = s;
-  reference_valid_ = false;
-  outputs_valid_ = 0;
+  state_ = state->core;
   return Status::OK;
 }
 
@@ -562,7 +605,7 @@ Status Instance::serializedSize(const char* function, const Snapshot* state, std
   if (!state) return nullArgument(function, "FMUstate");
   if (!size) return nullArgument(function, "size");
   if (!ownsState(state)) return fail(Status::Error, function, "FMUstate is not a state of this instance");
-  *size = serializeState(state->state, *table_).size();
+  *size = serializeState(*state, *model_).size();
   return Status::OK;
 }
 
@@ -570,7 +613,7 @@ Status Instance::serialize(const char* function, const Snapshot* state, unsigned
   if (!state) return nullArgument(function, "FMUstate");
   if (!bytes) return nullArgument(function, "serializedState");
   if (!ownsState(state)) return fail(Status::Error, function, "FMUstate is not a state of this instance");
-  const std::vector<unsigned char> written = serializeState(state->state, *table_);
+  const std::vector<unsigned char> written = serializeState(*state, *model_);
   if (size != written.size()) {
     return fail(Status::Error, function,
                 "size is " + std::to_string(size) + " bytes; the state needs " + std::to_string(written.size()));
@@ -587,7 +630,7 @@ Status Instance::deserialize(const char* function, const unsigned char bytes[], 
   }
   auto s = std::make_unique<Snapshot>();
   try {
-    s->state = deserializeState(bytes, size, *table_);
+    deserializeState(bytes, size, *model_, *s);
   } catch (const Error& error) {
     return fail(Status::Error, function, std::string("cannot read the state: ") + error.what());
   }
