@@ -4,6 +4,7 @@
 #include <limits>
 
 #include "model/common/errors.hpp"
+#include "model/common/sin_cos.hpp"
 #include "model/robot/dynamics.hpp"
 #include "model/robot/kinematics.hpp"
 
@@ -177,15 +178,26 @@ void updateMotorAngles(const JointErrorModel& model, JointContext& ctx) {
 }
 
 FixedPointReport settleStatically(const JointErrorModel& model, EffectMask mask, JointErrorWorkspace& ws,
-                                  JointContext& ctx, const FixedPointOptions& options) {
+                                  JointContext& ctx, const FixedPointOptions& options, SettleStart start,
+                                  SettleLoads loads) {
+  const int dof = model.robot().dof();
   checkJointVector(model.robot(), ctx.command, "command");
+  if (start == SettleStart::Given) checkJointVector(model.robot(), ctx.q, "q (the settling's start)");
   updateMotorAngles(model, ctx);
-  ctx.q = ctx.command;
+  if (start == SettleStart::Command) ctx.q = ctx.command;
+  const bool joint_frames =
+      loads == SettleLoads::JointFrames && loadsWithoutKinematics(loadsReadKinematics(model, mask), ctx);
+  double cosines[kMaxJoints], sines[kMaxJoints];
   FixedPointReport report;
   JointVector dq;
   for (report.iterations = 1; report.iterations <= options.max_iterations; ++report.iterations) {
-    computeLoadTorque(model, mask, ws, ctx);
-    dq.setZero(model.robot().dof());
+    if (joint_frames) {
+      sinCosBatch(ctx.q.data(), dof, sines, cosines);
+      loadTorqueInJointFrames(model, mask, ws, ctx, cosines, sines);
+    } else {
+      computeLoadTorque(model, mask, ws, ctx);
+    }
+    dq.setZero(dof);
     addSelectedJointErrors(model, mask, ctx, dq);
     const JointVector next = ctx.command + dq;
     report.residual = (next - ctx.q).cwiseAbs().maxCoeff();

@@ -113,9 +113,25 @@ struct FixedPointOptions {
   int max_iterations = 50;
 };
 
+// Where settleStatically's iteration starts.
+enum class SettleStart {
+  Command,  // q = command
+  Given,    // ctx.q as the caller set it: a guess near the solution (along a path, from the previous sample)
+};
+
+// How each iteration finds the load torque.
+enum class SettleLoads {
+  Kinematics,   // computeLoadTorque (forward kinematics at every iteration)
+  JointFrames,  // loadTorqueInJointFrames from the joints' sines and cosines where loadsWithoutKinematics
+                // allows it (gravity and kinematics-free load effects; no payload, no tool wrench), else
+                // computeLoadTorque: the same torque to rounding, without the poses
+};
+
 // The quasi-static robot: where the links are when commanded ctx.command, solving
-// q = command + dq(q, command) by fixed-point iteration from q = command. Result in ctx.q.
+// q = command + dq(q, command) by fixed-point iteration from `start`. Result in ctx.q.
 FixedPointReport settleStatically(const JointErrorModel& model, EffectMask mask, JointErrorWorkspace& ws,
-                                  JointContext& ctx, const FixedPointOptions& options = {});
+                                  JointContext& ctx, const FixedPointOptions& options = {},
+                                  SettleStart start = SettleStart::Command,
+                                  SettleLoads loads = SettleLoads::Kinematics);
 
 }  // namespace jointcomp

@@ -6,7 +6,6 @@
 
 #include "model/common/errors.hpp"
 #include "model/common/random.hpp"
-#include "model/common/sin_cos.hpp"
 #include "model/robot/kinematics.hpp"
 
 namespace jointcomp {
@@ -121,38 +120,6 @@ PreparedSpiral prepareSpiralRuns(const JointErrorModel& nominal, const SpiralExp
 
 namespace {
 
-// settleStatically's fixed point q = command + dq(q, command), iterated from ctx.q as given (a guess near the
-// solution) instead of from the command: along a path, the same point to the tolerance in fewer iterations.
-FixedPointReport settleFrom(const JointErrorModel& model, EffectMask mask, JointErrorWorkspace& ws, JointContext& ctx,
-                            const FixedPointOptions& options) {
-  updateMotorAngles(model, ctx);
-  // Gravity alone needs no poses (the compensator's shortcut): the joints' sines and cosines are enough.
-  const bool joint_frames = loadsWithoutKinematics(loadsReadKinematics(model, mask), ctx);
-  double cosines[kMaxJoints], sines[kMaxJoints];
-  FixedPointReport report;
-  JointVector dq;
-  for (report.iterations = 1; report.iterations <= options.max_iterations; ++report.iterations) {
-    if (joint_frames) {
-      sinCosBatch(ctx.q.data(), model.robot().dof(), sines, cosines);
-      loadTorqueInJointFrames(model, mask, ws, ctx, cosines, sines);
-    } else {
-      computeLoadTorque(model, mask, ws, ctx);
-    }
-    dq.setZero(model.robot().dof());
-    addSelectedJointErrors(model, mask, ctx, dq);
-    const JointVector next = ctx.command + dq;
-    report.residual = (next - ctx.q).cwiseAbs().maxCoeff();
-    ctx.q = next;
-    if (!std::isfinite(report.residual)) break;
-    if (report.residual <= options.tolerance) {
-      report.converged = true;
-      return report;
-    }
-  }
-  report.iterations = std::min(report.iterations, options.max_iterations);
-  return report;
-}
-
 // Where the links of `truth` go under the references of the prepared run `r`: the plant's integration or the
 // quasi-static settling, into run.actual.
 void simulateRun(const PreparedSpiral& prepared, int r, const JointErrorModel& truth, JointErrorWorkspace& true_ws,
@@ -179,7 +146,8 @@ void simulateRun(const PreparedSpiral& prepared, int r, const JointErrorModel& t
     ctx.command = run.reference[k];
     ctx.velocity = planned.qd[k];
     ctx.time = planned.time[k];
-    const FixedPointReport settled = settleFrom(truth, truth_mask, true_ws, ctx, spec.compensation);
+    const FixedPointReport settled = settleStatically(truth, truth_mask, true_ws, ctx, spec.compensation,
+                                                      SettleStart::Given, SettleLoads::JointFrames);
     if (!settled.converged) throw SolverError("the simulated robot did not settle at sample " + std::to_string(k));
     run.actual[k] = ctx.q;
   }

@@ -3,12 +3,15 @@
 // the load recomputed independently from gravityTorques and the spring balancer's torque.
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <random>
+#include <string>
 #include <vector>
 
 #include <gtest/gtest.h>
 
 #include "effects_test_support.hpp"
+#include "model/common/errors.hpp"
 #include "model/effects/compliance.hpp"
 #include "model/effects/spring_balancer.hpp"
 #include "model/robot/dynamics.hpp"
@@ -128,6 +131,68 @@ TEST(Compliance, EmptyMaskLeavesTheRobotWhereItIsCommanded) {
   const FixedPointReport report = settleStatically(model, 0, ws, ctx);
   EXPECT_TRUE(report.converged);
   EXPECT_EQ(ctx.q, ctx.command);
+}
+
+TEST(Compliance, SettlingFromAGuessOrInJointFramesFindsTheSameBalance) {
+  // The start and the load evaluation change the way, not the fixed point: from the solution itself the first
+  // iteration moves by less than the tolerance (joint-frame gravity is the kinematic one to rounding), from the
+  // command as a given start the bits are those of the default, and a payload (which needs the tool's pose)
+  // falls back to the kinematics.
+  const JointErrorModel model = effects_test::rx170Model();
+  const Robot& robot = model.robot();
+  const EffectMask mask = model.loadsAnd({"compliance"});
+  JointErrorWorkspace ws(robot);
+  std::mt19937 rng(44u);
+  for (int sample = 0; sample < 20; ++sample) {
+    JointContext plain(robot.dof());
+    plain.command = effects_test::randomConfiguration(robot, rng);
+    const FixedPointReport from_command = settleStatically(model, mask, ws, plain);
+    ASSERT_TRUE(from_command.converged);
+    ASSERT_GT(from_command.iterations, 2) << "sample " << sample;
+
+    JointContext at_solution = plain;
+    const FixedPointReport settled =
+        settleStatically(model, mask, ws, at_solution, {}, SettleStart::Given, SettleLoads::JointFrames);
+    EXPECT_TRUE(settled.converged);
+    EXPECT_EQ(settled.iterations, 1) << "sample " << sample << ", residual " << settled.residual;
+    EXPECT_LT((at_solution.q - plain.q).cwiseAbs().maxCoeff(), 1e-12);
+
+    JointContext nearby = plain;
+    nearby.q = plain.q + JointVector::Constant(robot.dof(), 1e-6);
+    ASSERT_TRUE(settleStatically(model, mask, ws, nearby, {}, SettleStart::Given, SettleLoads::JointFrames).converged);
+    EXPECT_LT((nearby.q - plain.q).cwiseAbs().maxCoeff(), 1e-11) << "sample " << sample;
+
+    JointContext given_command = plain;
+    given_command.q = plain.command;
+    const FixedPointReport same = settleStatically(model, mask, ws, given_command, {}, SettleStart::Given);
+    EXPECT_EQ(same.iterations, from_command.iterations);
+    EXPECT_EQ(given_command.q, plain.q);
+
+    JointContext loaded = plain;
+    loaded.payload_mass = 20.0;
+    loaded.payload_com = Eigen::Vector3d(0.0, 0.0, 0.1);
+    JointContext loaded_plain = loaded;
+    ASSERT_TRUE(settleStatically(model, mask, ws, loaded_plain).converged);
+    loaded.q = loaded.command;
+    ASSERT_TRUE(settleStatically(model, mask, ws, loaded, {}, SettleStart::Given, SettleLoads::JointFrames).converged);
+    EXPECT_EQ(loaded.q, loaded_plain.q);
+    EXPECT_GT((loaded.q - plain.q).cwiseAbs().maxCoeff(), 1e-7);  // the payload did weigh
+  }
+}
+
+TEST(Compliance, AGivenStartThatIsNotFiniteIsRefusedByName) {
+  const JointErrorModel model = effects_test::rx170Model();
+  JointErrorWorkspace ws(model.robot());
+  JointContext ctx(model.robot().dof());
+  ctx.command = JointVector::Zero(model.robot().dof());
+  ctx.q = ctx.command;
+  ctx.q[2] = std::numeric_limits<double>::quiet_NaN();
+  try {
+    settleStatically(model, model.allEffects(), ws, ctx, {}, SettleStart::Given);
+    FAIL() << "a NaN start was accepted";
+  } catch (const InvalidArgument& error) {
+    EXPECT_NE(std::string(error.what()).find("q (the settling's start)"), std::string::npos) << error.what();
+  }
 }
 
 }  // namespace
