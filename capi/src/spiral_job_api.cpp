@@ -1,6 +1,7 @@
 // jc_spiral_job_*: the paper's spiral planned and compensated once with the nominal parameters, then
 // followed by many truths (Monte Carlo draws, jointcomp.distributed): a draw costs its simulation only.
 #include <algorithm>
+#include <mutex>
 
 #include <nlohmann/json.hpp>
 
@@ -43,9 +44,26 @@ struct jc_spiral_job : HandleHeader {
   PreparedSpiral prepared;
   std::vector<ParameterSlot> slots;
   nlohmann::json parameters = nlohmann::json::array();  // name, nominal value and law of each slot
+  mutable std::mutex draws_mutex;
+  mutable std::vector<std::unique_ptr<SpiralDraw>> idle_draws;
 
   // The truth: the nominal model with every parameter replaced by `values` (in the order of `slots`).
   JointErrorModel truth(const double* values) const;
+
+  // The memory of the draws under way: a run takes a SpiralDraw (a kept one when there is one) and gives it
+  // back, so that a draw reuses the path's vectors of an earlier one instead of allocating them (and faulting
+  // their pages in) again. As many are kept as runs were ever under way at once.
+  std::unique_ptr<SpiralDraw> takeDraw() const {
+    const std::lock_guard<std::mutex> lock(draws_mutex);
+    if (idle_draws.empty()) return std::make_unique<SpiralDraw>();
+    std::unique_ptr<SpiralDraw> draw = std::move(idle_draws.back());
+    idle_draws.pop_back();
+    return draw;
+  }
+  void keepDraw(std::unique_ptr<SpiralDraw> draw) const {
+    const std::lock_guard<std::mutex> lock(draws_mutex);
+    idle_draws.push_back(std::move(draw));
+  }
 
 private:
   void listParameters();
@@ -182,8 +200,10 @@ jc_status jc_spiral_job_run(jc_spiral_job* job, const double* values, int32_t va
     const JointErrorModel truth = handle.truth(values);
     SpiralExperimentSpec spec = handle.spec;
     spec.noise_seed = static_cast<std::uint64_t>(noise_seed);
-    const SpiralExperimentResult result = followSpiralRuns(handle.prepared, truth, spec);
-    writeSpiralRuns(result, m, metrics, want_errors ? errors : nullptr);
+    std::unique_ptr<SpiralDraw> draw = handle.takeDraw();
+    drawSpiralRuns(handle.prepared, truth, spec, *draw);  // a draw that throws is dropped with its memory
+    writeSpiralRuns(*draw, m, metrics, want_errors ? errors : nullptr);
+    handle.keepDraw(std::move(draw));
   });
 }
 

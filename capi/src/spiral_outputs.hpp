@@ -3,21 +3,29 @@
 #pragma once
 
 #include <cstdint>
+#include <vector>
 
 #include "model/experiment/spiral_experiment.hpp"
 
 namespace jointcomp::capi {
 
-inline void writeSpiralRuns(const SpiralExperimentResult& result, std::int64_t m, double* metrics, double* errors) {
-  for (int r = 0; r < 3; ++r) {
-    const AccuracyMetrics& run = result.runs[r].metrics;
-    const double values[5] = {run.ra, run.rz, run.rms, run.max, run.mean};
-    for (int i = 0; i < 5; ++i) metrics[5 * r + i] = values[i];
-    if (!errors) continue;
-    for (std::int64_t k = 0; k < m; ++k) {
-      for (int i = 0; i < 3; ++i) errors[(r * m + k) * 3 + i] = result.runs[r].error[k][i];
-    }
+// Run r's metrics into metrics[5r..5r+4] and, when errors is not null, its errors into errors[3rm..].
+inline void writeSpiralRun(int r, const AccuracyMetrics& run, const std::vector<Eigen::Vector3d>& error, std::int64_t m,
+                           double* metrics, double* errors) {
+  const double values[5] = {run.ra, run.rz, run.rms, run.max, run.mean};
+  for (int i = 0; i < 5; ++i) metrics[5 * r + i] = values[i];
+  if (!errors) return;
+  for (std::int64_t k = 0; k < m; ++k) {
+    for (int i = 0; i < 3; ++i) errors[(r * m + k) * 3 + i] = error[static_cast<std::size_t>(k)][i];
   }
+}
+
+inline void writeSpiralRuns(const SpiralExperimentResult& result, std::int64_t m, double* metrics, double* errors) {
+  for (int r = 0; r < 3; ++r) writeSpiralRun(r, result.runs[r].metrics, result.runs[r].error, m, metrics, errors);
+}
+
+inline void writeSpiralRuns(const SpiralDraw& draw, std::int64_t m, double* metrics, double* errors) {
+  for (int r = 0; r < 3; ++r) writeSpiralRun(r, draw.metrics[r], draw.error[r], m, metrics, errors);
 }
 
 }  // namespace jointcomp::capi

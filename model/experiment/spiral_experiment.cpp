@@ -11,21 +11,6 @@
 namespace jointcomp {
 namespace {
 
-// The paper's runs: no correction; the loads and the joint springs (stiffness); and the gears' errors that
-// follow the command too (kinematic: transmission errors, periodic tables), each effect found by its role.
-void paperRunMasks(const JointErrorModel& nominal, EffectMask masks[3]) {
-  EffectMask stiffness = nominal.loadsAnd({});
-  if (nominal.jointSprings() >= 0) stiffness |= EffectMask(1) << nominal.jointSprings();
-  EffectMask kinematic = stiffness;
-  for (int i = 0; i < nominal.effectCount(); ++i) {
-    const Effect& effect = nominal.effect(i);
-    if (effect.role() == EffectRole::JointError && effect.dependsOnCommand()) kinematic |= EffectMask(1) << i;
-  }
-  masks[0] = 0;
-  masks[1] = stiffness;
-  masks[2] = kinematic;
-}
-
 constexpr double kDegree = 3.14159265358979323846 / 180.0;
 
 void tell(const std::function<void(const std::string&)>& progress, const std::string& what) {
@@ -33,6 +18,19 @@ void tell(const std::function<void(const std::string&)>& progress, const std::st
 }
 
 }  // namespace
+
+EffectMask spiralRunMask(const JointErrorModel& nominal, int run) {
+  if (run < 0 || run > 2) throw InvalidArgument("run is " + std::to_string(run) + ", must be 0, 1 or 2");
+  if (run == 0) return 0;
+  EffectMask mask = nominal.loadsAnd({});
+  if (nominal.jointSprings() >= 0) mask |= EffectMask(1) << nominal.jointSprings();
+  if (run == 1) return mask;
+  for (int i = 0; i < nominal.effectCount(); ++i) {
+    const Effect& effect = nominal.effect(i);
+    if (effect.role() == EffectRole::JointError && effect.dependsOnCommand()) mask |= EffectMask(1) << i;
+  }
+  return mask;
+}
 
 SpiralSpec SpiralExperimentSpec::defaultSpiral() {
   SpiralSpec spiral;
@@ -76,8 +74,6 @@ PreparedSpiral prepareSpiralRuns(const JointErrorModel& nominal, const SpiralExp
   PreparedSpiral prepared;
   tell(progress, "planning the spiral (feed rate, inverse kinematics)");
   prepared.planned = planSpiralTrajectory(robot, spec.spiral, spec.feed_rate, spec.seed_posture);
-  EffectMask run_masks[3];
-  paperRunMasks(nominal, run_masks);
   const char* run_names[4] = {"without correction", "stiffness correction", "stiffness and kinematic correction",
                               "stiffness, kinematic and dynamic correction"};
   const int run_count = spec.dynamic_correction ? 4 : 3;
@@ -96,8 +92,8 @@ PreparedSpiral prepareSpiralRuns(const JointErrorModel& nominal, const SpiralExp
     std::vector<JointVector>& reference_velocity = prepared.reference_velocity[r - spec.first_run];
     const auto computing = std::chrono::steady_clock::now();
     if (r < 3) {
-      run.compensation = compensateTrajectory(nominal, run_masks[r], prepared.planned.q, prepared.planned.qd,
-                                              run.reference, spec.compensation);
+      run.compensation = compensateTrajectory(nominal, spiralRunMask(nominal, r), prepared.planned.q,
+                                              prepared.planned.qd, run.reference, spec.compensation);
     } else {
       run.dynamic_compensation = compensateDynamically(nominal, spec.drives, prepared.planned, run.reference,
                                                        reference_velocity, spec.dynamic);
@@ -120,19 +116,39 @@ PreparedSpiral prepareSpiralRuns(const JointErrorModel& nominal, const SpiralExp
 
 namespace {
 
+// The quasi-static settling's start at sample k of a run: sample k's command plus the deflection (links minus
+// command) extrapolated from up to five samples before it, by the polynomial through them (of degree 4 at
+// most: sum over i of (-1)^(i+1) C(m, i) deflection[k - i]). Along the smooth path the quartic's guess is
+// within the settling's tolerance at nearly every sample, so one evaluation of the joint errors settles a
+// sample where the previous sample's deflection alone needed three; where the deflection jumps (a lost
+// motion's reversal) the guess is worse and the iteration takes the steps it needs.
+JointVector settlingStart(const std::vector<JointVector>& reference, const std::vector<JointVector>& actual,
+                          std::size_t k) {
+  static constexpr double kBinomial[6][6] = {{1},          {1, 1},          {1, 2, 1},
+                                             {1, 3, 3, 1}, {1, 4, 6, 4, 1}, {1, 5, 10, 10, 5, 1}};
+  const std::size_t points = std::min<std::size_t>(k, 5);
+  JointVector q = reference[k];
+  for (std::size_t i = 1; i <= points; ++i) {
+    const double weight = (i % 2 == 1 ? 1.0 : -1.0) * kBinomial[points][i];
+    q += weight * (actual[k - i] - reference[k - i]);
+  }
+  return q;
+}
+
 // Where the links of `truth` go under the references of the prepared run `r`: the plant's integration or the
-// quasi-static settling, into run.actual.
+// quasi-static settling, into `actual` (resized to the run's samples).
 void simulateRun(const PreparedSpiral& prepared, int r, const JointErrorModel& truth, JointErrorWorkspace& true_ws,
-                 FlexibleJointPlant* plant, const SpiralExperimentSpec& spec, SpiralRun& run) {
+                 FlexibleJointPlant* plant, const SpiralExperimentSpec& spec, std::vector<JointVector>& actual) {
   const JointTrajectory& planned = prepared.planned;
+  const std::vector<JointVector>& reference = prepared.runs[r].reference;
   const std::vector<JointVector>& reference_velocity = prepared.reference_velocity[r];
-  const std::size_t count = run.reference.size();
-  run.actual.resize(count);
+  const std::size_t count = reference.size();
+  actual.resize(count);
   if (plant) {
-    plant->reset(run.reference[0], planned.time[0]);
+    plant->reset(reference[0], planned.time[0]);
     for (std::size_t k = 0; k < count; ++k) {
-      plant->setReference(run.reference[k], reference_velocity[k]);
-      run.actual[k] = plant->linkPositions();
+      plant->setReference(reference[k], reference_velocity[k]);
+      actual[k] = plant->linkPositions();
       if (k + 1 < count) plant->advance(planned.time[k + 1]);
     }
     return;
@@ -140,30 +156,30 @@ void simulateRun(const PreparedSpiral& prepared, int r, const JointErrorModel& t
   const EffectMask truth_mask = truth.allEffects();
   JointContext ctx(truth.robot().dof());
   for (std::size_t k = 0; k < count; ++k) {
-    // Started from the previous sample's links moved by the change of command: along the smooth path a few
-    // iterations reach the tolerance, where many are needed from the command.
-    ctx.q = k == 0 ? run.reference[0] : JointVector(run.actual[k - 1] + (run.reference[k] - run.reference[k - 1]));
-    ctx.command = run.reference[k];
+    ctx.q = settlingStart(reference, actual, k);
+    ctx.command = reference[k];
     ctx.velocity = planned.qd[k];
     ctx.time = planned.time[k];
     const FixedPointReport settled = settleStatically(truth, truth_mask, true_ws, ctx, spec.compensation,
                                                       SettleStart::Given, SettleLoads::JointFrames);
     if (!settled.converged) throw SolverError("the simulated robot did not settle at sample " + std::to_string(k));
-    run.actual[k] = ctx.q;
+    actual[k] = ctx.q;
   }
 }
 
-// The tracker's measurement of run number `r` (0 to 3: its own noise stream) and the error against the plan.
-void measureRun(const JointTrajectory& planned, int r, const Robot& true_robot, JointErrorWorkspace& true_ws,
-                const SpiralExperimentSpec& spec, SpiralRun& run) {
+// The tracker's measurement of run number `r` (0 to 3: its own noise stream) of the links `actual`: the
+// error against the plan into `error`, the measured points into `measured` when not null; returns the metrics.
+AccuracyMetrics measureRun(const JointTrajectory& planned, int r, const Robot& true_robot, JointErrorWorkspace& true_ws,
+                           const SpiralExperimentSpec& spec, const std::vector<JointVector>& actual,
+                           std::vector<Eigen::Vector3d>* measured, std::vector<Eigen::Vector3d>& error) {
   // Each run has its own tracker noise; the dynamic correction's is the static one's it is compared with.
   DeterministicRandom noise(spec.noise_seed * 1000003ULL + static_cast<std::uint64_t>(std::min(r, 2)));
-  const std::size_t count = run.reference.size();
-  run.measured.resize(count);
-  run.error.resize(count);
+  const std::size_t count = actual.size();
+  if (measured) measured->resize(count);
+  error.resize(count);
   for (std::size_t k = 0; k < count; ++k) {
     // The tool goes where the true robot's geometry puts it (the nominal one when the truth shares it).
-    forwardKinematics(true_robot, true_ws.robot, run.actual[k]);
+    forwardKinematics(true_robot, true_ws.robot, actual[k]);
     const Eigen::Vector3d position = true_ws.robot.tool_pose.translation();
     const double sigma = spec.noise.sigma(position);
     // One draw per statement: the order of a constructor's arguments is unspecified (GCC evaluates them
@@ -172,11 +188,46 @@ void measureRun(const JointTrajectory& planned, int r, const Robot& true_robot, 
     const double noise_z = noise.normal();
     const double noise_y = noise.normal();
     const double noise_x = noise.normal();
-    const Eigen::Vector3d measured = position + sigma * Eigen::Vector3d(noise_x, noise_y, noise_z);
-    run.measured[k] = measured;
-    run.error[k] = measured - planned.tool_position[k];
+    const Eigen::Vector3d point = position + sigma * Eigen::Vector3d(noise_x, noise_y, noise_z);
+    if (measured) (*measured)[k] = point;
+    error[k] = point - planned.tool_position[k];
   }
-  run.metrics = accuracyMetrics(run.error);
+  return accuracyMetrics(error);
+}
+
+// Where one run's draw goes: the links, the measured points (null: not kept), the errors and the metrics.
+struct RunOutputs {
+  std::vector<JointVector>* actual;
+  std::vector<Eigen::Vector3d>* measured;
+  std::vector<Eigen::Vector3d>* error;
+  AccuracyMetrics* metrics;
+};
+
+// The prepared runs followed by `truth` into `outputs` (one per prepared run).
+void followEachRun(const PreparedSpiral& prepared, const JointErrorModel& truth, const SpiralExperimentSpec& spec,
+                   const std::function<void(const std::string&)>& progress, const std::vector<RunOutputs>& outputs,
+                   double& simulation_seconds, PlantStatistics& plant_statistics) {
+  const Robot& true_robot = truth.robot();
+  const int dof = prepared.planned.q.empty() ? true_robot.dof() : static_cast<int>(prepared.planned.q[0].size());
+  if (true_robot.dof() != dof) {
+    throw InvalidArgument("the truth robot '" + true_robot.name + "' has " + std::to_string(true_robot.dof()) +
+                          " joints, the planned spiral " + std::to_string(dof));
+  }
+  JointErrorWorkspace true_ws(true_robot);
+  std::unique_ptr<FlexibleJointPlant> plant;
+  if (!spec.drives.empty()) plant = std::make_unique<FlexibleJointPlant>(truth, spec.drives, spec.plant);
+  simulation_seconds = 0.0;
+  const int runs = static_cast<int>(prepared.runs.size());
+  for (int r = 0; r < runs; ++r) {
+    const RunOutputs& out = outputs[static_cast<std::size_t>(r)];
+    tell(progress, "run " + std::to_string(r + 1) + "/" + std::to_string(runs) + ": " + prepared.runs[r].name);
+    const auto started = std::chrono::steady_clock::now();
+    simulateRun(prepared, r, truth, true_ws, plant.get(), spec, *out.actual);
+    simulation_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+    *out.metrics = measureRun(prepared.planned, prepared.runs[r].index, true_robot, true_ws, spec, *out.actual,
+                              out.measured, *out.error);
+  }
+  plant_statistics = plant ? plant->statistics() : PlantStatistics{};
 }
 
 }  // namespace
@@ -184,29 +235,26 @@ void measureRun(const JointTrajectory& planned, int r, const Robot& true_robot, 
 SpiralExperimentResult followSpiralRuns(const PreparedSpiral& prepared, const JointErrorModel& truth,
                                         const SpiralExperimentSpec& spec,
                                         const std::function<void(const std::string&)>& progress) {
-  const Robot& true_robot = truth.robot();
-  const int dof = prepared.planned.q.empty() ? true_robot.dof() : static_cast<int>(prepared.planned.q[0].size());
-  if (true_robot.dof() != dof) {
-    throw InvalidArgument("the truth robot '" + true_robot.name + "' has " + std::to_string(true_robot.dof()) +
-                          " joints, the planned spiral " + std::to_string(dof));
-  }
   SpiralExperimentResult result;
   result.planned = prepared.planned;
   result.dynamic = !spec.drives.empty();
   result.runs = prepared.runs;
-  JointErrorWorkspace true_ws(true_robot);
-  std::unique_ptr<FlexibleJointPlant> plant;
-  if (result.dynamic) plant = std::make_unique<FlexibleJointPlant>(truth, spec.drives, spec.plant);
-  for (int r = 0; r < static_cast<int>(result.runs.size()); ++r) {
-    SpiralRun& run = result.runs[r];
-    tell(progress, "run " + std::to_string(r + 1) + "/" + std::to_string(result.runs.size()) + ": " + run.name);
-    const auto started = std::chrono::steady_clock::now();
-    simulateRun(prepared, r, truth, true_ws, plant.get(), spec, run);
-    result.simulation_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
-    measureRun(result.planned, run.index, true_robot, true_ws, spec, run);
-  }
-  if (plant) result.plant_statistics = plant->statistics();
+  std::vector<RunOutputs> outputs;
+  for (SpiralRun& run : result.runs) outputs.push_back({&run.actual, &run.measured, &run.error, &run.metrics});
+  followEachRun(prepared, truth, spec, progress, outputs, result.simulation_seconds, result.plant_statistics);
   return result;
+}
+
+void drawSpiralRuns(const PreparedSpiral& prepared, const JointErrorModel& truth, const SpiralExperimentSpec& spec,
+                    SpiralDraw& draw) {
+  const std::size_t runs = prepared.runs.size();
+  draw.actual.resize(runs);
+  draw.error.resize(runs);
+  draw.metrics.resize(runs);
+  std::vector<RunOutputs> outputs;
+  for (std::size_t r = 0; r < runs; ++r)
+    outputs.push_back({&draw.actual[r], nullptr, &draw.error[r], &draw.metrics[r]});
+  followEachRun(prepared, truth, spec, {}, outputs, draw.simulation_seconds, draw.plant_statistics);
 }
 
 SpiralExperimentResult runSpiralExperiment(const JointErrorModel& nominal, const JointErrorModel& truth,

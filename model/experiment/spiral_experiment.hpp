@@ -85,6 +85,11 @@ struct SpiralExperimentResult {
 JointTrajectory planSpiralTrajectory(const Robot& robot, const SpiralSpec& spiral, const FeedRateSpec& feed_rate,
                                      JointVector seed_posture = {});
 
+// The effects run `run` (0 to 2) of the paper's spiral compensates: none; the loads and the joint springs
+// (stiffness); those and the gears' errors that follow the command (kinematic: transmission errors, periodic
+// tables), each effect found by its role. InvalidArgument for another run.
+EffectMask spiralRunMask(const JointErrorModel& nominal, int run);
+
 // What every follower of one nominal model shares: the planned spiral and each run's references (the
 // compensation uses the nominal model only), computed once for many truths (Monte Carlo draws).
 struct PreparedSpiral {
@@ -103,6 +108,21 @@ PreparedSpiral prepareSpiralRuns(const JointErrorModel& nominal, const SpiralExp
 SpiralExperimentResult followSpiralRuns(const PreparedSpiral& prepared, const JointErrorModel& truth,
                                         const SpiralExperimentSpec& spec,
                                         const std::function<void(const std::string&)>& progress = {});
+
+// One truth's draw of the prepared runs without the plan and the references (the PreparedSpiral has them):
+// per run where the links went, the measured-minus-planned errors and their metrics. A Monte Carlo keeps one
+// per thread from draw to draw, so that a draw reuses these vectors instead of allocating the path again.
+struct SpiralDraw {
+  std::vector<std::vector<JointVector>> actual;     // per prepared run
+  std::vector<std::vector<Eigen::Vector3d>> error;  // per prepared run: measured - planned (m)
+  std::vector<AccuracyMetrics> metrics;             // per prepared run
+  PlantStatistics plant_statistics;                 // summed over the runs
+  double simulation_seconds = 0.0;                  // wall-clock time spent simulating the robot
+};
+
+// followSpiralRuns into `draw` (the same bits): its vectors are resized, and keep their memory when they fit.
+void drawSpiralRuns(const PreparedSpiral& prepared, const JointErrorModel& truth, const SpiralExperimentSpec& spec,
+                    SpiralDraw& draw);
 
 // `progress` (may be empty) is told what is being done, for tools that show it.
 SpiralExperimentResult runSpiralExperiment(const JointErrorModel& nominal, const SpiralExperimentSpec& spec,

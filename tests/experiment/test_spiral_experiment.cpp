@@ -2,6 +2,7 @@
 // stiffness-and-kinematic run must reduce Ra and Rz at least as much as the paper did (85 % and 48 %), the
 // stiffness-only run lies between, the numbers are bit-identical from run to run, and a spiral out of reach
 // is reported with the path sample that cannot be reached.
+#include <algorithm>
 #include <cstdio>
 #include <cstring>
 #include <iostream>
@@ -112,6 +113,47 @@ TEST(SpiralExperiment, IsDeterministic) {
       ASSERT_EQ(first.runs[r].error[k], second.runs[r].error[k]) << "run " << r << ", sample " << k;
     }
   }
+}
+
+TEST(SpiralExperiment, AKeptDrawHasTheBitsOfTheExperimentAndItsLinksAreAtTheTruthsFixedPoint) {
+  // drawSpiralRuns into a SpiralDraw that held another truth's draw (a Monte Carlo worker's reuse) gives the
+  // experiment's bits; and each settled sample, re-evaluated with forward kinematics (not the joint-frame
+  // gravity of the settling, not its extrapolated start), satisfies q = command + dq(q, command).
+  const SpiralExperimentSpec spec;
+  const PreparedSpiral prepared = prepareSpiralRuns(nominal(), spec);
+  const JointErrorModel truth = perturbedModel(nominal(), spec.truth);
+  SpiralDraw draw;
+  SpiralExperimentSpec other_seed = spec;
+  other_seed.noise_seed = 3;
+  drawSpiralRuns(prepared, nominal(), other_seed, draw);
+  drawSpiralRuns(prepared, truth, spec, draw);
+  const SpiralExperimentResult& expected = defaultResult();
+  JointErrorWorkspace ws(truth.robot());
+  double largest_residual = 0.0, largest_deflection = 0.0;
+  for (int r = 0; r < 3; ++r) {
+    EXPECT_TRUE(sameBits(draw.metrics[r].ra, expected.runs[r].metrics.ra)) << "run " << r;
+    EXPECT_TRUE(sameBits(draw.metrics[r].rz, expected.runs[r].metrics.rz)) << "run " << r;
+    ASSERT_EQ(draw.error[r].size(), expected.runs[r].error.size());
+    for (std::size_t k = 0; k < draw.error[r].size(); ++k) {
+      ASSERT_EQ(draw.error[r][k], expected.runs[r].error[k]) << "run " << r << ", sample " << k;
+      ASSERT_EQ(draw.actual[r][k], expected.runs[r].actual[k]) << "run " << r << ", sample " << k;
+    }
+    for (std::size_t k = 0; k < draw.actual[r].size(); k += 7) {
+      JointContext ctx(truth.robot().dof());
+      ctx.q = draw.actual[r][k];
+      ctx.command = prepared.runs[r].reference[k];
+      ctx.velocity = prepared.planned.qd[k];
+      ctx.time = prepared.planned.time[k];
+      updateMotorAngles(truth, ctx);
+      computeLoadTorque(truth, truth.allEffects(), ws, ctx);
+      JointVector dq = JointVector::Zero(truth.robot().dof());
+      addSelectedJointErrors(truth, truth.allEffects(), ctx, dq);
+      largest_residual = std::max(largest_residual, (ctx.command + dq - ctx.q).cwiseAbs().maxCoeff());
+      largest_deflection = std::max(largest_deflection, dq.cwiseAbs().maxCoeff());
+    }
+  }
+  EXPECT_LT(largest_residual, 1e-11);
+  EXPECT_GT(largest_deflection, 1e-4);  // the links did deflect: the check is not of q = command
 }
 
 TEST(SpiralExperiment, ADifferentNoiseSeedChangesTheMeasurementsOnly) {
