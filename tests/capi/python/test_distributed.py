@@ -7,8 +7,12 @@ runs (this process, no Dask) are the reference the cluster's results must equal 
 import json
 import math
 import os
+import pathlib
 import pickle
 import signal
+import subprocess
+import sys
+import tempfile
 import time
 
 import numpy as np
@@ -187,6 +191,89 @@ def test_a_stopped_run_resumes_to_the_same_bytes(serial_run, tmp_path):
                    batch_size=3)
     assert _bytes(tmp_path) == _bytes(serial_out)
     assert not (tmp_path / montecarlo.CHECKPOINT).exists()
+
+
+def _dask_scratch_folders():
+    return set(pathlib.Path(tempfile.gettempdir()).glob("jointcomp-dask-*"))
+
+
+def test_ctrl_c_on_a_local_cluster_stops_its_workers_and_removes_its_folder(serial_run, tmp_path):
+    """SIGINT to the client (as Ctrl-C gives it) while its own LocalCluster runs: Interrupted with the
+    checkpoint, the worker processes ended, the cluster's scratch folder gone, and the checkpoint resumes to
+    the uninterrupted run's bytes."""
+    import psutil
+    _, serial_out = serial_run
+    folders_before = _dask_scratch_folders()
+    others = psutil.Process().children(recursive=True)  # another cluster's workers (a module fixture's)
+    workers, during = [], set()
+
+    def interrupt_at_the_second_batch(done, total, rate):
+        during.update(_dask_scratch_folders() - folders_before)
+        for child in psutil.Process().children(recursive=True):  # multiprocessing's tracker lives on, by design
+            if child not in workers + others and "resource_tracker" not in " ".join(child.cmdline()):
+                workers.append(child)
+        if done >= 2 and done < total:
+            os.kill(os.getpid(), signal.SIGINT)
+    with pytest.raises(jd.Interrupted, match="run again with --resume"):
+        jd.monte_carlo(RX170_URDF, RX170_PARAMETERS, samples=SAMPLES, seed=7, n_workers=2, out=tmp_path,
+                       batch_size=1, progress=interrupt_at_the_second_batch)
+    assert during and workers  # the run had its folder and its worker processes
+    _, alive = psutil.wait_procs(workers, timeout=10)
+    assert not alive, "worker processes outlived the run: %s" % [" ".join(p.cmdline()) for p in alive]
+    assert not _dask_scratch_folders() - folders_before
+    assert (tmp_path / montecarlo.CHECKPOINT).exists()
+    jd.monte_carlo(RX170_URDF, RX170_PARAMETERS, samples=SAMPLES, seed=7, serial=True, out=tmp_path, resume=True)
+    assert _bytes(tmp_path) == _bytes(serial_out)
+
+
+_KILLED_CLIENT = """
+import os, signal, sys
+from jointcomp import distributed as jd
+half = int(sys.argv[4]) // 2
+def kill_at_half_way(done, total, rate):
+    if done == half:
+        print("killed at", done, flush=True)
+        os.kill(os.getpid(), signal.SIGKILL)
+jd.monte_carlo(sys.argv[1], sys.argv[2], samples=int(sys.argv[4]), seed=7, serial=True, out=sys.argv[3],
+               batch_size=1, progress=kill_at_half_way)
+"""
+
+
+def test_a_client_killed_at_half_way_resumes_to_the_same_bytes(serial_run, tmp_path):
+    """SIGKILL of the client right after it merged half the draws (no chance to checkpoint on the way out):
+    --resume continues from the checkpoint on disk, drops the CSV rows written after it, and ends with the
+    bytes of the run never stopped."""
+    _, serial_out = serial_run
+    child = subprocess.run([sys.executable, "-c", _KILLED_CLIENT, str(RX170_URDF), str(RX170_PARAMETERS),
+                            str(tmp_path), str(SAMPLES)], capture_output=True, timeout=120)
+    assert child.returncode == -signal.SIGKILL, child.stderr.decode()[-2000:]
+    assert child.stdout.decode().split() == ["killed", "at", str(SAMPLES // 2)]
+    with np.load(tmp_path / montecarlo.CHECKPOINT) as kept:  # the first batch's: later ones came within 2 s
+        assert 1 <= int(kept["draws"]) <= SAMPLES // 2
+    jd.monte_carlo(RX170_URDF, RX170_PARAMETERS, samples=SAMPLES, seed=7, serial=True, out=tmp_path, resume=True)
+    assert _bytes(tmp_path) == _bytes(serial_out)
+    assert not (tmp_path / montecarlo.CHECKPOINT).exists()
+
+
+def test_an_interrupt_inside_a_merge_keeps_the_last_checkpoint(serial_run, tmp_path, monkeypatch):
+    """Ctrl-C after the summary took a batch but before the CSV got its rows: the stop does not checkpoint
+    that half-merged state; the last checkpoint stands and resumes to the same bytes."""
+    _, serial_out = serial_run
+    rows = montecarlo._csv_rows
+    calls = []
+
+    def interrupted_on_the_third_batch(*arguments):
+        calls.append(1)
+        if len(calls) == 3:
+            raise KeyboardInterrupt
+        return rows(*arguments)
+    monkeypatch.setattr(montecarlo, "_csv_rows", interrupted_on_the_third_batch)
+    with pytest.raises(jd.Interrupted, match="1 of 6 draws are kept"):  # the first batch's checkpoint
+        jd.monte_carlo(RX170_URDF, RX170_PARAMETERS, samples=SAMPLES, seed=7, serial=True, out=tmp_path,
+                       batch_size=1)
+    monkeypatch.setattr(montecarlo, "_csv_rows", rows)
+    jd.monte_carlo(RX170_URDF, RX170_PARAMETERS, samples=SAMPLES, seed=7, serial=True, out=tmp_path, resume=True)
+    assert _bytes(tmp_path) == _bytes(serial_out)
 
 
 def test_a_worker_without_the_library_is_left_out(serial_run, tmp_path, capsys):

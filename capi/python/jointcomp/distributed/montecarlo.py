@@ -155,6 +155,8 @@ class _Run:
         self.started = time.monotonic()
         self.saved = self.started
         self.first = 0
+        self.merging = False
+        self.kept = None  # the draws the checkpoint on disk holds (None: no checkpoint written yet)
         if out is not None:
             self._open(resume)
 
@@ -166,7 +168,7 @@ class _Run:
                     raise DistributedError("--resume: %s is of another run (other inputs, seed or samples)" % checkpoint)
                 self.summary = Summary.from_arrays(stored, json.loads(str(stored["failed"])))
                 csv_bytes = int(stored["csv_bytes"])
-            self.first = self.summary.draws
+            self.first = self.kept = self.summary.draws
             self.csv = open(self.out / CSV_NAME, "r+b")
             self.csv.truncate(csv_bytes)
             self.csv.seek(csv_bytes)
@@ -182,9 +184,13 @@ class _Run:
         self.csv.write((",".join(header) + "\n").encode("utf-8"))
 
     def merge(self, batch, result):
+        # A Ctrl-C between the summary's merge and the CSV's rows would leave the two disagreeing: until both
+        # are done, a stop keeps the last checkpoint written instead of writing this state (see _stopped).
+        self.merging = True
         self.summary.merge(result["summary"])
         if self.csv is not None:
             self.csv.write(_csv_rows(batch, result["metrics"], result["summary"].failed).encode("utf-8"))
+        self.merging = False
         now = time.monotonic()
         if self.out is not None and (now - self.saved >= 2.0 or self.saved == self.started):
             self.checkpoint()  # the first batch at once, then every 2 s
@@ -204,6 +210,7 @@ class _Run:
                       csv_bytes=np.int64(self.csv.tell()))
         write_atomically(self.out / CHECKPOINT, lambda stream: np.savez(stream, **arrays))
         self.saved = time.monotonic()
+        self.kept = self.summary.draws
 
     def close(self):
         if self.csv is not None:
@@ -312,7 +319,13 @@ def _stopped(run, kind, what):
     if run.out is None:
         run.close()
         return kind("%s: %d of %d draws were done (give out= to keep a checkpoint)" % (what, done, run.samples))
-    run.checkpoint()
+    if not run.merging:
+        run.checkpoint()
+    elif run.kept is not None:
+        done = run.kept  # stopped inside a merge: the last checkpoint stands (resume truncates the CSV to it)
+    else:
+        run.close()
+        return kind("%s before the first batch was kept: run again without --resume" % what)
     run.close()
     return kind("%s; %d of %d draws are kept in %s: run again with --resume (resume=True) to continue" % (
         what, done, run.samples, run.out / CHECKPOINT))
