@@ -2,7 +2,8 @@
 # Counts the instructions of the hot paths with valgrind's callgrind: per FMU communication step (1 ms and
 # 10 ms, FMI 2 and 3, the FMU's defaults), the same step on the plant and compensator called directly (the
 # difference is the FMI layer's own cost), per compensated point, and one plant right-hand side against
-# forward dynamics, ours and KDL's. Counts do not move with the machine's load or clock, which the timings
+# forward dynamics, ours and KDL's; a Monte Carlo draw of the spiral against its three compensations. Counts
+# do not move with the machine's load or clock, which the timings
 # of run-benchmarks.sh and fmu_bench do (on a shared machine by up to half); an instruction is not a cycle,
 # so a count compares builds and code paths, and a timing says how fast.
 # Each FMU figure is the mean over one whole spiral (fmu_bench --whole_spirals=1), so that two builds count
@@ -25,7 +26,7 @@ done
 if [ ! -f "$build_dir/CMakeCache.txt" ]; then
   cmake -S . -B "$build_dir" -DCMAKE_BUILD_TYPE=Release -DJOINTCOMP_BUILD_TESTS=OFF >/dev/null
 fi
-cmake --build "$build_dir" --target fmu_bench compensation_bench plant_bench -j"$(nproc)" >/dev/null
+cmake --build "$build_dir" --target fmu_bench compensation_bench plant_bench montecarlo_bench -j"$(nproc)" >/dev/null
 
 work="$(mktemp -d)"
 trap 'rm -rf "$work"' EXIT
@@ -54,6 +55,8 @@ for step_ms in 1 10; do
 done
 profile compensation "$build_dir/bench/compensation_bench" --benchmark_min_time=0.2 \
   --benchmark_filter='^BM_Ours_CompensateSpiral(Point|Path)$'
+profile montecarlo "$build_dir/bench/montecarlo_bench" --benchmark_min_time=0.1 \
+  --benchmark_filter='^BM_(Draw|ThreeCompensations)$'
 profile dynamics "$build_dir/bench/plant_bench" --benchmark_min_time=0.1 \
   --benchmark_filter='^BM_(Ours_PlantRightHandSide|Ours_ForwardDynamics|Kdl_ForwardDynamics)$'
 
@@ -95,6 +98,13 @@ path, _ = per_call("compensation", "Compensator::compensateFrom(")
 print("\nCompensation of the spiral's points (stiffness, balancer, transmission error)")
 print(f"  {'a lone point (compensate)':52s} {lone:9,.0f}")
 print(f"  {'along the path (compensateFrom)':52s} {path:9,.0f}")
+
+draw, _ = per_call("montecarlo", "jointcomp::drawSpiralRuns(")
+compensation, _ = per_call("montecarlo", "jointcomp::compensateTrajectory(")
+print("\nA quasi-static Monte Carlo draw of the spiral (three runs settled and measured) against the spiral's "
+      "three compensations (issue 44's target: at most 3 times)")
+print(f"  {'a draw (drawSpiralRuns)':52s} {draw:9,.0f}")
+print(f"  {'three compensations (compensateTrajectory)':52s} {3 * compensation:9,.0f}   ratio {draw / (3 * compensation):.2f}")
 
 rhs, _ = per_call("dynamics", "FlexibleJointPlant::derivative(")
 ours, _ = per_call("dynamics", "jointcomp::forwardDynamics(jointcomp::Robot const&")

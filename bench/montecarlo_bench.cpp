@@ -87,7 +87,15 @@ void BM_DrawAgainstCompensations(benchmark::State& state) {
 }
 BENCHMARK(BM_DrawAgainstCompensations)->Unit(benchmark::kMillisecond)->MinTime(2.0);
 
-// The draw alone (for callgrind: bench/count-instructions.sh counts drawSpiralRuns per call).
+// The three compensations alone, and the draw alone below (for callgrind: bench/count-instructions.sh counts
+// compensateTrajectory and drawSpiralRuns per call).
+void BM_ThreeCompensations(benchmark::State& state) {
+  const Fixture& f = fixture();
+  std::vector<JointVector> reference;
+  for (auto _ : state) compensateThreeRuns(f, reference);
+}
+BENCHMARK(BM_ThreeCompensations)->Unit(benchmark::kMillisecond);
+
 void BM_Draw(benchmark::State& state) {
   const Fixture& f = fixture();
   SpiralExperimentSpec spec = f.spec;
