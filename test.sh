@@ -72,6 +72,8 @@ asan_stage() {
   #   binary refers to the sanitizer runtime by design;
   # - io_kill_during_write: kills the tool at moments measured on an uninstrumented run, twenty times;
   # - capi_threads: the threads test, run under ThreadSanitizer in build 3;
+  # - limits_function_sizes (and its own check, _catches): they read the sources with clang-tidy, not
+  #   instrumented code, at a core-minute or more a run;
   # - cli_workflow: runs a Python example that loads the library into Debian's uninstrumented interpreter
   #   (the Python tests of tests/capi are not even registered in a sanitizer build);
   # - what takes from ten seconds to five minutes instrumented (20 to 80 times its plain time) and repeats
@@ -85,9 +87,9 @@ asan_stage() {
   slow_under_sanitizers='TheDynamicCorrectionFollowsTheSpiral|DiscoveryTables\.|Discovery\.BacklashAndHysteresisAreToldApart|DiscoveryPeriodic\.SmoothnessPriorBridgesTheGapsOfAGrid|OfflineDynamicReferences|DynamicCompensation\.WithTheModelEqualToTheRobot|DiscoverySweep\.|DiscoveryIpaUr10\.|FmuOfTheUr10\.|IpaUr10Calibration\.|IntervalsCoverTheTruth|OverSeeds|SpiralAt1ms|FmuRegression\.|VaryingCommunicationSteps|RegressionThroughTheFmuEqualsTheCApi|PlantEnergy\.ConservedWithoutLossesOrControl|CapiMatchesCore\.SpiralPlanTrajectoryCompensationAndExperiment|Discovery\.RaRzOnHeldOutSpiral|TwoInstancesInTwoThreads|SpiralExperiment\.(ADifferentNoiseSeed|RunsAreCompleteAndNamed|DefaultSpecReproduces)|PlantSpiralRegression\.(MetricsFollowFromTheErrors|CorrectionRemovesMostOfRa)|PlantMisuse\.AbsurdGains|PaperIdentification\.(SameSeedSameBits|TheSweepReveals|Joint2Harmonics)|(RestoringAStateMidRunContinuesIdentically|BadStepsAreRefused)/fmi2'
   # JOINTCOMP_ASAN_ALL=1 runs the slow ones under the sanitizers too (each takes 10 s to 5 min there).
   if [ "${JOINTCOMP_ASAN_ALL:-0}" = 1 ]; then
-    not_under_sanitizers="^fmu_binary_fmi[23]$|^io_kill_during_write$|^capi_threads$|^cli_workflow$"
+    not_under_sanitizers="^fmu_binary_fmi[23]$|^io_kill_during_write$|^capi_threads$|^cli_workflow$|^limits_function_sizes(_catches)?$"
   else
-    not_under_sanitizers="^fmu_binary_fmi[23]$|^io_kill_during_write$|^capi_threads$|^cli_workflow$|$slow_under_sanitizers"
+    not_under_sanitizers="^fmu_binary_fmi[23]$|^io_kill_during_write$|^capi_threads$|^cli_workflow$|^limits_function_sizes(_catches)?$|$slow_under_sanitizers"
   fi
   sanitizer_environment
   ctest --test-dir "$asan_dir" --no-tests=error --output-on-failure --timeout 900 -j"$jobs" -LE fuzz \

@@ -38,6 +38,50 @@ void readWarmUp(const std::string& text, TemperatureProfile& profile) {
   if (items.size() > 2) profile.start_degc = parseNumber(items[2], "warm-up", {-100.0, 200.0});
 }
 
+// The options that shape the campaign (target, pose, sweep, counts, warm-up, plant) into `spec`.
+void readCampaignOptions(const Options& options, const RobotSetup& setup, CampaignSimulationSpec& spec) {
+  if (options.has("target")) {
+    const std::vector<double> target = numberList(options.get("target", ""), "target", kTargetMm);
+    if (target.size() != 3) throw std::invalid_argument("--target takes x,y,z in mm");
+    spec.target_in_flange = Eigen::Vector3d(target[0], target[1], target[2]) * 1e-3;
+  }
+  if (options.has("pose")) {
+    const std::vector<double> pose = numberList(options.get("pose", ""), "pose", kAngleDeg);
+    if (static_cast<int>(pose.size()) != setup.robot->dof()) {
+      throw std::invalid_argument("--pose takes " + std::to_string(setup.robot->dof()) + " joint angles in degrees");
+    }
+    JointVector q(setup.robot->dof());
+    for (int j = 0; j < setup.robot->dof(); ++j) q[j] = pose[j] * kDegree;
+    spec.stiffness.pose = q;
+    spec.sweep.pose = q;
+  }
+  spec.sweep.joint = static_cast<int>(options.integer("joint", 2, 1, kMaxJoints)) - 1;
+  spec.sweep.from_rad = options.number("from", spec.sweep.from_rad / kDegree, kAngleDeg) * kDegree;
+  spec.sweep.to_rad = options.number("to", spec.sweep.to_rad / kDegree, kAngleDeg) * kDegree;
+  spec.sweep.step_rad = options.number("step", spec.sweep.step_rad / kDegree, {0.0, 360.0, true}) * kDegree;
+  spec.sweep.settle_s = options.number("settle", spec.sweep.settle_s, {0.0, 3600.0, true});
+  spec.sweep.cycles = static_cast<int>(options.integer("cycles", spec.sweep.cycles, 1, kMaxCycles));
+  spec.random.count = static_cast<int>(options.integer("count", spec.random.count, 1, kMaxRandomPoses));
+  spec.stiffness.global_poses =
+      static_cast<int>(options.integer("global-poses", spec.stiffness.global_poses, 0, kMaxGlobalPoses));
+  if (options.has("warm-up")) readWarmUp(options.get("warm-up", ""), spec.temperature);
+  if (options.has("plant")) {
+    if (!setup.parameters.hasDrives()) {
+      throw ParameterError(setup.params + ": no \"plant\" object (drives and controller gains) for the plant");
+    }
+    spec.drives = setup.parameters.drives;
+  }
+}
+
+// The instruments' noise, as the run simulates them.
+void printInstruments(const CampaignSimulationSpec& spec) {
+  std::printf(
+      "  instruments: tracker 1 sigma = %.1f um + %.1f um/m from (%.0f, %.0f, %.0f) mm; levels 1 sigma = %.4f deg%s\n",
+      spec.tracker.constant_m * 1e6, spec.tracker.per_metre * 1e6, spec.tracker.tracker_position.x() * 1e3,
+      spec.tracker.tracker_position.y() * 1e3, spec.tracker.tracker_position.z() * 1e3, spec.level.sigma_rad / kDegree,
+      spec.noise ? "" : " (noise off)");
+}
+
 }  // namespace
 
 int runSimulate(int argc, char** argv) {
@@ -72,45 +116,11 @@ int runSimulate(int argc, char** argv) {
   }
   spec.seed = static_cast<std::uint64_t>(options.integer("seed", 1, 0, kMaxSeed));
   spec.noise = !options.has("no-noise");
-  if (options.has("target")) {
-    const std::vector<double> target = numberList(options.get("target", ""), "target", kTargetMm);
-    if (target.size() != 3) throw std::invalid_argument("--target takes x,y,z in mm");
-    spec.target_in_flange = Eigen::Vector3d(target[0], target[1], target[2]) * 1e-3;
-  }
-  if (options.has("pose")) {
-    const std::vector<double> pose = numberList(options.get("pose", ""), "pose", kAngleDeg);
-    if (static_cast<int>(pose.size()) != robot->dof()) {
-      throw std::invalid_argument("--pose takes " + std::to_string(robot->dof()) + " joint angles in degrees");
-    }
-    JointVector q(robot->dof());
-    for (int j = 0; j < robot->dof(); ++j) q[j] = pose[j] * kDegree;
-    spec.stiffness.pose = q;
-    spec.sweep.pose = q;
-  }
-  spec.sweep.joint = static_cast<int>(options.integer("joint", 2, 1, kMaxJoints)) - 1;
-  spec.sweep.from_rad = options.number("from", spec.sweep.from_rad / kDegree, kAngleDeg) * kDegree;
-  spec.sweep.to_rad = options.number("to", spec.sweep.to_rad / kDegree, kAngleDeg) * kDegree;
-  spec.sweep.step_rad = options.number("step", spec.sweep.step_rad / kDegree, {0.0, 360.0, true}) * kDegree;
-  spec.sweep.settle_s = options.number("settle", spec.sweep.settle_s, {0.0, 3600.0, true});
-  spec.sweep.cycles = static_cast<int>(options.integer("cycles", spec.sweep.cycles, 1, kMaxCycles));
-  spec.random.count = static_cast<int>(options.integer("count", spec.random.count, 1, kMaxRandomPoses));
-  spec.stiffness.global_poses =
-      static_cast<int>(options.integer("global-poses", spec.stiffness.global_poses, 0, kMaxGlobalPoses));
-  if (options.has("warm-up")) readWarmUp(options.get("warm-up", ""), spec.temperature);
-  if (options.has("plant")) {
-    if (!setup.parameters.hasDrives()) {
-      throw ParameterError(truth_path + ": no \"plant\" object (drives and controller gains) for the plant");
-    }
-    spec.drives = setup.parameters.drives;
-  }
+  readCampaignOptions(options, setup, spec);
 
   std::printf("jointcomp simulate: %s campaign of robot '%s'\n  truth %s\n", protocolName(spec.protocol).c_str(),
               robot->name.c_str(), spec.metadata["truth"].c_str());
-  std::printf(
-      "  instruments: tracker 1 sigma = %.1f um + %.1f um/m from (%.0f, %.0f, %.0f) mm; levels 1 sigma = %.4f deg%s\n",
-      spec.tracker.constant_m * 1e6, spec.tracker.per_metre * 1e6, spec.tracker.tracker_position.x() * 1e3,
-      spec.tracker.tracker_position.y() * 1e3, spec.tracker.tracker_position.z() * 1e3, spec.level.sigma_rad / kDegree,
-      spec.noise ? "" : " (noise off)");
+  printInstruments(spec);
   const MeasurementCampaign campaign = simulateCampaign(truth, spec, [](const std::string& what) {
     std::printf("  %s\n", what.c_str());
     std::fflush(stdout);

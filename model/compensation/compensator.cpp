@@ -155,43 +155,109 @@ bool Compensator::evaluateCommandEffects(const JointContext& ctx, bool reuse_anc
   return slopes_known;
 }
 
+double Compensator::startAtFixedErrors(const JointContext& ctx, JointVector& reference) const {
+  double fixed_check = 0.0;  // x * 0 is 0 for a finite x and not a number otherwise
+  for (Eigen::Index j = 0; j < ctx.q.size(); ++j) {
+    reference[j] = ctx.q[j] - fixed_dq_[j];
+    fixed_check += reference[j] * 0.0;
+  }
+  return fixed_check;
+}
+
+void Compensator::activeMotorAngles(JointContext& ctx) const {
+  // Each row's nonzero terms summed from 0.0 as motorAngles sums them, so the same bits.
+  for (int a = 0; a < active_count_; ++a) {
+    const int i = active_joints_[a];
+    double sum = 0.0;
+    for (int e = gear_row_start_[i]; e < gear_row_start_[i + 1]; ++e) {
+      sum += gear_values_[e] * ctx.command[gear_columns_[e]];
+    }
+    ctx.motor[i] = sum;
+  }
+}
+
+double Compensator::plainStep(const JointContext& ctx, JointVector& reference, bool& finite) const {
+  const int* active = active_joints_.data();
+  // Their sum is finite when every change is (without a branch per joint); only when it is not are the
+  // changes searched for the first that is not (a finite sum's overflow is no such change).
+  double residual = 0.0, change_sum = 0.0;
+  for (int a = 0; a < active_count_; ++a) {
+    const int j = active[a];
+    const double next = ctx.q[j] - dq_[j];
+    const double change = std::abs(next - ctx.command[j]);
+    residual = std::max(residual, change);
+    change_sum += change;
+    reference[j] = next;
+  }
+  finite = true;
+  for (int a = 0; a < active_count_ && !std::isfinite(change_sum); ++a) {
+    const int j = active[a];
+    const double change = std::abs(reference[j] - ctx.command[j]);
+    if (!std::isfinite(change)) {
+      finite = false;
+      residual = change;
+      break;
+    }
+  }
+  return residual;
+}
+
+void Compensator::higherOrderStep(JointContext& ctx, const JointVector& reference) const {
+  // The Newton step and one step more, on the cubic Taylor model of the error about the command, from the
+  // Newton step: the command then misses the fixed point by the model's fourth-order remainder instead of
+  // Newton's second-order term. On the RX170's spiral the first step lands within about 1e-14 rad instead
+  // of 2e-9, and a lone point meets the 1e-12 tolerance at its second evaluation of the error, not its
+  // third.
+  for (int a = 0; a < active_count_; ++a) {
+    const int j = active_joints_[a];
+    const double gear = gear_diagonal_[j];
+    const double error_per_command = slope_[j] * gear;
+    const double derivative = 1.0 + error_per_command;
+    const double newton = (reference[j] - ctx.command[j]) / derivative;
+    const double curvature = second_[j] * gear * gear, third_order = third_[j] * gear * gear * gear;
+    const double model = newton * newton * (0.5 * curvature + newton * third_order * (1.0 / 6.0));
+    const double model_slope = derivative + newton * (curvature + 0.5 * newton * third_order);
+    double correction = -model / model_slope;
+    if (!(std::abs(correction) <= 0.5 * std::abs(newton))) correction = 0.0;  // beyond the model's reach
+    // (a slope beyond kLargestNewtonSlope, or not a number: the plain step, as newtonStep)
+    ctx.command[j] +=
+        std::abs(error_per_command) <= kLargestNewtonSlope ? newton + correction : reference[j] - ctx.command[j];
+  }
+}
+
+void Compensator::newtonStep(JointContext& ctx, const JointVector& reference, bool slopes_known) const {
+  for (int a = 0; a < active_count_; ++a) {
+    const int j = active_joints_[a];
+    const double error_per_command = slopes_known ? slope_[j] * gear_diagonal_[j] : 0.0;
+    const double step = reference[j] - ctx.command[j];
+    // (not a number fails the test: the plain step)
+    ctx.command[j] += std::abs(error_per_command) <= kLargestNewtonSlope ? step / (1.0 + error_per_command) : step;
+  }
+}
+
 FixedPointReport Compensator::iterate(JointContext& ctx, JointVector& reference, bool continue_anchors,
                                       bool cold_start) {
-  const Robot& robot = model_.robot();
   const Eigen::Index n = ctx.q.size();
   dq_.resize(n);
   slope_.resize(n);
   reference.resize(n);
   FixedPointReport report;
   // A joint that does not iterate is at its fixed point (its command is Q_theo less its fixed errors, the
-  // map's image of any command): the loops below visit the active joints only.
-  double fixed_check = 0.0;  // x * 0 is 0 for a finite x and not a number otherwise
-  for (Eigen::Index j = 0; j < n; ++j) {
-    reference[j] = ctx.q[j] - fixed_dq_[j];
-    fixed_check += reference[j] * 0.0;
-  }
-  const int* active = active_joints_.data();
+  // map's image of any command): the steps below visit the active joints only.
+  const double fixed_check = startAtFixedErrors(ctx, reference);
   // (A command-independent error that is not finite has no fixed point: no iteration, not converged.)
   report.iterations = 1;
   report.residual = fixed_check;
   ctx.motor.resize(n);
   for (; fixed_check == 0.0 && report.iterations <= options_.max_iterations; ++report.iterations) {
-    // The motors the errors read, those of the active joints (all motors once the iteration ends): each row's
-    // nonzero terms summed from 0.0 as motorAngles sums them, so the same bits.
-    for (int a = 0; a < active_count_; ++a) {
-      const int i = active[a];
-      double sum = 0.0;
-      for (int e = gear_row_start_[i]; e < gear_row_start_[i + 1]; ++e) {
-        sum += gear_values_[e] * ctx.command[gear_columns_[e]];
-      }
-      ctx.motor[i] = sum;
-    }
+    // The motors the errors read, those of the active joints (all motors once the iteration ends).
+    activeMotorAngles(ctx);
     // The first step from a cold start is long (the whole command-dependent error, 1e-4 rad on the RX170): for
     // it the error's second and third derivatives too, which harmonics give at little cost (the
-    // higher-order step below). A later step, or the first from a near guess, is short enough for Newton.
+    // higher-order step). A later step, or the first from a near guess, is short enough for Newton.
     const bool higher_order = cold_start && report.iterations == 1 && derivatives_known_;
     for (int a = 0; a < active_count_; ++a) {
-      const int j = active[a];
+      const int j = active_joints_[a];
       dq_[j] = fixed_dq_[j];
       slope_[j] = 0.0;
     }
@@ -199,28 +265,8 @@ FixedPointReport Compensator::iterate(JointContext& ctx, JointVector& reference,
     // along a path (continue_anchors) the first is within one of the previous point's.
     const bool slopes_known = evaluateCommandEffects(ctx, continue_anchors || report.iterations > 1, higher_order);
     // The stopping test of the plain fixed point: how far its map Q_theo - dQ(command) moves the command.
-    // Their sum is finite when every change is (without a branch per joint); only when it is not are the
-    // changes searched for the first that is not (a finite sum's overflow is no such change).
-    double residual = 0.0, change_sum = 0.0;
-    for (int a = 0; a < active_count_; ++a) {
-      const int j = active[a];
-      const double next = ctx.q[j] - dq_[j];
-      const double change = std::abs(next - ctx.command[j]);
-      residual = std::max(residual, change);
-      change_sum += change;
-      reference[j] = next;
-    }
     bool finite = true;
-    for (int a = 0; a < active_count_ && !std::isfinite(change_sum); ++a) {
-      const int j = active[a];
-      const double change = std::abs(reference[j] - ctx.command[j]);
-      if (!std::isfinite(change)) {
-        finite = false;
-        residual = change;
-        break;
-      }
-    }
-    report.residual = residual;
+    report.residual = plainStep(ctx, reference, finite);
     if (!iterate_ || report.residual <= options_.tolerance) {
       report.converged = finite;
       break;
@@ -229,40 +275,15 @@ FixedPointReport Compensator::iterate(JointContext& ctx, JointVector& reference,
     // Newton on each joint: the error of joint j moves with its command by slope_j * G_jj (through its own
     // motor; a coupled motor's other terms are left to the iteration, which they slow only by their size).
     if (higher_order) {
-      // And one Newton step more, on the cubic Taylor model of the error about the command, from the Newton
-      // step: the command then misses the fixed point by the model's fourth-order remainder instead of
-      // Newton's second-order term. On the RX170's spiral the first step lands within about 1e-14 rad instead
-      // of 2e-9, and a lone point meets the 1e-12 tolerance at its second evaluation of the error, not its
-      // third. The stopping test is the same.
-      for (int a = 0; a < active_count_; ++a) {
-        const int j = active[a];
-        const double gear = gear_diagonal_[j];
-        const double error_per_command = slope_[j] * gear;
-        const double derivative = 1.0 + error_per_command;
-        const double newton = (reference[j] - ctx.command[j]) / derivative;
-        const double curvature = second_[j] * gear * gear, third_order = third_[j] * gear * gear * gear;
-        const double model = newton * newton * (0.5 * curvature + newton * third_order * (1.0 / 6.0));
-        const double model_slope = derivative + newton * (curvature + 0.5 * newton * third_order);
-        double correction = -model / model_slope;
-        if (!(std::abs(correction) <= 0.5 * std::abs(newton))) correction = 0.0;  // beyond the model's reach
-        // (a slope beyond kLargestNewtonSlope, or not a number: the plain step, as below)
-        ctx.command[j] +=
-            std::abs(error_per_command) <= kLargestNewtonSlope ? newton + correction : reference[j] - ctx.command[j];
-      }
-      continue;
-    }
-    for (int a = 0; a < active_count_; ++a) {
-      const int j = active[a];
-      const double error_per_command = slopes_known ? slope_[j] * gear_diagonal_[j] : 0.0;
-      const double step = reference[j] - ctx.command[j];
-      // (not a number fails the test: the plain step)
-      ctx.command[j] += std::abs(error_per_command) <= kLargestNewtonSlope ? step / (1.0 + error_per_command) : step;
+      higherOrderStep(ctx, reference);
+    } else {
+      newtonStep(ctx, reference, slopes_known);
     }
   }
   report.iterations = std::min(report.iterations, options_.max_iterations);
   for (Eigen::Index j = 0; j < n; ++j) ctx.command[j] = reference[j];  // element-wise: no store-forwarding stall
   motorAngles(ctx.command, ctx.motor);
-  if (report.converged) requireWithinLimits(robot, reference);
+  if (report.converged) requireWithinLimits(model_.robot(), reference);
   return report;
 }
 

@@ -49,6 +49,18 @@ private:
   // previous call are a valid start; cold_start: the start is Q_theo less the command-independent errors (not a
   // guess), a whole command-dependent error from the fixed point.
   FixedPointReport iterate(JointContext& ctx, JointVector& reference, bool continue_anchors, bool cold_start);
+  // The steps of iterate (inline: defined and called in compensator.cpp only, on the hot path). Every joint's reference
+  // Q_theo less its command-independent errors; returns 0 when they are all finite (not a number otherwise).
+  inline double startAtFixedErrors(const JointContext& ctx, JointVector& reference) const;
+  // ctx.motor of the active joints from ctx.command.
+  inline void activeMotorAngles(JointContext& ctx) const;
+  // The plain map Q_theo - dQ(command) of the active joints into reference; returns how far it moves the
+  // command (the largest change), with finite false and that change when one is not finite.
+  inline double plainStep(const JointContext& ctx, JointVector& reference, bool& finite) const;
+  // The active joints' commands moved toward reference: by a Newton step on each joint (where the slope is known
+  // and small enough, else the plain step), or by the higher-order step from dQ's second and third derivatives.
+  inline void newtonStep(JointContext& ctx, const JointVector& reference, bool slopes_known) const;
+  inline void higherOrderStep(JointContext& ctx, const JointVector& reference) const;
   // motor = G * command.
   void motorAngles(const JointVector& command, JointVector& motor) const;
 

@@ -234,6 +234,62 @@ Path straightLine(const Eigen::Vector3d& start, const Eigen::Vector3d& end) {
   return polyline({start, end});
 }
 
+namespace {
+
+constexpr std::array<const char*, 3> kAxisNames = {"x", "y", "z"};
+
+// The cells (0-based) of x, y and z in a path file's header; `where` (file:line: ) starts the error when one
+// is missing or repeated.
+std::array<std::size_t, 3> axisColumns(const std::vector<std::string>& header, const std::string& where) {
+  std::array<std::size_t, 3> axis_column{};
+  for (std::size_t axis = 0; axis < 3; ++axis) {
+    const auto first = std::find(header.begin(), header.end(), kAxisNames[axis]);
+    if (first == header.end()) {
+      throw InvalidArgument(where + "header has no column '" + kAxisNames[axis] +
+                            "' (x, y, z in millimetres are required)");
+    }
+    const auto column = static_cast<std::size_t>(std::distance(header.begin(), first));
+    if (std::find(first + 1, header.end(), kAxisNames[axis]) != header.end()) {
+      const auto again =
+          static_cast<std::size_t>(std::distance(header.begin(), std::find(first + 1, header.end(), kAxisNames[axis])));
+      throw InvalidArgument(where + "column " + std::to_string(again + 1) + " ('" + kAxisNames[axis] +
+                            "') repeats column " + std::to_string(column + 1));
+    }
+    axis_column[axis] = column;
+  }
+  return axis_column;
+}
+
+// The point of a data row, in metres, from its x, y and z cells (millimetres); the row must have the header's
+// cell count (the header on line header_line). `where` (file:line: ) starts the error.
+Eigen::Vector3d pointOfRow(const std::vector<std::string_view>& cells, const std::vector<std::string>& header,
+                           std::size_t header_line, const std::array<std::size_t, 3>& axis_column,
+                           const std::string& where) {
+  if (cells.size() != header.size()) {
+    const std::size_t column = std::min(cells.size(), header.size()) + 1;
+    const std::string problem = cells.size() < header.size()
+                                    ? "column " + std::to_string(column) + " ('" + header[column - 1] + "') is missing"
+                                    : "column " + std::to_string(column) + " is not in the header";
+    throw InvalidArgument(where + "expected " + std::to_string(header.size()) + " cells as in the header (line " +
+                          std::to_string(header_line) + "), found " + std::to_string(cells.size()) + ": " + problem);
+  }
+  Eigen::Vector3d point;
+  for (std::size_t axis = 0; axis < 3; ++axis) {
+    const std::size_t column = axis_column[axis];
+    double value = 0.0;
+    const CellParse result = parseCell(cells[column], value);
+    if (result != CellParse::ok) {
+      throw InvalidArgument(where + "column " + std::to_string(column + 1) + " ('" + kAxisNames[axis] +
+                            "'): " + (result == CellParse::not_finite ? "non-finite value '" : "non-numeric cell '") +
+                            std::string(cells[column]) + "'");
+    }
+    point[static_cast<Eigen::Index>(axis)] = value * kMillimetre;
+  }
+  return point;
+}
+
+}  // namespace
+
 Path polylineFromCsv(const std::string& file_path) {
   std::ifstream file(file_path);
   if (!file) {
@@ -243,7 +299,6 @@ Path polylineFromCsv(const std::string& file_path) {
     return file_path + ":" + std::to_string(line_number) + ": ";
   };
 
-  static constexpr std::array<const char*, 3> kAxisNames = {"x", "y", "z"};
   std::array<std::size_t, 3> axis_column{};  // 0-based cell index of x, y, z
   std::vector<std::string> header;
   std::size_t header_line = 0;
@@ -263,46 +318,11 @@ Path polylineFromCsv(const std::string& file_path) {
     if (header.empty()) {
       header_line = line_number;
       for (const std::string_view cell : cells) header.push_back(lowerCase(unquoted(cell)));
-      for (std::size_t axis = 0; axis < 3; ++axis) {
-        const auto first = std::find(header.begin(), header.end(), kAxisNames[axis]);
-        if (first == header.end()) {
-          throw InvalidArgument(at_line(line_number) + "header has no column '" + kAxisNames[axis] +
-                                "' (x, y, z in millimetres are required)");
-        }
-        const auto column = static_cast<std::size_t>(std::distance(header.begin(), first));
-        if (std::find(first + 1, header.end(), kAxisNames[axis]) != header.end()) {
-          const auto again = static_cast<std::size_t>(
-              std::distance(header.begin(), std::find(first + 1, header.end(), kAxisNames[axis])));
-          throw InvalidArgument(at_line(line_number) + "column " + std::to_string(again + 1) + " ('" +
-                                kAxisNames[axis] + "') repeats column " + std::to_string(column + 1));
-        }
-        axis_column[axis] = column;
-      }
+      axis_column = axisColumns(header, at_line(line_number));
       continue;
     }
 
-    if (cells.size() != header.size()) {
-      const std::size_t column = std::min(cells.size(), header.size()) + 1;
-      const std::string problem =
-          cells.size() < header.size()
-              ? "column " + std::to_string(column) + " ('" + header[column - 1] + "') is missing"
-              : "column " + std::to_string(column) + " is not in the header";
-      throw InvalidArgument(at_line(line_number) + "expected " + std::to_string(header.size()) +
-                            " cells as in the header (line " + std::to_string(header_line) + "), found " +
-                            std::to_string(cells.size()) + ": " + problem);
-    }
-    Eigen::Vector3d point;
-    for (std::size_t axis = 0; axis < 3; ++axis) {
-      const std::size_t column = axis_column[axis];
-      double value = 0.0;
-      const CellParse result = parseCell(cells[column], value);
-      if (result != CellParse::ok) {
-        throw InvalidArgument(at_line(line_number) + "column " + std::to_string(column + 1) + " ('" + kAxisNames[axis] +
-                              "'): " + (result == CellParse::not_finite ? "non-finite value '" : "non-numeric cell '") +
-                              std::string(cells[column]) + "'");
-      }
-      point[static_cast<Eigen::Index>(axis)] = value * kMillimetre;
-    }
+    const Eigen::Vector3d point = pointOfRow(cells, header, header_line, axis_column, at_line(line_number));
     if (points.empty()) first_point_line = line_number;
     last_point_line = line_number;
     points.push_back(point);

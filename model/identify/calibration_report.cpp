@@ -171,6 +171,82 @@ std::string describeInstrumentSetUps(const GeometricCalibrationResult& result, c
   return text.str();
 }
 
+namespace {
+
+// Each parameter of the fit: nominal and fitted value, and its sigma or why it was held.
+nlohmann::ordered_json parametersJson(const GeometricCalibrationResult& result) {
+  nlohmann::ordered_json parameters = nlohmann::ordered_json::array();
+  for (const ParameterEstimate& p : result.parameters) {
+    nlohmann::ordered_json entry = {
+        {"name", p.name},  {"unit", p.unit}, {"nominal", p.nominal}, {"value", p.value}, {"identified", p.identified},
+        {"pivot", p.pivot}};
+    if (p.identified) {
+      entry["sigma"] = p.sigma;
+    } else {
+      entry["fixed_because"] = p.fixed_because;
+      nlohmann::ordered_json with = nlohmann::ordered_json::array();
+      for (const auto& r : p.redundant_with) with.push_back({{"name", r.first}, {"ratio", r.second}});
+      if (!with.empty()) entry["redundant_with"] = with;
+    }
+    parameters.push_back(entry);
+  }
+  return parameters;
+}
+
+// The identified parameters' correlation matrix, by name.
+nlohmann::ordered_json correlationJson(const GeometricCalibrationResult& result) {
+  nlohmann::ordered_json names = nlohmann::ordered_json::array(), matrix = nlohmann::ordered_json::array();
+  const Eigen::VectorXd sigma = result.covariance.diagonal().cwiseMax(0.0).cwiseSqrt();
+  for (std::size_t a = 0; a < result.free.size(); ++a) {
+    names.push_back(result.names[static_cast<std::size_t>(result.free[a])]);
+    nlohmann::ordered_json row = nlohmann::ordered_json::array();
+    for (std::size_t b = 0; b < result.free.size(); ++b) {
+      const double scale = sigma[a] * sigma[b];
+      row.push_back(a == b ? 1.0 : scale > 0.0 ? result.covariance(a, b) / scale : 0.0);
+    }
+    matrix.push_back(row);
+  }
+  return {{"parameters", names}, {"matrix", matrix}};
+}
+
+// The fitted campaigns (`files`, as fittedFiles names them) and the held-out ones, before and after.
+nlohmann::ordered_json campaignsJson(const CalibrationRun& run, const std::vector<std::string>& files) {
+  const GeometricCalibrationResult& result = run.result;
+  nlohmann::ordered_json campaigns = nlohmann::ordered_json::array();
+  const bool several = result.sources.size() > 1;
+  for (std::size_t c = 0; c < result.sources.size(); ++c) {
+    const auto [before, after] =
+        several ? campaignStatistics(result, static_cast<int>(c)) : std::make_pair(result.before, result.after);
+    nlohmann::ordered_json entry = {{"file", fileOf(files, result, c)},
+                                    {"role", "calibration"},
+                                    {"rows", after.rows},
+                                    {"before", errorStatisticsJson(before)},
+                                    {"after", errorStatisticsJson(after)}};
+    if (several) {
+      entry["setup"] = result.setup_of_campaign[c] + 1;
+    } else {
+      entry["downweighted_rows"] = result.downweighted_rows;
+      entry["downweighted_below_half_rows"] = result.outlier_rows;
+    }
+    campaigns.push_back(entry);
+  }
+  for (const CalibrationHoldoutRun& held : run.holdouts) {
+    campaigns.push_back({{"file", held.name},
+                         {"role", result.frame_fitted ? "holdout (robot fixed, instrument frame re-fitted)"
+                                                      : "holdout (robot fixed, base frame)"},
+                         {"rows", held.after.statistics.rows},
+                         {"skipped_not_measured", held.after.skipped_rows},
+                         {"before", errorStatisticsJson(held.before.statistics)},
+                         {"after", errorStatisticsJson(held.after.statistics)},
+                         {"downweighted_rows", held.after.downweighted_rows},
+                         {"downweighted_below_half_rows", held.after.outlier_rows},
+                         {"after_with_calibration_frame", errorStatisticsJson(held.shared_frame.statistics)}});
+  }
+  return campaigns;
+}
+
+}  // namespace
+
 nlohmann::ordered_json calibrationReportJson(const CalibrationRun& run, const GeometricCalibrationOptions& options,
                                              const CalibrationSources& sources) {
   const GeometricCalibrationResult& result = run.result;
@@ -202,72 +278,16 @@ nlohmann::ordered_json calibrationReportJson(const CalibrationRun& run, const Ge
                                {"fixed", result.names.size() - result.free.size()},
                                {"condition_number_at_start", result.condition_number_at_start},
                                {"condition_number", result.condition_number}};
-  nlohmann::ordered_json parameters = nlohmann::ordered_json::array();
-  for (const ParameterEstimate& p : result.parameters) {
-    nlohmann::ordered_json entry = {
-        {"name", p.name},  {"unit", p.unit}, {"nominal", p.nominal}, {"value", p.value}, {"identified", p.identified},
-        {"pivot", p.pivot}};
-    if (p.identified) {
-      entry["sigma"] = p.sigma;
-    } else {
-      entry["fixed_because"] = p.fixed_because;
-      nlohmann::ordered_json with = nlohmann::ordered_json::array();
-      for (const auto& r : p.redundant_with) with.push_back({{"name", r.first}, {"ratio", r.second}});
-      if (!with.empty()) entry["redundant_with"] = with;
-    }
-    parameters.push_back(entry);
-  }
-  report["parameters"] = parameters;
+  report["parameters"] = parametersJson(result);
   // The identified parameters' correlation (from the fit's covariance): what Monte Carlo studies need
   // beyond the sigmas, since placements, offsets and the target trade off against each other.
   if (result.covariance.rows() == static_cast<Eigen::Index>(result.free.size()) && !result.free.empty()) {
-    nlohmann::ordered_json names = nlohmann::ordered_json::array(), matrix = nlohmann::ordered_json::array();
-    const Eigen::VectorXd sigma = result.covariance.diagonal().cwiseMax(0.0).cwiseSqrt();
-    for (std::size_t a = 0; a < result.free.size(); ++a) {
-      names.push_back(result.names[static_cast<std::size_t>(result.free[a])]);
-      nlohmann::ordered_json row = nlohmann::ordered_json::array();
-      for (std::size_t b = 0; b < result.free.size(); ++b) {
-        const double scale = sigma[a] * sigma[b];
-        row.push_back(a == b ? 1.0 : scale > 0.0 ? result.covariance(a, b) / scale : 0.0);
-      }
-      matrix.push_back(row);
-    }
-    report["correlation"] = {{"parameters", names}, {"matrix", matrix}};
+    report["correlation"] = correlationJson(result);
   }
   report["compliance_left_out"] = run.compliance_left_out;
-  nlohmann::ordered_json campaigns = nlohmann::ordered_json::array();
   const std::vector<std::string> files = fittedFiles(sources);
-  const bool several = result.sources.size() > 1;
-  if (several) report["instrument_setups"] = instrumentSetUpsJson(result, files);
-  for (std::size_t c = 0; c < result.sources.size(); ++c) {
-    const auto [before, after] =
-        several ? campaignStatistics(result, static_cast<int>(c)) : std::make_pair(result.before, result.after);
-    nlohmann::ordered_json entry = {{"file", fileOf(files, result, c)},
-                                    {"role", "calibration"},
-                                    {"rows", after.rows},
-                                    {"before", errorStatisticsJson(before)},
-                                    {"after", errorStatisticsJson(after)}};
-    if (several) {
-      entry["setup"] = result.setup_of_campaign[c] + 1;
-    } else {
-      entry["downweighted_rows"] = result.downweighted_rows;
-      entry["downweighted_below_half_rows"] = result.outlier_rows;
-    }
-    campaigns.push_back(entry);
-  }
-  for (const CalibrationHoldoutRun& held : run.holdouts) {
-    campaigns.push_back({{"file", held.name},
-                         {"role", result.frame_fitted ? "holdout (robot fixed, instrument frame re-fitted)"
-                                                      : "holdout (robot fixed, base frame)"},
-                         {"rows", held.after.statistics.rows},
-                         {"skipped_not_measured", held.after.skipped_rows},
-                         {"before", errorStatisticsJson(held.before.statistics)},
-                         {"after", errorStatisticsJson(held.after.statistics)},
-                         {"downweighted_rows", held.after.downweighted_rows},
-                         {"downweighted_below_half_rows", held.after.outlier_rows},
-                         {"after_with_calibration_frame", errorStatisticsJson(held.shared_frame.statistics)}});
-  }
-  report["campaigns"] = campaigns;
+  if (result.sources.size() > 1) report["instrument_setups"] = instrumentSetUpsJson(result, files);
+  report["campaigns"] = campaignsJson(run, files);
   report["pose_predictability"] = posePredictabilityJson(run.pose);
   report["outputs"] = sources.outputs;
   return report;

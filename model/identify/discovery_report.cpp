@@ -110,45 +110,36 @@ std::string discoveryStepLabel(const DiscoveryStep& step) {
   return step.type + " " + step.joint_name + step.detail;
 }
 
-nlohmann::ordered_json discoveryReportJson(const DiscoveryResult& result, const DiscoveryOptions& options,
-                                           const DiscoverySources& sources, double seconds) {
-  nlohmann::ordered_json report;
-  report["format"] = "jointcomp-discovery-report/1";
-  report["robot"] = result.model.robot().name;
-  report["urdf"] = sources.urdf;
-  report["params"] =
-      sources.parameters.empty() ? nlohmann::ordered_json(nullptr) : nlohmann::ordered_json(sources.parameters);
-  report["campaigns"] = sources.campaigns;
-  report["held_out"] = sources.held_out;
-  report["vocabulary"] = discoveryEffectTypes();
-  report["selection"] = {{"cross_validation", "time-blocked K-fold (blocks of consecutive rows)"},
-                         {"folds", options.folds},
-                         {"min_cv_gain", options.min_cv_gain},
-                         {"criterion", "dBIC = N ln(RSS_c/RSS_0) + dk ln N + 2 ln(candidates) < 0"},
-                         {"transfer",
-                          "predicted from the other groups, no time block, joint-space part (at least "
-                          "min_group_share of the rows) or range of a candidate's joint angle more than 1 % and "
-                          "transfer_significance standard errors worse"},
-                         {"transfer_significance", options.transfer_significance},
-                         {"min_group_share", options.min_group_share},
-                         {"angle_ranges", options.angle_ranges},
-                         {"pairs", options.pairs},
-                         {"table_knots", options.table_knots},
-                         {"max_prior_weight", options.max_prior_weight},
-                         {"max_ridge_weight", options.max_ridge_weight},
-                         {"ties",
-                          "within one standard error of the fold-wise CV differences or a quarter of "
-                          "min_cv_gain: the fewest parameters, then the lowest BIC"},
-                         {"base", baseName(options)},
-                         {"max_steps", options.max_steps},
-                         {"max_harmonic_order", options.max_harmonic_order},
-                         {"candidates", result.candidates}};
-  report["fitted_rows"] = result.fitted_rows;
-  if (sources.campaigns.size() > 1)
-    report["instrument_setups"] = instrumentSetUpsJson(result.calibration, sources.campaigns);
-  report["coverage"] = coverageJson(result, sources);
-  report["initial"] = stateJson(result.initial, sources);
-  report["initial"]["joint_residual_rms_rad"] = result.joint_residual_rms_initial;
+namespace {
+
+// How discovery chose: the cross-validation, the criterion, the transfer check and their settings.
+nlohmann::ordered_json selectionJson(const DiscoveryResult& result, const DiscoveryOptions& options) {
+  return {{"cross_validation", "time-blocked K-fold (blocks of consecutive rows)"},
+          {"folds", options.folds},
+          {"min_cv_gain", options.min_cv_gain},
+          {"criterion", "dBIC = N ln(RSS_c/RSS_0) + dk ln N + 2 ln(candidates) < 0"},
+          {"transfer",
+           "predicted from the other groups, no time block, joint-space part (at least "
+           "min_group_share of the rows) or range of a candidate's joint angle more than 1 % and "
+           "transfer_significance standard errors worse"},
+          {"transfer_significance", options.transfer_significance},
+          {"min_group_share", options.min_group_share},
+          {"angle_ranges", options.angle_ranges},
+          {"pairs", options.pairs},
+          {"table_knots", options.table_knots},
+          {"max_prior_weight", options.max_prior_weight},
+          {"max_ridge_weight", options.max_ridge_weight},
+          {"ties",
+           "within one standard error of the fold-wise CV differences or a quarter of "
+           "min_cv_gain: the fewest parameters, then the lowest BIC"},
+          {"base", baseName(options)},
+          {"max_steps", options.max_steps},
+          {"max_harmonic_order", options.max_harmonic_order},
+          {"candidates", result.candidates}};
+}
+
+// Each step: the effect added, its parameters, the evidence for it, and the errors before and after.
+nlohmann::ordered_json stepsJson(const DiscoveryResult& result, const DiscoverySources& sources) {
   nlohmann::ordered_json steps = nlohmann::ordered_json::array();
   int index = 0;
   for (const DiscoveryStep& s : result.steps) {
@@ -181,11 +172,10 @@ nlohmann::ordered_json discoveryReportJson(const DiscoveryResult& result, const 
     entry["after"] = stateJson(s.after, sources);
     steps.push_back(entry);
   }
-  report["steps"] = steps;
-  report["final"] = stateJson(result.final_state, sources);
-  report["final"]["joint_residual_rms_rad"] = result.joint_residual_rms_final;
-  report["stop_reason"] = result.stop_reason;
-  report["rejected_at_stop"] = result.rejected_at_stop;
+  return steps;
+}
+
+nlohmann::ordered_json noiseFloorJson(const DiscoveryResult& result) {
   // The final error over the floor: of the first held-out campaign (or the fitted rows), and of each held-out one.
   auto overFloor = [&](double rms) {
     return result.noise_floor > 0.0 ? nlohmann::ordered_json(rms / result.noise_floor)
@@ -195,10 +185,38 @@ nlohmann::ordered_json discoveryReportJson(const DiscoveryResult& result, const 
       result.final_state.heldout.empty() ? result.final_state.fitted.rms : result.final_state.heldout[0].rms;
   nlohmann::ordered_json per_heldout = nlohmann::ordered_json::array();
   for (const ErrorStatistics& h : result.final_state.heldout) per_heldout.push_back(overFloor(h.rms));
-  report["noise_floor"] = {{"rms_3d_mm", result.noise_floor * 1e3},
-                           {"final_over_floor", overFloor(final_held)},
-                           {"fitted_over_floor", overFloor(result.final_state.fitted.rms)},
-                           {"held_out_over_floor", per_heldout}};
+  return {{"rms_3d_mm", result.noise_floor * 1e3},
+          {"final_over_floor", overFloor(final_held)},
+          {"fitted_over_floor", overFloor(result.final_state.fitted.rms)},
+          {"held_out_over_floor", per_heldout}};
+}
+
+}  // namespace
+
+nlohmann::ordered_json discoveryReportJson(const DiscoveryResult& result, const DiscoveryOptions& options,
+                                           const DiscoverySources& sources, double seconds) {
+  nlohmann::ordered_json report;
+  report["format"] = "jointcomp-discovery-report/1";
+  report["robot"] = result.model.robot().name;
+  report["urdf"] = sources.urdf;
+  report["params"] =
+      sources.parameters.empty() ? nlohmann::ordered_json(nullptr) : nlohmann::ordered_json(sources.parameters);
+  report["campaigns"] = sources.campaigns;
+  report["held_out"] = sources.held_out;
+  report["vocabulary"] = discoveryEffectTypes();
+  report["selection"] = selectionJson(result, options);
+  report["fitted_rows"] = result.fitted_rows;
+  if (sources.campaigns.size() > 1)
+    report["instrument_setups"] = instrumentSetUpsJson(result.calibration, sources.campaigns);
+  report["coverage"] = coverageJson(result, sources);
+  report["initial"] = stateJson(result.initial, sources);
+  report["initial"]["joint_residual_rms_rad"] = result.joint_residual_rms_initial;
+  report["steps"] = stepsJson(result, sources);
+  report["final"] = stateJson(result.final_state, sources);
+  report["final"]["joint_residual_rms_rad"] = result.joint_residual_rms_final;
+  report["stop_reason"] = result.stop_reason;
+  report["rejected_at_stop"] = result.rejected_at_stop;
+  report["noise_floor"] = noiseFloorJson(result);
   report["unexplained"] = unexplainedJson(result);
   report["not_candidates"] = nlohmann::ordered_json::array();
   report["seconds"] = seconds;

@@ -64,10 +64,10 @@ void findRedundancies(const Eigen::MatrixXd& jacobian, IdentifiabilityResult& re
 
 }  // namespace
 
-IdentifiabilityResult analyseIdentifiability(const Eigen::MatrixXd& jacobian, const std::vector<int>& priority,
-                                             const std::vector<double>& typical_change,
-                                             const IdentifiabilityOptions& options) {
-  const Eigen::Index m = jacobian.rows();
+namespace {
+
+void checkIdentifiabilityInputs(const Eigen::MatrixXd& jacobian, const std::vector<int>& priority,
+                                const std::vector<double>& typical_change, const IdentifiabilityOptions& options) {
   const Eigen::Index n = jacobian.cols();
   if (!priority.empty() && static_cast<Eigen::Index>(priority.size()) != n) {
     throw InvalidArgument("analyseIdentifiability: " + std::to_string(priority.size()) + " priorities for " +
@@ -81,16 +81,15 @@ IdentifiabilityResult analyseIdentifiability(const Eigen::MatrixXd& jacobian, co
   if (!(options.relative_pivot_threshold > 0.0 && options.relative_pivot_threshold < 1.0)) {
     throw InvalidArgument("analyseIdentifiability: the relative pivot threshold must lie in (0, 1)");
   }
+}
 
-  IdentifiabilityResult result;
-  result.pivot = Eigen::VectorXd::Zero(n);
-  result.column_norm.resize(n);
-  result.no_effect.assign(static_cast<std::size_t>(n), false);
-  result.redundant_with.resize(static_cast<std::size_t>(n));
-
-  // Unit-norm columns; those without effect take no part.
-  Eigen::MatrixXd work(m, n);
-  std::vector<int> remaining;
+// The Jacobian's columns scaled to unit norm into `work` (the column norms into result), and the columns with
+// an effect (beyond the no-effect tolerance over their typical change) into `remaining`; the others are zero.
+void normaliseColumns(const Eigen::MatrixXd& jacobian, const std::vector<double>& typical_change,
+                      const IdentifiabilityOptions& options, IdentifiabilityResult& result, Eigen::MatrixXd& work,
+                      std::vector<int>& remaining) {
+  const Eigen::Index m = jacobian.rows();
+  const Eigen::Index n = jacobian.cols();
   const double rows = static_cast<double>(std::max<Eigen::Index>(m, 1));
   for (Eigen::Index j = 0; j < n; ++j) {
     const double norm = jacobian.col(j).norm();
@@ -104,8 +103,15 @@ IdentifiabilityResult analyseIdentifiability(const Eigen::MatrixXd& jacobian, co
     work.col(j) = jacobian.col(j) / norm;
     remaining.push_back(static_cast<int>(j));
   }
+}
 
-  // Column-pivoted Gram-Schmidt (twice orthogonalised), pivots restricted to the highest priority class.
+// Column-pivoted Gram-Schmidt (twice orthogonalised) of the unit columns `work`, pivots restricted to the
+// highest priority class: the pivot order and each column's pivot (its norm off the columns before it) into
+// result; the columns left below the threshold stay in `remaining`.
+void pivotColumns(const std::vector<int>& priority, const IdentifiabilityOptions& options,
+                  IdentifiabilityResult& result, Eigen::MatrixXd& work, std::vector<int>& remaining) {
+  const Eigen::Index m = work.rows();
+  const Eigen::Index n = work.cols();
   Eigen::MatrixXd basis(m, n);
   int rank = 0;
   Eigen::VectorXd residual_norm = Eigen::VectorXd::Zero(n);
@@ -135,6 +141,29 @@ IdentifiabilityResult analyseIdentifiability(const Eigen::MatrixXd& jacobian, co
     for (int j : remaining) work.col(j) -= q * q.dot(work.col(j));
   }
   for (int j : remaining) result.pivot[j] = residual_norm[j];
+}
+
+}  // namespace
+
+IdentifiabilityResult analyseIdentifiability(const Eigen::MatrixXd& jacobian, const std::vector<int>& priority,
+                                             const std::vector<double>& typical_change,
+                                             const IdentifiabilityOptions& options) {
+  const Eigen::Index m = jacobian.rows();
+  const Eigen::Index n = jacobian.cols();
+  checkIdentifiabilityInputs(jacobian, priority, typical_change, options);
+
+  IdentifiabilityResult result;
+  result.pivot = Eigen::VectorXd::Zero(n);
+  result.column_norm.resize(n);
+  result.no_effect.assign(static_cast<std::size_t>(n), false);
+  result.redundant_with.resize(static_cast<std::size_t>(n));
+
+  // Unit-norm columns; those without effect take no part.
+  Eigen::MatrixXd work(m, n);
+  std::vector<int> remaining;
+  normaliseColumns(jacobian, typical_change, options, result, work, remaining);
+
+  pivotColumns(priority, options, result, work, remaining);
 
   result.kept = result.pivot_order;
   std::sort(result.kept.begin(), result.kept.end());

@@ -120,6 +120,76 @@ bool InverseKinematics::wrapIntoLimits(JointVector& q, const JointVector& seed) 
   return true;
 }
 
+int InverseKinematics::shoulderAngles(const Eigen::Isometry3d& target, const Eigen::Vector3d& wrist_target,
+                                      const JointVector& seed, double q1_candidates[2], bool& singular) const {
+  // Joint 1: the component of (wrist - point1) along the rotated axis 2 is fixed by the geometry.
+  const Eigen::Vector3d u = wrist_target - point1_;
+  const Eigen::Vector3d axis2_perp = projectOff(axis1_, axis2_);
+  const double along = axis1_.dot(axis2_);
+  const double cos_coefficient = axis2_perp.dot(u);
+  const double sin_coefficient = axis1_.cross(axis2_perp).dot(u);
+  const double wanted = axis2_.dot(wrist_centre_ - point1_) - along * axis1_.dot(u);
+  const double radius = std::hypot(cos_coefficient, sin_coefficient);
+  int q1_count = 0;
+  if (radius < kGeometryTolerance) {
+    if (std::abs(wanted) > 1e-9) throw UnreachableError(describe(target) + " is out of reach (wrist centre)");
+    singular = true;  // wrist centre on axis 1: joint 1 is free, keep the seed
+    q1_candidates[q1_count++] = seed[0];
+  } else {
+    const double ratio = wanted / radius;
+    if (std::abs(ratio) > 1.0 + 1e-12) throw UnreachableError(describe(target) + " is out of reach (wrist centre)");
+    const double phase = std::atan2(sin_coefficient, cos_coefficient);
+    const double spread = std::acos(std::max(-1.0, std::min(1.0, ratio)));
+    q1_candidates[q1_count++] = phase + spread;
+    if (spread > 1e-12) q1_candidates[q1_count++] = phase - spread;
+  }
+  return q1_count;
+}
+
+void InverseKinematics::addWristSolutions(const Eigen::Isometry3d& target, const JointVector& seed,
+                                          const std::array<double, 3>& arm, bool arm_singular,
+                                          std::array<IkSolution, 8>& solutions, int& count) {
+  const Eigen::Matrix3d rotation_zero = tool_at_zero_.linear();
+  // Wrist: Rot(u4,q4) Rot(u5,q5) Rot(u6,q6) = desired, with the axes at q = 0 (product of exponentials).
+  const Eigen::Matrix3d r123 = rotation(axis1_, arm[0]) * rotation(axis2_, arm[1]) * rotation(axis2_, arm[2]);
+  const Eigen::Matrix3d desired = r123.transpose() * target.linear() * rotation_zero.transpose();
+  const Eigen::Vector3d& u4 = wrist_axis_[0];
+  const Eigen::Vector3d& u5 = wrist_axis_[1];
+  const Eigen::Vector3d& u6 = wrist_axis_[2];
+  const Eigen::Vector3d p = u6;
+  const Eigen::Vector3d goal = desired * u6;
+  // Paden-Kahan subproblem 2: Rot(u4,q4) Rot(u5,q5) p = goal through c = Rot(u5,q5) p.
+  const double cross45 = u4.dot(u5);
+  const double denominator = cross45 * cross45 - 1.0;
+  const double alpha = (cross45 * u5.dot(p) - u4.dot(goal)) / denominator;
+  const double beta = (cross45 * u4.dot(goal) - u5.dot(p)) / denominator;
+  const Eigen::Vector3d normal = u4.cross(u5);
+  double gamma_squared =
+      (p.squaredNorm() - alpha * alpha - beta * beta - 2.0 * alpha * beta * cross45) / normal.squaredNorm();
+  if (gamma_squared < -1e-10) return;  // this wrist cannot reach that orientation
+  gamma_squared = std::max(0.0, gamma_squared);
+  const double gamma_values[2] = {std::sqrt(gamma_squared), -std::sqrt(gamma_squared)};
+  for (int c = 0; c < (gamma_squared > 1e-20 ? 2 : 1); ++c) {
+    const Eigen::Vector3d via = alpha * u4 + beta * u5 + gamma_values[c] * normal;
+    const double q5 = rotationTaking(u5, p, via);
+    bool wrist_singular = projectOff(u4, via).norm() < 1e-9;
+    const double q4 = wrist_singular ? seed[3] : rotationTaking(u4, via, goal);
+    const Eigen::Matrix3d remaining = (rotation(u4, q4) * rotation(u5, q5)).transpose() * desired;
+    const Eigen::Vector3d normal_to_6 = std::abs(u6.x()) < 0.9 ? u6.cross(Eigen::Vector3d::UnitX()).normalized()
+                                                               : u6.cross(Eigen::Vector3d::UnitY()).normalized();
+    const double q6 = rotationTaking(u6, normal_to_6, remaining * normal_to_6);
+    IkSolution solution;
+    solution.q.resize(6);
+    solution.q << arm[0], arm[1], arm[2], q4, q5, q6;
+    solution.singular = arm_singular || wrist_singular;
+    if (!wrapIntoLimits(solution.q, seed)) continue;
+    forwardKinematics(robot_, ws_, solution.q);
+    const Vector6 error = poseError(ws_.tool_pose, target);
+    if (error.head<3>().norm() > 1e-7 || error.tail<3>().norm() > 1e-7) continue;
+    if (count < 8) solutions[count++] = solution;
+  }
+}
+
 int InverseKinematics::allSolutions(const Eigen::Isometry3d& target, const JointVector& seed,
                                     std::array<IkSolution, 8>& solutions) {
   if (!closed_form_) {
@@ -131,31 +201,11 @@ int InverseKinematics::allSolutions(const Eigen::Isometry3d& target, const Joint
   if (!target.matrix().allFinite()) throw InvalidArgument("inverse kinematics target is not finite");
   // The wrist centre is fixed in the tool frame.
   const Eigen::Vector3d wrist_target = target * (tool_at_zero_.inverse() * wrist_centre_);
-  const Eigen::Matrix3d rotation_zero = tool_at_zero_.linear();
 
-  // Joint 1: the component of (wrist - point1) along the rotated axis 2 is fixed by the geometry.
-  const Eigen::Vector3d u = wrist_target - point1_;
-  const Eigen::Vector3d axis2_perp = projectOff(axis1_, axis2_);
-  const double along = axis1_.dot(axis2_);
-  const double cos_coefficient = axis2_perp.dot(u);
-  const double sin_coefficient = axis1_.cross(axis2_perp).dot(u);
-  const double wanted = axis2_.dot(wrist_centre_ - point1_) - along * axis1_.dot(u);
-  const double radius = std::hypot(cos_coefficient, sin_coefficient);
+  // Joint 1: one or two angles put the wrist centre in the plane of axes 2 and 3.
   double q1_candidates[2];
-  int q1_count = 0;
   bool shoulder_singular = false;
-  if (radius < kGeometryTolerance) {
-    if (std::abs(wanted) > 1e-9) throw UnreachableError(describe(target) + " is out of reach (wrist centre)");
-    shoulder_singular = true;  // wrist centre on axis 1: joint 1 is free, keep the seed
-    q1_candidates[q1_count++] = seed[0];
-  } else {
-    const double ratio = wanted / radius;
-    if (std::abs(ratio) > 1.0 + 1e-12) throw UnreachableError(describe(target) + " is out of reach (wrist centre)");
-    const double phase = std::atan2(sin_coefficient, cos_coefficient);
-    const double spread = std::acos(std::max(-1.0, std::min(1.0, ratio)));
-    q1_candidates[q1_count++] = phase + spread;
-    if (spread > 1e-12) q1_candidates[q1_count++] = phase - spread;
-  }
+  const int q1_count = shoulderAngles(target, wrist_target, seed, q1_candidates, shoulder_singular);
 
   // Joints 2 and 3: a planar two-link arm about the parallel axes 2 and 3.
   const Eigen::Vector3d upper_arm = projectOff(axis2_, point3_ - point2_);
@@ -182,44 +232,7 @@ int InverseKinematics::allSolutions(const Eigen::Isometry3d& target, const Joint
       const double q3 = elbow_candidates[b];
       const Eigen::Vector3d arm = upper_arm + rotation(axis2_, q3) * forearm;
       const double q2 = rotationTaking(axis2_, arm, reach);
-      // Wrist: Rot(u4,q4) Rot(u5,q5) Rot(u6,q6) = desired, with the axes at q = 0 (product of exponentials).
-      const Eigen::Matrix3d r123 = r1 * rotation(axis2_, q2) * rotation(axis2_, q3);
-      const Eigen::Matrix3d desired = r123.transpose() * target.linear() * rotation_zero.transpose();
-      const Eigen::Vector3d& u4 = wrist_axis_[0];
-      const Eigen::Vector3d& u5 = wrist_axis_[1];
-      const Eigen::Vector3d& u6 = wrist_axis_[2];
-      const Eigen::Vector3d p = u6;
-      const Eigen::Vector3d goal = desired * u6;
-      // Paden-Kahan subproblem 2: Rot(u4,q4) Rot(u5,q5) p = goal through c = Rot(u5,q5) p.
-      const double cross45 = u4.dot(u5);
-      const double denominator = cross45 * cross45 - 1.0;
-      const double alpha = (cross45 * u5.dot(p) - u4.dot(goal)) / denominator;
-      const double beta = (cross45 * u4.dot(goal) - u5.dot(p)) / denominator;
-      const Eigen::Vector3d normal = u4.cross(u5);
-      double gamma_squared =
-          (p.squaredNorm() - alpha * alpha - beta * beta - 2.0 * alpha * beta * cross45) / normal.squaredNorm();
-      if (gamma_squared < -1e-10) continue;  // this wrist cannot reach that orientation
-      gamma_squared = std::max(0.0, gamma_squared);
-      const double gamma_values[2] = {std::sqrt(gamma_squared), -std::sqrt(gamma_squared)};
-      for (int c = 0; c < (gamma_squared > 1e-20 ? 2 : 1); ++c) {
-        const Eigen::Vector3d via = alpha * u4 + beta * u5 + gamma_values[c] * normal;
-        const double q5 = rotationTaking(u5, p, via);
-        bool wrist_singular = projectOff(u4, via).norm() < 1e-9;
-        const double q4 = wrist_singular ? seed[3] : rotationTaking(u4, via, goal);
-        const Eigen::Matrix3d remaining = (rotation(u4, q4) * rotation(u5, q5)).transpose() * desired;
-        const Eigen::Vector3d normal_to_6 = std::abs(u6.x()) < 0.9 ? u6.cross(Eigen::Vector3d::UnitX()).normalized()
-                                                                   : u6.cross(Eigen::Vector3d::UnitY()).normalized();
-        const double q6 = rotationTaking(u6, normal_to_6, remaining * normal_to_6);
-        IkSolution solution;
-        solution.q.resize(6);
-        solution.q << q1, q2, q3, q4, q5, q6;
-        solution.singular = shoulder_singular || stretched || wrist_singular;
-        if (!wrapIntoLimits(solution.q, seed)) continue;
-        forwardKinematics(robot_, ws_, solution.q);
-        const Vector6 error = poseError(ws_.tool_pose, target);
-        if (error.head<3>().norm() > 1e-7 || error.tail<3>().norm() > 1e-7) continue;
-        if (count < 8) solutions[count++] = solution;
-      }
+      addWristSolutions(target, seed, {q1, q2, q3}, shoulder_singular || stretched, solutions, count);
     }
   }
   if (!any_reachable_position) throw UnreachableError(describe(target) + " is out of reach of the arm");

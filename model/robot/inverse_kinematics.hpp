@@ -47,6 +47,15 @@ public:
 private:
   IkSolution solveNumerically(const Eigen::Isometry3d& target, const JointVector& seed);
   bool wrapIntoLimits(JointVector& q, const JointVector& seed) const;
+  // allSolutions' steps. Joint 1's one or two angles (in q1_candidates; returns how many) that put the wrist
+  // centre at wrist_target in reach of the plane of axes 2 and 3; singular: the wrist centre on axis 1 (the
+  // seed's angle, joint 1 is free).
+  int shoulderAngles(const Eigen::Isometry3d& target, const Eigen::Vector3d& wrist_target, const JointVector& seed,
+                     double q1_candidates[2], bool& singular) const;
+  // The wrist angles (joints 4 to 6) that give target's orientation after joints 1 to 3 at `arm`: each solution
+  // within the limits that reaches target goes into solutions[count++] (up to 8).
+  void addWristSolutions(const Eigen::Isometry3d& target, const JointVector& seed, const std::array<double, 3>& arm,
+                         bool arm_singular, std::array<IkSolution, 8>& solutions, int& count);
 
   const Robot& robot_;
   IkOptions options_;
