@@ -22,6 +22,7 @@ packages=(
   clang libclang-rt-14-dev # sanitizers and libFuzzer
   valgrind                 # memcheck of the FMU importer test (test.sh, tests/load/run-load.sh)
   clang-format clang-tidy  # packaging/format.sh and packaging/tidy.sh keep the style and the checks
+  doxygen                  # the C API's reference (docs/build-reference.sh, CTest docs_reference)
 )
 
 SUDO=""

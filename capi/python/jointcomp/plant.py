@@ -48,6 +48,7 @@ class Plant(OwnedHandle):
 
     @property
     def dof(self):
+        """Number of joints n."""
         return self._dof
 
     @property

@@ -160,5 +160,6 @@ def write_text(path, text):
 
 
 def save_figure(figure, path):
+    """Writes a matplotlib figure to ``path`` as PNG, whole or not at all."""
     # No date or version in the PNG: a resumed run's plot has the same bytes.
     write_atomically(path, lambda stream: figure.savefig(stream, dpi=110, format="png", metadata={"Software": None}))

@@ -66,6 +66,7 @@ class Summary:
 
     @property
     def succeeded(self):
+        """The draws that gave metrics (all draws less the failed ones)."""
         return self.draws - len(self.failed)
 
     def add_draw(self, metrics, z, norm):
@@ -86,6 +87,7 @@ class Summary:
         self.draws += 1
 
     def add_failure(self, index, message):
+        """One failed draw: its index and the library's message."""
         self.failed[int(index)] = message
         self.draws += 1
 
@@ -171,6 +173,7 @@ class Summary:
 
     @classmethod
     def from_arrays(cls, arrays, failed):
+        """The summary of ``arrays`` (as arrays() gives them) and ``failed`` ((index, message) pairs)."""
         summary = cls(arrays["band_norm"].shape[1])
         summary.draws, summary.clamped = int(arrays["draws"]), int(arrays["clamped"])
         for key in ("metrics", "low", "high", "band_norm", "band_z"):
