@@ -54,16 +54,16 @@ extern "C" {
 
 /** Status codes. */
 typedef int32_t jc_status;
-#define JC_OK 0 /**< success */
+#define JC_OK 0                        /**< success */
 #define JC_ERROR_INVALID_ARGUMENT (-1) /**< NULL pointer, wrong length, NaN or infinity, out of range */
 #define JC_ERROR_FILE (-2)             /**< unreadable or malformed URDF or parameter file or text */
 #define JC_ERROR_UNREACHABLE (-3)      /**< a pose outside the workspace or the joint limits */
 #define JC_ERROR_SOLVER (-4)           /**< no convergence, integrator failure */
 #define JC_ERROR_WRONG_HANDLE (-5)     /**< a handle of another kind, or one already freed */
-#define JC_ERROR_OUT_OF_MEMORY (-6) /**< the memory a call needed was not there */
-#define JC_ERROR_INTERNAL (-7)    /**< a bug: please report it with the message */
-#define JC_ERROR_PLANT_LIMIT (-8) /**< a simulation that left its joint limits or its tracking envelope */
-#define JC_ERROR_BUSY (-9)        /**< a *_free of a handle that a call in progress still uses: not freed */
+#define JC_ERROR_OUT_OF_MEMORY (-6)    /**< the memory a call needed was not there */
+#define JC_ERROR_INTERNAL (-7)         /**< a bug: please report it with the message */
+#define JC_ERROR_PLANT_LIMIT (-8)      /**< a simulation that left its joint limits or its tracking envelope */
+#define JC_ERROR_BUSY (-9)             /**< a *_free of a handle that a call in progress still uses: not freed */
 
 /* Opaque handles. */
 typedef struct jc_robot jc_robot;   /**< a robot, its joint-error model and (optionally) its drives */
@@ -390,7 +390,7 @@ JOINTCOMP_API jc_status jc_spiral_experiment_truth(jc_robot* nominal, jc_robot* 
    @{ */
 typedef struct jc_spiral_job jc_spiral_job; /**< a spiral prepared for many truths */
 /** Plans and compensates the spiral with `nominal` (use_plant: 1 for the flexible-joint plant, needing drives);
-    *job receives the new handle. */
+ *job receives the new handle. */
 JOINTCOMP_API jc_status jc_spiral_job_create(jc_robot* nominal, int32_t use_plant, jc_spiral_job** job);
 /** Releases the job (NULL: nothing to do); JC_ERROR_BUSY while a run still uses it. */
 JOINTCOMP_API jc_status jc_spiral_job_free(jc_spiral_job* job);
