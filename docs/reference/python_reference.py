@@ -68,6 +68,7 @@ def main():
     modules = ["jointcomp"] + [info.name for info in pkgutil.walk_packages(jointcomp.__path__, "jointcomp.")
                                if not info.name.endswith("__main__")]
     problems = []
+    written = []
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         loaded = [importlib.import_module(name) for name in modules]
@@ -80,12 +81,13 @@ def main():
         problems.extend(undocumented(module))
         os.chdir(out)
         pydoc.writedoc(module)
+        written.append(module.__name__)
     for problem in problems:
         print("python_reference: " + problem, file=sys.stderr)
     if problems:
         print("python_reference: %d undocumented name(s) or warning(s)" % len(problems), file=sys.stderr)
         return 1
-    print("python_reference: %d modules documented in %s" % (len(loaded), out))
+    print("python_reference: %d modules documented in %s" % (len(written), out))
     return 0
 
 
