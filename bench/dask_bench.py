@@ -9,13 +9,15 @@ Run from a checkout with the library built (or set JOINTCOMP_LIBRARY and PYTHONP
 1. the seconds of one draw (jointcomp.SpiralJob.run: the truth's three runs and the tracker) and of the
    three compensations of the spiral it follows (Robot.compensate_trajectory), and their ratio;
 2. draws per second serial (this process) and on a LocalCluster of --workers processes (or --scheduler),
-   and the speed-up;
+   and the speed-up; for a LocalCluster also the CPU each draw costs serial, in the workers and in the client
+   (with the scheduler), and the speed-up they allow on idle cores (a loaded machine's wall clock cannot say);
 3. with --long N: a run of N draws on the cluster, sampling every second the client's resident memory (the
    LocalCluster's scheduler runs in the client process) and the workers'; the peak and the first and last
    thirds' means say whether memory stays flat.
 """
 
 import argparse
+import os
 import pathlib
 import sys
 import tempfile
@@ -54,10 +56,27 @@ def draw_against_compensations(plant, repeats=5):
         draw * 1e3, compensations * 1e3, len(plan.time), draw / compensations))
 
 
+def _cpu_seconds(processes):
+    total = 0.0
+    for process in processes:
+        try:
+            times = process.cpu_times()
+            total += times.user + times.system
+        except psutil.NoSuchProcess:
+            pass
+    return total
+
+
 def throughput(samples, plant, where):
+    """Draws per second (wall clock), and the CPU seconds per draw of this process (the client, and a
+    LocalCluster's scheduler) and of its children (the LocalCluster's workers and nannies)."""
+    me = psutil.Process()
+    children = me.children(recursive=True)
+    client, workers = _cpu_seconds([me]), _cpu_seconds(children)
     started = time.perf_counter()
     jd.monte_carlo(URDF, PARAMETERS, samples=samples, seed=1, use_plant=plant, **where)
-    return samples / (time.perf_counter() - started)
+    rate = samples / (time.perf_counter() - started)
+    return rate, (_cpu_seconds([me]) - client) / samples, (_cpu_seconds(children) - workers) / samples
 
 
 class MemorySampler(threading.Thread):
@@ -106,14 +125,23 @@ def main():
     arguments = parser.parse_args()
     print("Monte Carlo of the RX170 spiral, %s robot" % ("flexible-joint plant" if arguments.plant else "quasi-static"))
     draw_against_compensations(arguments.plant)
-    serial = throughput(arguments.samples, arguments.plant, {"serial": True})
+    serial, serial_cpu, _ = throughput(arguments.samples, arguments.plant, {"serial": True})
     where = {"scheduler": arguments.scheduler} if arguments.scheduler else {"n_workers": arguments.workers}
     with jd.cluster(start_timeout=120, **where) as client:
         workers = len(client.scheduler_info()["workers"])
         throughput(2 * workers, arguments.plant, {"client": client})  # warm: every worker prepares the job
-        parallel = throughput(arguments.samples, arguments.plant, {"client": client})
-        print("%d draws: serial %.1f draws/s; %d workers %.1f draws/s; speed-up %.2f" % (
-            arguments.samples, serial, workers, parallel, parallel / serial))
+        parallel, client_cpu, workers_cpu = throughput(arguments.samples, arguments.plant, {"client": client})
+        print("%d draws: serial %.1f draws/s; %d workers %.1f draws/s; speed-up %.2f (load average %.1f)" % (
+            arguments.samples, serial, workers, parallel, parallel / serial, os.getloadavg()[0]))
+        if not arguments.scheduler:
+            # A loaded machine shares its cores between sessions (the kernel's autogroups), not processes: the
+            # wall-clock speed-up then says little. The CPU each draw costs does not depend on the load: with
+            # every core of this machine free, a draw takes (workers' CPU + client's CPU) / cores at best.
+            cores = os.cpu_count() or 1
+            print("CPU per draw: serial %.1f ms; cluster %.1f ms in the workers + %.1f ms in the client; on %d idle "
+                  "cores a speed-up of at most %.2f" % (
+                      serial_cpu * 1e3, workers_cpu * 1e3, client_cpu * 1e3, cores,
+                      min(workers, cores) * serial_cpu / (workers_cpu + client_cpu)))
         if arguments.long:
             long_run(arguments.long, arguments.plant, {"client": client})
 
