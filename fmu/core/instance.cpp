@@ -495,7 +495,8 @@ Status Instance::dependencies(const char* function, std::uint32_t vr, std::vecto
 // ------------------------------------------------------------------------------------------------
 // Steps.
 
-Status Instance::checkStep(const char* function, double current_time, double step) {
+// Inlined into doStep (its one caller): the checks are a few compares; only a refusal is a call.
+[[gnu::always_inline]] inline Status Instance::checkStep(const char* function, double current_time, double step) {
   if (!std::isfinite(current_time) || !std::isfinite(step) || !(step > 0.0)) {
     char text[160];
     std::snprintf(text, sizeof text,

@@ -53,7 +53,8 @@ RobotModel::RobotModel(std::shared_ptr<const Robot> robot, ParameterSet paramete
     fixed_parameter_[i] = v.causality == Causality::Parameter && v.variability == Variability::Fixed;
   }
   for (int j = 0; j < dof_; ++j) {
-    for (int index : {roles_.q_desired[j], roles_.qd_desired[j], roles_.qdd_desired[j]}) desired_input_[index] = true;
+    for (int index : {roles().q_desired[j], roles().qd_desired[j], roles().qdd_desired[j]})
+      desired_input_[index] = true;
   }
   planned_ = JointVector::Zero(dof_);
   updateCoreFlags();
@@ -62,19 +63,19 @@ RobotModel::RobotModel(std::shared_ptr<const Robot> robot, ParameterSet paramete
 VariableTraits RobotModel::traits(int index) const {
   VariableTraits traits;
   for (int j = 0; j < dof_; ++j) {
-    if (index == roles_.q_link[j]) traits.output_group = kLinkOutputs;
-    if (index == roles_.qd_link[j]) traits.output_group = kLinkVelocityOutputs;
-    if (index == roles_.q_motor[j] || index == roles_.qd_motor[j] || index == roles_.dq_actual[j])
+    if (index == roles().q_link[j]) traits.output_group = kLinkOutputs;
+    if (index == roles().qd_link[j]) traits.output_group = kLinkVelocityOutputs;
+    if (index == roles().q_motor[j] || index == roles().qd_motor[j] || index == roles().dq_actual[j])
       traits.output_group = kMotorOutputs;
-    if (index == roles_.dq_predicted[j]) traits.output_group = kPredictedOutputs;
-    if (index == roles_.q_ref[j] || index == roles_.q_planned[j]) traits.output_group = kReferenceOutputs;
+    if (index == roles().dq_predicted[j]) traits.output_group = kPredictedOutputs;
+    if (index == roles().q_ref[j] || index == roles().q_planned[j]) traits.output_group = kReferenceOutputs;
   }
-  for (int k : roles_.tool_position) {
+  for (int k : roles().tool_position) {
     if (index == k) traits.output_group = kToolOutputs;
   }
   // Setting a desired input, even to its start value, makes reference = auto follow the inputs; they are
   // refused in steps while the robot follows the demo move. Another compensation mode rebuilds the compensator.
-  traits.watched = desired_input_[index] || index == roles_.compensation;
+  traits.watched = desired_input_[index] || index == roles().compensation;
   traits.held_when_restricted = desired_input_[index];
   return traits;
 }
@@ -93,7 +94,7 @@ void RobotModel::onSet(CoreState& state, int index, bool changed, bool before_st
     if (state.phase == kInitializationMode) state.initialized = false;
     updateCoreFlags();
   }
-  if (index == roles_.compensation && changed) {
+  if (index == roles().compensation && changed) {
     // Another compensation mode: the dynamic mode's drive filter starts afresh from the next sample.
     live_.dynamic.started = false;
     if (built_ && !before_step) ensureCompensator(state);
@@ -102,7 +103,7 @@ void RobotModel::onSet(CoreState& state, int index, bool changed, bool before_st
 
 std::string RobotModel::restriction(const CoreState& state) const {
   return std::string("the robot follows the built-in demo move (reference = ") +
-         (state.values[roles_.reference] == kReferenceDemo
+         (state.values[roles().reference] == kReferenceDemo
               ? std::string("demo")
               : std::string("auto, and no q_desired or qd_desired input was set before the end of initialisation")) +
          "); set reference = inputs, or the inputs during initialisation";
@@ -149,7 +150,7 @@ void RobotModel::ensureModels(CoreState& state) {
 }
 
 void RobotModel::ensureCompensator(const CoreState& state) {
-  const int mode = static_cast<int>(state.values[roles_.compensation]);
+  const int mode = static_cast<int>(state.values[roles().compensation]);
   if (compensator_ && compensator_mode_ == mode) return;
   EffectMask mask = 0;
   if (mode == 1) mask = nominal_->loadsAnd({"compliance"});
@@ -170,7 +171,7 @@ Status RobotModel::ensureReference(const CoreState& state, const char* function,
   JointVector& q = planned_;
   JointVector velocity = JointVector::Zero(dof_);
   JointVector acceleration = JointVector::Zero(dof_);
-  copyJointValues(&state.values[roles_.q_desired[0]], q.data(), dof_);
+  copyJointValues(&state.values[roles().q_desired[0]], q.data(), dof_);
   const bool estimated = live_.has_last_step && state.time > live_.last_step_time;
   if (live_.demo) {
     const double t = state.time - state.start_time;
@@ -182,10 +183,10 @@ Status RobotModel::ensureReference(const CoreState& state, const char* function,
     demoMove(*robot_, t - kHalfSpan, q_unused, before);
     demoMove(*robot_, t + kHalfSpan, q_unused, after);
     acceleration = (after - before) / (2 * kHalfSpan);
-  } else if (state.values[roles_.use_velocity_inputs] != 0.0) {
+  } else if (state.values[roles().use_velocity_inputs] != 0.0) {
     for (int j = 0; j < dof_; ++j) {
-      velocity[j] = state.values[roles_.qd_desired[j]];
-      acceleration[j] = state.values[roles_.qdd_desired[j]];
+      velocity[j] = state.values[roles().qd_desired[j]];
+      acceleration[j] = state.values[roles().qdd_desired[j]];
     }
   } else if (estimated) {
     estimateDesiredMotion(live_, state.time, *robot_, q.data(), compensator_mode_ == kCompensationDynamic,
@@ -196,23 +197,26 @@ Status RobotModel::ensureReference(const CoreState& state, const char* function,
   return status;
 }
 
-// Q_ref and v from Q_theo (planned_) and its velocity and acceleration, by the compensation mode.
-Status RobotModel::compensateReference(const CoreState& state, const JointVector& velocity,
-                                       const JointVector& acceleration, const char* function, ModelLog& log) {
+// Q_ref and v from Q_theo (planned_) and its velocity and acceleration, by the compensation mode (inlined into
+// ensureReference, its one caller, on the step's path).
+[[gnu::always_inline]] inline Status RobotModel::compensateReference(const CoreState& state,
+                                                                     const JointVector& velocity,
+                                                                     const JointVector& acceleration,
+                                                                     const char* function, ModelLog& log) {
   const auto refused = [&](const char* what) {
     char text[400];
     std::snprintf(text, sizeof text, "at t = %.9g s: %s", state.time, what);
     return log.fail(Status::Discard, function, text);
   };
   const JointVector& q = planned_;
-  const bool with_wrench = state.values[roles_.compensate_wrench] != 0.0;
+  const bool with_wrench = state.values[roles().compensate_wrench] != 0.0;
   FixedPointReport report;
   report.converged = true;
   if (compensator_mode_ == 0) {
     copyJoints(q, reference_);
     copyJoints(velocity, reference_velocity_);
   } else if (compensator_mode_ == kCompensationDynamic) {
-    const Vector6 wrench = with_wrench ? wrenchOf(state.values, roles_) : Vector6::Zero();
+    const Vector6 wrench = with_wrench ? wrenchOf(state.values, roles()) : Vector6::Zero();
     try {
       report = online_->compensate(live_.dynamic, state.time, q, velocity, acceleration, wrench, reference_,
                                    reference_velocity_, dynamic_after_);
@@ -225,7 +229,7 @@ Status RobotModel::compensateReference(const CoreState& state, const JointVector
     copyJoints(velocity, ctx.velocity);
     ctx.time = state.time;
     if (with_wrench) {
-      ctx.tool_wrench = wrenchOf(state.values, roles_);
+      ctx.tool_wrench = wrenchOf(state.values, roles());
     } else {
       ctx.tool_wrench.setZero();
     }
@@ -261,13 +265,13 @@ void RobotModel::initialize(CoreState& state) {
   live_.has_last_step = false;
   live_.has_earlier_step = false;
   live_.has_earliest_step = false;
-  const double source = state.values[roles_.reference];
+  const double source = state.values[roles().reference];
   live_.demo = source == kReferenceDemo || (source == kReferenceAuto && !live_.desired_inputs_set);
   updateCoreFlags();
   reference_valid_ = false;
   ThrowingLog log;
   ensureReference(state, "initialization", log);
-  live_.applied_wrench = wrenchOf(state.values, roles_);
+  live_.applied_wrench = wrenchOf(state.values, roles());
   plant_->setToolWrench(live_.applied_wrench);
   plant_->reset(reference_, state.start_time);
   state.initialized = true;
@@ -291,8 +295,8 @@ Status RobotModel::computeOutputs(CoreState& state, unsigned groups, const char*
     const Status status = ensureReference(state, function, log);
     if (status != Status::OK) return status;
     for (int j = 0; j < dof_; ++j) {
-      state.values[roles_.q_ref[j]] = reference_[j];
-      state.values[roles_.q_planned[j]] = planned_[j];
+      state.values[roles().q_ref[j]] = reference_[j];
+      state.values[roles().q_planned[j]] = planned_[j];
     }
   }
   if (missing & (kLinkOutputs | kLinkVelocityOutputs | kMotorOutputs | kToolOutputs | kPredictedOutputs)) {
@@ -302,27 +306,27 @@ Status RobotModel::computeOutputs(CoreState& state, unsigned groups, const char*
   return Status::OK;
 }
 
-void RobotModel::computePlantOutputs(CoreState& state, unsigned missing) {
+[[gnu::always_inline]] inline void RobotModel::computePlantOutputs(CoreState& state, unsigned missing) {
   const int n = dof_;
   const double* y = plant_->state();
   const double *q = y, *qd = y + n, *p = y + 2 * n, *pd = y + 3 * n;
   std::vector<double>& values = state.values;
   if (missing & kLinkOutputs) {
-    for (int j = 0; j < n; ++j) values[roles_.q_link[j]] = q[j];
+    for (int j = 0; j < n; ++j) values[roles().q_link[j]] = q[j];
   }
   if (missing & kLinkVelocityOutputs) {
-    for (int j = 0; j < n; ++j) values[roles_.qd_link[j]] = qd[j];
+    for (int j = 0; j < n; ++j) values[roles().qd_link[j]] = qd[j];
   }
   if (missing & kMotorOutputs) {
     for (int j = 0; j < n; ++j) {
-      values[roles_.q_motor[j]] = p[j];
-      values[roles_.qd_motor[j]] = pd[j];
-      values[roles_.dq_actual[j]] = q[j] - p[j];
+      values[roles().q_motor[j]] = p[j];
+      values[roles().qd_motor[j]] = pd[j];
+      values[roles().dq_actual[j]] = q[j] - p[j];
     }
   }
   if (missing & kToolOutputs) {
     const Eigen::Vector3d tool = toolPosition(*robot_, Eigen::Map<const Eigen::VectorXd>(q, n));
-    for (int k = 0; k < 3; ++k) values[roles_.tool_position[k]] = tool[k];
+    for (int k = 0; k < 3; ++k) values[roles().tool_position[k]] = tool[k];
   }
   if (missing & kPredictedOutputs) computePredictedOutputs(state, q, qd, p);
 }
@@ -342,7 +346,7 @@ void RobotModel::computePredictedOutputs(CoreState& state, const double* link, c
   updateMotorAngles(*nominal_, ctx);
   JointVector dq = JointVector::Zero(n);
   addSelectedJointErrors(*nominal_, all, ctx, dq);
-  for (int j = 0; j < n; ++j) state.values[roles_.dq_predicted[j]] = dq[j];
+  for (int j = 0; j < n; ++j) state.values[roles().dq_predicted[j]] = dq[j];
 }
 
 Status RobotModel::doStep(CoreState& state, double end, const char* function, ModelLog& log) {
@@ -353,9 +357,9 @@ Status RobotModel::doStep(CoreState& state, double end, const char* function, Mo
   // Compared by bits, or-ed without a branch per value (a wrench of -0 for 0 is applied again, harmlessly).
   std::uint64_t wrench_bits_differ = 0;
   for (int k = 0; k < 6; ++k)
-    wrench_bits_differ |= bitsOf(state.values[roles_.wrench[k]]) ^ bitsOf(live_.applied_wrench[k]);
+    wrench_bits_differ |= bitsOf(state.values[roles().wrench[k]]) ^ bitsOf(live_.applied_wrench[k]);
   if (wrench_bits_differ != 0) {
-    live_.applied_wrench = wrenchOf(state.values, roles_);
+    live_.applied_wrench = wrenchOf(state.values, roles());
     plant.setToolWrench(live_.applied_wrench);
   }
   plant.setReference(reference_, reference_velocity_);
@@ -375,7 +379,7 @@ Status RobotModel::doStep(CoreState& state, double end, const char* function, Mo
   // The three vectors hold dof values from the start (RobotState::atStart, readState).
   copyJointValues(s.earlier_q_desired.data(), s.earliest_q_desired.data(), dof_);
   copyJointValues(s.last_q_desired.data(), s.earlier_q_desired.data(), dof_);
-  copyJointValues(&state.values[roles_.q_desired[0]], s.last_q_desired.data(), dof_);
+  copyJointValues(&state.values[roles().q_desired[0]], s.last_q_desired.data(), dof_);
   if (compensator_mode_ == kCompensationDynamic) s.dynamic = dynamic_after_;  // this step's sample is done
   s.last_step_time = state.time;
   reference_valid_ = false;

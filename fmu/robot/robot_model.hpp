@@ -96,6 +96,8 @@ private:
     reference_valid_ = false;
     outputs_valid_ &= ~kReferenceOutputs;
   }
+  // The robot's variables by role (inline: an offset from this, no reference to load).
+  const Roles& roles() const { return table_.roles; }
   // The inline flags the core reads, from live_.
   void updateCoreFlags() {
     watches_reals_ = !live_.desired_inputs_set;
@@ -103,7 +105,6 @@ private:
   }
 
   VariableTable table_;
-  const Roles& roles_ = table_.roles;
   int dof_;
   std::vector<bool> fixed_parameter_;
   std::vector<bool> desired_input_;
