@@ -6,6 +6,7 @@
 // parameters so that identification can fit them, and are created by type name (registry.hpp).
 #pragma once
 
+#include <cstdio>
 #include <memory>
 #include <optional>
 #include <string>
@@ -17,6 +18,17 @@
 #include "model/robot/workspace.hpp"
 
 namespace jointcomp {
+
+// The largest joint error one entry of a parameter file may state (a table coefficient, a harmonic's
+// amplitude): 0.1 rad (5.7 deg). A gear that loses more is broken, not calibrated; a file beyond it is refused
+// naming the entry (a table of 1e300 rad once gave the paper 2.5 m errors and exit 0).
+constexpr double kMaxStatedJointError = 0.1;  // rad
+// A value of a parameter-file message, short ("1e+300").
+inline std::string shortNumber(double value) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.3g", value);
+  return text;
+}
 
 // Everything an effect may depend on at one instant. The caller fills q, command, motor, velocity,
 // time and temperature; JointErrorModel fills load_torque before asking for errors.

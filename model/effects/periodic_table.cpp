@@ -141,6 +141,11 @@ std::unique_ptr<Effect> PeriodicTableEffect::fromJson(const nlohmann::json& json
       if (!values[k].is_number() || !std::isfinite(values[k].get<double>())) {
         entry.fail("coefficients_rad", "coefficient " + std::to_string(k) + " is not a finite number");
       }
+      if (std::abs(values[k].get<double>()) > kMaxStatedJointError) {
+        entry.fail("coefficients_rad", "coefficient " + std::to_string(k) + " is " +
+                                           shortNumber(values[k].get<double>()) + " rad, beyond the plausible +-" +
+                                           shortNumber(kMaxStatedJointError) + " rad of a joint error");
+      }
       table.coefficients_rad.push_back(values[k].get<double>());
     }
     entry.rejectUnknownKeys();

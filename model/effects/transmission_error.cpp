@@ -59,6 +59,11 @@ std::unique_ptr<Effect> TransmissionErrorEffect::fromJson(const nlohmann::json& 
     }
     h.amplitude_rad = entry.has("amplitude_rad") ? entry.nonNegativeNumber("amplitude_rad")
                                                  : entry.nonNegativeNumber("amplitude_deg") * kDegree;
+    if (h.amplitude_rad > kMaxStatedJointError) {
+      entry.fail(entry.has("amplitude_rad") ? "amplitude_rad" : "amplitude_deg",
+                 "is " + shortNumber(h.amplitude_rad) + " rad, beyond the plausible " +
+                     shortNumber(kMaxStatedJointError) + " rad of a joint error");
+    }
     h.phase_rad = entry.number("phase_rad");
     entry.rejectUnknownKeys();
     harmonics.push_back(h);

@@ -3,6 +3,8 @@
 #include <nlohmann/json.hpp>
 
 #include <cmath>
+#include <map>
+#include <memory>
 
 #include "model/common/errors.hpp"
 #include "model/common/json_fields.hpp"
@@ -58,6 +60,23 @@ ToolTarget toolFromJson(const nlohmann::json& node, const std::string& path) {
   return tool;
 }
 
+// One quantity stated twice (a compliance effect listed twice, two tables of one joint's gear stage) would be
+// summed silently: every parameter name may come from one entry only.
+void refuseRepeatedParameters(const std::vector<std::unique_ptr<Effect>>& effects, const JsonFields& fields) {
+  std::map<std::string, std::size_t> giver;
+  for (std::size_t i = 0; i < effects.size(); ++i) {
+    for (const std::string& name : effects[i]->parameterNames()) {
+      const auto [first, inserted] = giver.emplace(name, i);
+      if (!inserted) {
+        fields.fail("effects[" + std::to_string(i) + "]",
+                    effects[i]->type() + " states " + name + ", which effects[" + std::to_string(first->second) +
+                        "] (" + effects[first->second]->type() +
+                        ") states already; list each effect of a joint once (they would be summed)");
+      }
+    }
+  }
+}
+
 }  // namespace
 
 ParameterSet parseParameterSet(const std::string& json_text, const std::string& source_name,
@@ -84,6 +103,7 @@ ParameterSet parseParameterSet(const std::string& json_text, const std::string& 
     effects.push_back(registry.create(list[i], *robot, gears, fields.pathOf("effects[" + std::to_string(i) + "]")));
   }
   fields.rejectUnknownKeys();
+  refuseRepeatedParameters(effects, fields);
   JointErrorModel model(std::move(robot), std::move(gears), std::move(effects));
   model.notes = notes;
   return ParameterSet{std::move(model), std::move(drives), std::move(tool)};

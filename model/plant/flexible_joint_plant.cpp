@@ -114,6 +114,12 @@ void FlexibleJointPlant::updateReference(const JointVector& position, const Join
   }
   if (since_last > 0.0) {
     data_.reference_acceleration = (velocity - data_.reference_velocity) / since_last;
+    // A velocity of exactly zero is a stop: that joint holds the position given. (The acceleration of the
+    // last interval, -100 rad/s^2 after a 1 rad/s motion stopped at 10 ms updates, would otherwise run it
+    // away quadratically until the next update, and the watchdog would blame the drive.)
+    for (int j = 0; j < model_.n; ++j) {
+      if (velocity[j] == 0.0) data_.reference_acceleration[j] = 0.0;
+    }
   } else {
     data_.reference_acceleration.setZero(model_.n);
   }

@@ -43,7 +43,9 @@ public:
 
   // Starts at rest in static equilibrium with the motors at `command` (and the reference there).
   void reset(const JointVector& command, double start_time = 0.0);
-  // The controller follows `position` from now on, extrapolated with `velocity` until the next update.
+  // The controller follows `position` from now on, extrapolated with `velocity` (and the acceleration between
+  // the last two updates) until the next update. A joint given a velocity of exactly 0 stops: its reference
+  // holds `position` (no acceleration is extrapolated) however long the next update takes.
   void setReference(const JointVector& position, const JointVector& velocity);
   // The reference the controller follows at t (>= the last update): position, velocity, acceleration.
   void referenceAt(double t, JointVector& position, JointVector& velocity, JointVector& acceleration) const;

@@ -164,7 +164,7 @@ TEST(ParameterFile, RoundTripsArbitraryValuesBitForBit) {
   for (int i = 0; i < model.effectCount(); ++i) {
     std::vector<double> values = model.effect(i).parameters();
     for (std::size_t k = 0; k < values.size(); ++k)
-      values[k] = (values[k] + 0.1) * (1.0 + std::sqrt(2.0) * 1e-3 * (k + 1));
+      values[k] = (values[k] + 0.01) * (1.0 + std::sqrt(2.0) * 1e-3 * (k + 1));  // within the reader's ranges
     model.effect(i).setParameters(values);
   }
   const JointErrorModel again = parseParameters(parametersToJson(model), "round trip", rx170());
@@ -259,6 +259,12 @@ struct Edit {
   const char* path;  // expected JSON path in the message
 };
 
+// A periodic table of joint 2's output with one coefficient of `value` rad.
+nlohmann::json tableOf(double value) {
+  return {{"type", "periodic_table"},
+          {"tables", {{{"joint", "joint_2"}, {"of", "output"}, {"coefficients_rad", {0.0, value, 0.0, 0.0}}}}}};
+}
+
 std::vector<Edit> edits() {
   using nlohmann::json;
   return {
@@ -340,6 +346,20 @@ std::vector<Edit> edits() {
          j["effects"][2]["harmonics"][0]["joint"] = "joint_4";  // one stage: stage_2 is its output, named "output"
        },
        "effects[2].harmonics[0].of"},
+      // Values no robot has, and one quantity stated twice (summed silently before): issue 41.
+      {"HarmonicOf1e300Degrees", [](json& j) { j["effects"][2]["harmonics"][1]["amplitude_deg"] = 1e300; },
+       "effects[2].harmonics[1].amplitude_deg"},
+      {"TableOf1e300Rad", [](json& j) { j["effects"].push_back(tableOf(1e300)); },
+       "effects[3].tables[0].coefficients_rad"},
+      {"ComplianceListedTwice", [](json& j) { j["effects"].push_back(j["effects"][0]); }, "effects[3]"},
+      {"HarmonicListedTwice", [](json& j) { j["effects"][2]["harmonics"].push_back(j["effects"][2]["harmonics"][0]); },
+       "effects[2]"},
+      {"TableListedTwice",
+       [](json& j) {
+         j["effects"].push_back(tableOf(0.001));
+         j["effects"].push_back(tableOf(0.002));
+       },
+       "effects[4]"},
   };
 }
 
@@ -379,6 +399,9 @@ TEST(ParameterFileEdits, MessagesSayWhatIsWrong) {
       {[](nlohmann::json& j) { j["effects"][0]["stiffness_nm_per_rad"].erase(5); }, "5"},
       {[](nlohmann::json& j) { j["effects"][1].erase("preload_n"); }, "missing"},
       {[](nlohmann::json& j) { j["effects"][2]["harmonics"][1]["order"] = 2; }, "unknown"},
+      {[](nlohmann::json& j) { j["effects"].push_back(tableOf(-1e300)); }, "-1e+300 rad, beyond the plausible"},
+      {[](nlohmann::json& j) { j["effects"].push_back(j["effects"][0]); },
+       "compliance states joint_1.stiffness_nm_per_rad, which effects[0] (compliance) states already"},
   };
   for (const Case& c : cases) {
     nlohmann::json json = goodJson();
@@ -409,6 +432,7 @@ TEST(ParameterFileEdits, ValidEditsAreAccepted) {
       [](nlohmann::json& j) { j["effects"][1]["preload_n"] = -50.0; },
       [](nlohmann::json& j) { j["effects"][1].erase("estimate"); },
       [](nlohmann::json& j) { j["effects"][0]["estimate"] = "from a test"; },
+      [](nlohmann::json& j) { j["effects"].push_back(tableOf(0.09)); },  // within the plausible 0.1 rad
   };
   for (std::size_t i = 0; i < fine.size(); ++i) {
     nlohmann::json json = goodJson();

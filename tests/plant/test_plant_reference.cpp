@@ -65,6 +65,34 @@ ReferenceValues referenceOf(const FlexibleJointPlant& plant, double t) {
   return r;
 }
 
+// A stop (velocity 0) after a motion at 1 rad/s: the reference holds the position given instead of
+// extrapolating the last interval's -100 rad/s^2 (issue 41), and the plant settles there, watchdog quiet.
+TEST(PlantReference, AStopHoldsItsPositionInsteadOfExtrapolatingTheLastDeceleration) {
+  for (bool smooth : {false, true}) {
+    PlantOptions options;
+    options.smooth_reference = smooth;
+    auto plant = makePlant(options);
+    JointVector position = home(), velocity = JointVector::Zero(6);
+    velocity[0] = 1.0;  // joint 1 turns at 1 rad/s, updated every 10 ms
+    for (int k = 0; k < 10; ++k) {
+      position[0] = home()[0] + 0.01 * k;
+      plant->setReference(position, velocity);
+      plant->advance(0.01 * (k + 1));
+    }
+    const JointVector target = position;
+    plant->setReference(target, JointVector::Zero(6));
+    const double stop = plant->time();
+    for (double later : {0.02, 0.5, 2.0}) {  // after the blend (one interval) and far beyond it
+      const ReferenceValues r = referenceOf(*plant, stop + later);
+      EXPECT_NEAR((r.position - target).cwiseAbs().maxCoeff(), 0.0, 1e-12) << "smooth " << smooth << " at +" << later;
+      EXPECT_EQ(r.velocity.cwiseAbs().maxCoeff(), 0.0);
+      EXPECT_EQ(r.acceleration.cwiseAbs().maxCoeff(), 0.0);
+    }
+    ASSERT_NO_THROW(plant->advance(stop + 0.5));
+    EXPECT_LT(std::fabs(plant->linkPositions()[0] - target[0]), 0.05);  // before: the reference 12.5 rad away
+  }
+}
+
 TEST(PlantReference, IsC2AcrossAnUpdateAndTheMotorTorquesDoNotJump) {
   for (bool smooth : {true, false}) {
     PlantOptions options;

@@ -245,7 +245,9 @@ JOINTCOMP_API jc_status jc_plant_free(jc_plant* plant);
 JOINTCOMP_API jc_status jc_plant_dof(jc_plant* plant, int32_t* dof);
 /** Starts at rest in static equilibrium with the motors at `command` (n), at start_time (s). */
 JOINTCOMP_API jc_status jc_plant_reset(jc_plant* plant, const double* command, int32_t command_len, double start_time);
-/** The controller follows `position` (n) from now on, extrapolated with `velocity` (n). */
+/** The controller follows `position` (n) from now on, extrapolated with `velocity` (n) and the acceleration
+   seen between the last two updates, until the next update. A joint given a velocity of exactly 0 stops:
+   its reference holds `position` however long the next update takes. */
 JOINTCOMP_API jc_status jc_plant_set_reference(jc_plant* plant, const double* position, int32_t position_len,
                                                const double* velocity, int32_t velocity_len);
 /** Wrench (6) applied by the environment at the tool, as for jc_robot_set_tool_wrench. */

@@ -65,7 +65,9 @@ class Plant(OwnedHandle):
                                                  float(start_time)))
 
     def set_reference(self, position, velocity):
-        """The controller follows ``position`` (n) from now on, extrapolated with ``velocity`` (n)."""
+        """The controller follows ``position`` (n) from now on, extrapolated with ``velocity`` (n) and the
+        acceleration seen between the last two updates; a joint given a velocity of exactly 0 stops and holds
+        ``position`` until the next update."""
         position, velocity = _array(position), _array(velocity)
         _native.check(_native.lib.jc_plant_set_reference(self.handle, _native.pointer(position), position.size,
                                                          _native.pointer(velocity), velocity.size))
