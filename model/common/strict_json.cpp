@@ -1,4 +1,5 @@
 #include "model/common/strict_json.hpp"
+#include "model/common/plain_text.hpp"
 
 #include <set>
 #include <vector>
@@ -40,8 +41,10 @@ nlohmann::json parseStrictJson(const std::string& text, const std::string& sourc
     }
     return true;
   };
+  std::string storage;
+  const std::string& body = plainText<ParameterError>(text, source_name, storage);
   try {
-    return nlohmann::json::parse(text, check);
+    return nlohmann::json::parse(body, check);
   } catch (const nlohmann::json::parse_error& error) {
     throw ParameterError(source_name + ": not valid JSON (byte " + std::to_string(error.byte) +
                          "): " + shortExcerpt(error.what()));

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "model/common/errors.hpp"
+#include "model/common/plain_text.hpp"
 #include "model/common/strict_json.hpp"
 #include "model/io/atomic_file.hpp"
 #include "model/io/text_cells.hpp"
@@ -367,7 +368,8 @@ private:
 
 MeasurementCampaign importCsv(const std::string& text, const std::string& source_name,
                               const CsvImportOptions& options) {
-  return CsvImporter(source_name, options).run(text);
+  std::string storage;
+  return CsvImporter(source_name, options).run(plainText<MeasurementError>(text, source_name, storage));
 }
 
 MeasurementCampaign importCsvFile(const std::string& path, const CsvImportOptions& options) {

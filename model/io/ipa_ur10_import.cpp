@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "model/common/errors.hpp"
+#include "model/common/plain_text.hpp"
 #include "model/common/strict_json.hpp"
 #include "model/io/atomic_file.hpp"
 #include "model/io/text_cells.hpp"
@@ -60,7 +61,8 @@ Eigen::Vector3d ipaTargetInFlange(const std::string& trafo_path) {
   } catch (const Error& error) {
     throw MeasurementError(error.what());
   }
-  std::istringstream stream(text);
+  std::string storage;
+  std::istringstream stream(plainText<MeasurementError>(text, trafo_path, storage));
   Eigen::Matrix4d transform;
   for (int i = 0; i < 16; ++i) {
     std::string token;
@@ -100,7 +102,8 @@ MeasurementCampaign parseIpaUr10(const std::string& text, const std::string& mea
   auto fail = [&](int line, const std::string& what) {
     throw MeasurementError(measurements_path + ":" + std::to_string(line) + ": " + what);
   };
-  std::istringstream stream(text);
+  std::string storage;
+  std::istringstream stream(plainText<MeasurementError>(text, measurements_path, storage));
   std::string raw;
   if (!std::getline(stream, raw)) fail(1, "the file is empty");
   const std::vector<std::string> header = splitCells(trimmed(raw), ';');

@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "model/common/errors.hpp"
+#include "model/common/plain_text.hpp"
 #include "model/common/strict_json.hpp"
 #include "model/io/atomic_file.hpp"
 #include "model/io/text_cells.hpp"
@@ -324,7 +325,8 @@ void MeasurementCampaign::validate() const {
 }
 
 MeasurementCampaign parseCampaign(const std::string& text, const std::string& source_name) {
-  return CampaignParser(source_name).parse(text);
+  std::string storage;
+  return CampaignParser(source_name).parse(plainText<MeasurementError>(text, source_name, storage));
 }
 
 MeasurementCampaign readCampaignFile(const std::string& path) {

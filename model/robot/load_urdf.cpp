@@ -14,6 +14,7 @@
 
 #include "model/common/errors.hpp"
 #include "model/common/input_file.hpp"
+#include "model/common/plain_text.hpp"
 
 namespace jointcomp {
 namespace {
@@ -356,8 +357,10 @@ int elementDepth(const std::string& text, int limit) {
 
 }  // namespace
 
-Robot loadRobotFromUrdfString(const std::string& urdf_xml, const std::string& source_name,
+Robot loadRobotFromUrdfString(const std::string& urdf_text, const std::string& source_name,
                               const UrdfChainOptions& options) {
+  std::string storage;
+  const std::string& urdf_xml = plainText<UrdfError>(urdf_text, source_name, storage);
   if (urdf_xml.size() > kMaxUrdfBytes) {
     throw UrdfError(source_name + ": the URDF has " + std::to_string(urdf_xml.size()) + " bytes; at most " +
                     std::to_string(kMaxUrdfBytes) + " are read (is it the right file?)");

@@ -110,7 +110,7 @@ static const char* kSoftParameters =
 static const char* kWildParameters =
     "{\"format\": \"jointcomp-parameters/1\", \"robot\": \"rx170\", " RX170_GEARS
     ", \"effects\": [{\"type\": \"transmission_error\", \"harmonics\": [{\"joint\": \"joint_2\", \"of\": \"motor\", "
-    "\"cycles_per_revolution\": 2, \"amplitude_deg\": 30, \"phase_rad\": 1}]}]}";
+    "\"cycles_per_revolution\": 2, \"amplitude_deg\": 5, \"phase_rad\": 1}]}]}";
 
 static void test_library(void) {
   const char* version = jc_version();

@@ -13,7 +13,7 @@ GEARS = ('"gears": {"joints": [' + ", ".join(
     for j, ratios in enumerate(["[3.0, 40.0]", "[3.0, 40.0]", "[2.5, 40.0]", "[72.0]", "[64.0]", "[28.0]"])) + "]}")
 WILD = ('{"format": "jointcomp-parameters/1", "robot": "rx170", ' + GEARS + ', "effects": [{"type": '
         '"transmission_error", "harmonics": [{"joint": "joint_2", "of": "motor", "cycles_per_revolution": 2, '
-        '"amplitude_deg": 30, "phase_rad": 1}]}]}')
+        '"amplitude_deg": 5, "phase_rad": 1}]}]}')
 
 
 def test_prediction_by_effect(robot):
