@@ -94,8 +94,8 @@ void BM_Ours_CompensateSpiralPath(benchmark::State& state) {
 }
 BENCHMARK(BM_Ours_CompensateSpiralPath);
 
-// The dynamic compensation (model/plant/dynamic_compensation.hpp) of the whole 30 s spiral at the paper's
-// feed rate and at ten times it, with the parameter file's drives: closed form and refinement against the
+// The dynamic compensation (model/dynamic_compensation/dynamic_compensation.hpp) of the whole 30 s spiral at the
+// paper's feed rate and at ten times it, with the parameter file's drives: closed form and refinement against the
 // nominal plant, one core (target: under 1 s at the paper's feed rate).
 void BM_Ours_DynamicCompensationSpiral(benchmark::State& state) {
   const Fixture& f = fixture();

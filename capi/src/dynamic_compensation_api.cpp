@@ -1,7 +1,7 @@
-// jc_compensate_trajectory_dynamic: the dynamic compensation (model/plant/dynamic_compensation.hpp) of a
+// jc_compensate_trajectory_dynamic: the dynamic compensation (model/dynamic_compensation/dynamic_compensation.hpp) of a
 // trajectory with time, with the handle's payload and tool wrench.
 #include "api_support.hpp"
-#include "model/plant/dynamic_compensation.hpp"
+#include "model/dynamic_compensation/dynamic_compensation.hpp"
 
 using namespace jointcomp;
 using namespace jointcomp::capi;

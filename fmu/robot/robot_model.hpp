@@ -33,7 +33,7 @@
 #include "fmu/robot/robot_state.hpp"
 #include "fmu/robot/variable_binding.hpp"
 #include "model/compensation/compensator.hpp"
-#include "model/plant/dynamic_compensation.hpp"
+#include "model/dynamic_compensation/dynamic_compensation.hpp"
 #include "model/plant/flexible_joint_plant.hpp"
 
 namespace jointcomp::fmu {

@@ -4,7 +4,7 @@
 
 #include "fmu/core/model.hpp"
 #include "model/common/types.hpp"
-#include "model/plant/dynamic_compensation.hpp"
+#include "model/dynamic_compensation/dynamic_compensation.hpp"
 #include "model/plant/flexible_joint_plant.hpp"
 
 namespace jointcomp::fmu {

@@ -51,7 +51,7 @@ struct JointContext {
   JointVector load_torque;
   // Torque the motion's inertia asks of each transmission (M(q) qdd + C(q, qd) qd, N m), which
   // computeLoadTorque adds to load_torque when it has one value per joint: the dynamic compensation
-  // (model/plant/dynamic_compensation.hpp) deflects the joints under it. Empty for quasi-static use.
+  // (model/dynamic_compensation/dynamic_compensation.hpp) deflects the joints under it. Empty for quasi-static use.
   JointVector inertial_torque;
 
   explicit JointContext(int dof = 0);

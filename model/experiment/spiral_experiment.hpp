@@ -14,9 +14,9 @@
 #include "model/compensation/joint_trajectory.hpp"
 #include "model/compensation/metrics.hpp"
 #include "model/compensation/path.hpp"
+#include "model/dynamic_compensation/dynamic_compensation.hpp"
 #include "model/effects/perturbation.hpp"
 #include "model/io/instrument_noise.hpp"
-#include "model/plant/dynamic_compensation.hpp"
 #include "model/plant/flexible_joint_plant.hpp"
 
 namespace jointcomp {
@@ -45,7 +45,7 @@ struct SpiralExperimentSpec {
   std::vector<DriveParameters> drives;
   PlantOptions plant;
   // A fourth run, "stiffness, kinematic and dynamic correction" (the plant only): the references of
-  // compensateDynamically (model/plant/dynamic_compensation.hpp) for the nominal model and drives.
+  // compensateDynamically (model/dynamic_compensation/dynamic_compensation.hpp) for the nominal model and drives.
   bool dynamic_correction = false;
   DynamicCompensationOptions dynamic;
   // The first run made (0 to 3): the later runs of another model need no uncorrected run of their own

@@ -1,6 +1,6 @@
-// The dynamic compensation (model/plant/dynamic_compensation.hpp): with the model equal to the robot and no
-// noise, a fast planned move is followed to within 1e-6 rad, where the static compensation leaves the
-// drives' lag and the links' inertia; bad trajectories and drives are refused with the reason.
+// The dynamic compensation (model/dynamic_compensation/dynamic_compensation.hpp): with the model equal to the robot and
+// no noise, a fast planned move is followed to within 1e-6 rad, where the static compensation leaves the drives' lag
+// and the links' inertia; bad trajectories and drives are refused with the reason.
 #include <cmath>
 #include <cstdio>
 #include <string>
@@ -10,8 +10,8 @@
 
 #include "model/common/errors.hpp"
 #include "model/compensation/compensator.hpp"
+#include "model/dynamic_compensation/dynamic_compensation.hpp"
 #include "model/io/parameter_file.hpp"
-#include "model/plant/dynamic_compensation.hpp"
 #include "tests/plant/plant_test_support.hpp"
 
 namespace jointcomp {

@@ -1,4 +1,4 @@
-#include "model/plant/dynamic_compensation.hpp"
+#include "model/dynamic_compensation/dynamic_compensation.hpp"
 
 #include <algorithm>
 #include <cmath>
