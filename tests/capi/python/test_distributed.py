@@ -4,6 +4,7 @@ The quasi-static robot and a few draws keep the file short: one cluster serves m
 runs (this process, no Dask) are the reference the cluster's results must equal byte for byte.
 """
 
+import io
 import json
 import math
 import os
@@ -20,7 +21,7 @@ import pytest
 
 import jointcomp
 from jointcomp import distributed as jd
-from jointcomp.distributed import laws, montecarlo, summary as summaries
+from jointcomp.distributed import laws, montecarlo, streaming, summary as summaries
 
 from conftest import RX170_PARAMETERS, RX170_URDF
 
@@ -127,15 +128,33 @@ def test_a_summary_is_exact_counts_whatever_the_batching():
     for part in reversed(parts):
         merged.merge(part)
     travelled = pickle.loads(pickle.dumps(merged))  # as Dask ships it: the counts sparse
-    assert len(pickle.dumps(merged)) < 0.1 * sum(a.nbytes for a in merged.arrays().values())
+    assert len(pickle.dumps(merged)) < 0.1 * sum(getattr(merged, k).nbytes for k in ("metrics", "band_norm", "band_z"))
+    # Batches merged as they arrive (still packed), and a checkpoint read back, are the same counts.
+    arrived = summaries.Summary(8)
+    for part in parts:
+        arrived.merge(pickle.loads(pickle.dumps(part)))
+    stored = io.BytesIO()
+    np.savez(stored, **arrived.arrays())
+    stored.seek(0)
+    with np.load(stored) as arrays:
+        resumed = summaries.Summary.from_arrays(arrays, [])
     for key, value in whole.arrays().items():
-        assert np.array_equal(value, merged.arrays()[key]), key
-        assert np.array_equal(value, travelled.arrays()[key]), key
+        for other in (merged, travelled, arrived, resumed):
+            assert np.array_equal(value, other.arrays()[key]), key
+    for key in ("metrics", "band_norm", "band_z"):  # and dense when read
+        assert np.array_equal(getattr(whole, key), getattr(travelled, key)), key
+        assert np.array_equal(getattr(whole, key), getattr(resumed, key)), key
     # A percentile read from the bins is the nearest-rank percentile of the draws within the bins' 0.05 %.
     values = np.array([d[0][2, 3] for d in draws])
     for p in (5, 50, 95):
         exact = np.percentile(values, p, method="inverted_cdf")
         assert abs(merged.percentile(2, 3, p)[0] / exact - 1) <= 0.0005 + 1e-12
+    # The band's percentiles at each point, signed Z and norm, are the draws' own within the bins' 2.5 %.
+    band_z, band_norm = arrived.band()
+    for band, values in ((band_z, np.array([d[1] for d in draws])), (band_norm, np.array([d[2] for d in draws]))):
+        for i, p in enumerate(summaries.PERCENTILES):
+            exact = np.percentile(values, p, axis=0, method="inverted_cdf")
+            assert np.all(np.abs(band[:, i, :] - exact) <= 0.025 * np.abs(exact) + summaries.BAND_LOW)
 
 
 def test_percentile_intervals_are_the_binomial_ones():
@@ -168,6 +187,16 @@ def test_two_workers_equal_the_serial_run_byte_for_byte(client, serial_run, tmp_
     values = [float(v) for v in rows[1 + 2].split(",")[1:13]]
     assert min(values) > 1e-4 and max(values) < 10
     assert not list(tmp_path.glob("*.checkpoint.npz"))
+
+
+def test_the_local_cluster_slows_dasks_housekeeping(client):
+    # The settings are read in the worker processes, which the nannies spawn with the client's configuration.
+    def settings():
+        import dask
+        return {key: dask.config.get(key) for key in streaming.LOCAL_CONFIG}
+    for worker, found in client.run(settings).items():
+        assert found == streaming.LOCAL_CONFIG, worker
+    assert client.cluster.scheduler._tick_interval == 1.0  # the scheduler's own event loop check
 
 
 def test_a_stopped_run_resumes_to_the_same_bytes(serial_run, tmp_path):

@@ -30,7 +30,7 @@ MAX_SAMPLES = 10_000_000  # jointcomp montecarlo's cap too: the CSV then holds a
 BATCH_SECONDS = 2.0       # a batch's work, from the measured cost of a draw
 CHECKPOINT = "montecarlo.checkpoint.npz"
 CSV_NAME = "montecarlo.csv"
-FORMAT = "jointcomp-montecarlo/2"
+FORMAT = "jointcomp-montecarlo/3"  # of the checkpoint (/3: its counts sparse)
 
 
 class Interrupted(DistributedError):

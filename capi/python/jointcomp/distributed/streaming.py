@@ -9,6 +9,7 @@ works in a temporary folder removed on leaving, and serves no dashboard unless a
 import contextlib
 import os
 import pathlib
+import queue
 import shutil
 import signal
 import tempfile
@@ -88,6 +89,21 @@ def cluster(client=None, scheduler=None, n_workers=None, start_timeout=30.0, das
         shutil.rmtree(scratch, ignore_errors=True)
 
 
+# Dask's periodic housekeeping, slowed down for the LocalCluster started here (a cluster you give keeps its
+# own settings). With the defaults an idle LocalCluster of 2 workers took 129 ms of CPU a second (55 in the
+# client, which hosts the scheduler and the nannies; 74 in the workers), 1.3 ms a draw at 100 draws/s; with
+# these, 14 (docs/performance.md). What they slow: the event loops' health check (every 20 ms: a blocked
+# loop is still reported after 3 s), the workers' statistical profiler (a stack sample every 10 ms, for the
+# dashboard), the system monitor (every 0.5 s, for the dashboard) and the workers' memory check (0.1 s;
+# no result is kept on a worker here, a batch's memory is its own).
+LOCAL_CONFIG = {
+    "distributed.admin.tick.interval": "1s",
+    "distributed.worker.profile.enabled": False,
+    "distributed.admin.system-monitor.interval": "5s",
+    "distributed.worker.memory.monitor-interval": "1s",
+}
+
+
 def _start_local(distributed, n_workers, start_timeout, dashboard, scratch):
     # The scheduler's HTTP server starts whatever the dashboard setting: on loopback and a free port unless a
     # dashboard address is asked for (dashboard_address=None alone still bound 0.0.0.0:8787).
@@ -96,10 +112,13 @@ def _start_local(distributed, n_workers, start_timeout, dashboard, scratch):
     # process group, and this process, not each worker with its own traceback, stops the run and the cluster.
     main_thread = threading.current_thread() is threading.main_thread()
     interrupt = signal.signal(signal.SIGINT, signal.SIG_IGN) if main_thread else None
+    import dask
     try:
-        return distributed.LocalCluster(n_workers=n_workers, threads_per_worker=1, processes=True,
-                                        host="127.0.0.1", dashboard_address=None, scheduler_kwargs=scheduler_kwargs,
-                                        local_directory=scratch, silence_logs=40, timeout=start_timeout)
+        with dask.config.set(LOCAL_CONFIG):  # read by the scheduler and the nannies, handed to the workers
+            return distributed.LocalCluster(n_workers=n_workers, threads_per_worker=1, processes=True,
+                                            host="127.0.0.1", dashboard_address=None,
+                                            scheduler_kwargs=scheduler_kwargs, local_directory=scratch,
+                                            silence_logs=40, timeout=start_timeout)
     except (TimeoutError, OSError, RuntimeError) as error:
         raise DistributedError("the local cluster of %d workers did not start within %g s (%s)" % (
             n_workers, start_timeout, error)) from None
@@ -144,10 +163,12 @@ def stream(client, function, job, items, merge, *, in_flight, timeout, retries, 
             if time.monotonic() > deadline:
                 raise DistributedError("%s: not done within %g s" % (describe, timeout))
         return
-    distributed = _import_distributed()
     items = enumerate(items)  # (sequence number, item): merged in that order
-    pending, done, excluded, in_progress = [], {}, set(), {}
-    futures = distributed.as_completed(loop=client.loop)
+    pending, done, excluded = [], {}, set()
+    in_progress = {}  # future key -> (future, numbered): what is submitted and not yet taken back
+    # Finished futures arrive through their callbacks: the loop sleeps until one does (polling every 20 ms
+    # cost the client 0.2 ms of CPU a draw), waking every WAKE s to check the deadline and the connection.
+    finished = queue.Queue()
     where = scheduler or "the scheduler"
     _probe(client, excluded, describe)
 
@@ -155,8 +176,8 @@ def stream(client, function, job, items, merge, *, in_flight, timeout, retries, 
         workers = _usable_workers(client, excluded, describe)
         future = client.submit(function, job, numbered[1], retries=retries, pure=False, workers=workers,
                                allow_other_workers=False)
-        futures.add(future)
-        in_progress[future.key] = numbered
+        in_progress[future.key] = (future, numbered)
+        future.add_done_callback(finished.put)
         if not again:
             pending.append(numbered[0])
 
@@ -166,9 +187,9 @@ def stream(client, function, job, items, merge, *, in_flight, timeout, retries, 
             if len(pending) >= in_flight:
                 break
         while pending:
-            future = _next_done(futures, client, deadline, describe, where, timeout)
-            numbered = in_progress.pop(future.key)
+            future, numbered = _next_done(finished, in_progress, client, deadline, describe, where, timeout)
             result = _result(future, numbered[1], client, excluded, describe, where)
+            future.release()  # the scheduler forgets the result now, not when the future is collected
             if result is _AGAIN:
                 submit(numbered, again=True)
                 continue
@@ -181,19 +202,29 @@ def stream(client, function, job, items, merge, *, in_flight, timeout, retries, 
     except BaseException:
         if client.status == "running":  # a client that lost its scheduler would wait for it to cancel
             with contextlib.suppress(Exception):
-                client.cancel(list(futures.futures))
+                client.cancel([future for future, _ in in_progress.values()])
         raise
 
 
 _AGAIN = object()
 
 
-def _next_done(futures, client, deadline, describe, where, timeout):
-    """The next finished future; DistributedError past the deadline or once the scheduler is lost."""
+WAKE = 0.25  # s: how often a run waiting for its tasks checks its deadline and its scheduler
+
+
+def _next_done(finished, in_progress, client, deadline, describe, where, timeout):
+    """(future, numbered) of the next finished task; DistributedError past the deadline or once the
+    scheduler is lost."""
     lost_since = None
-    while not futures.has_ready():
-        if futures.is_empty():
+    while True:
+        if not in_progress:
             raise DistributedError("%s: no task left in flight (lost %s?)" % (describe, where))
+        try:
+            future = finished.get(timeout=WAKE)
+        except queue.Empty:
+            future = None
+        if future is not None and future.key in in_progress:
+            return in_progress.pop(future.key)
         now = time.monotonic()
         if now > deadline:
             raise DistributedError("%s: not done within %g s" % (describe, timeout))
@@ -203,8 +234,6 @@ def _next_done(futures, client, deadline, describe, where, timeout):
                 raise DistributedError("%s: lost %s (no connection for %g s)" % (describe, where, LOST_AFTER))
         else:
             lost_since = None
-        time.sleep(0.02)
-    return next(futures)
 
 
 def _usable_workers(client, excluded, describe):
