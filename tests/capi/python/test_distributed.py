@@ -196,7 +196,9 @@ def test_the_local_cluster_slows_dasks_housekeeping(client):
         return {key: dask.config.get(key) for key in streaming.LOCAL_CONFIG}
     for worker, found in client.run(settings).items():
         assert found == streaming.LOCAL_CONFIG, worker
-    assert client.cluster.scheduler._tick_interval == 1.0  # the scheduler's own event loop check
+    scheduler = client.cluster.scheduler  # in this process
+    assert scheduler._tick_interval == 1.0  # its own event loop check
+    assert scheduler.transition_log.maxlen == streaming.LOCAL_CONFIG["distributed.scheduler.transition-log-length"]
 
 
 def test_a_stopped_run_resumes_to_the_same_bytes(serial_run, tmp_path):

@@ -95,12 +95,16 @@ def cluster(client=None, scheduler=None, n_workers=None, start_timeout=30.0, das
 # these, 14 (docs/performance.md). What they slow: the event loops' health check (every 20 ms: a blocked
 # loop is still reported after 3 s), the workers' statistical profiler (a stack sample every 10 ms, for the
 # dashboard), the system monitor (every 0.5 s, for the dashboard) and the workers' memory check (0.1 s;
-# no result is kept on a worker here, a batch's memory is its own).
+# no result is kept on a worker here, a batch's memory is its own). The scheduler, in this process, logs
+# each task's transitions (4) and events (1) for debugging, about 2 kB a task, up to 100,000 of each: 10,000
+# are kept, so that what the client holds of them stops growing after 2,500 to 10,000 batches (a few MB).
 LOCAL_CONFIG = {
     "distributed.admin.tick.interval": "1s",
     "distributed.worker.profile.enabled": False,
     "distributed.admin.system-monitor.interval": "5s",
     "distributed.worker.memory.monitor-interval": "1s",
+    "distributed.scheduler.transition-log-length": 10000,
+    "distributed.scheduler.events-log-length": 10000,
 }
 
 
