@@ -1,4 +1,5 @@
-"""Where the distributed jobs write: checked before any work, and names from user data kept inside it.
+"""Where the distributed jobs write: checked before any work, names from user data kept inside it, and
+scratch folders that a killed run does not leave behind for good.
 
 The same rules as the command-line tool's (cli/output_paths.cpp): an output folder is made if needed and
 proved writable before a long run starts, and a name taken from the user's data (a campaign file's name, a
@@ -9,6 +10,7 @@ import contextlib
 import os
 import pathlib
 import re
+import shutil
 import tempfile
 
 MAX_NAME_LENGTH = 64
@@ -80,3 +82,69 @@ def write_atomically(path, write):
             with contextlib.suppress(OSError):
                 os.unlink(temporary)
         raise
+
+
+# Scratch folders in the temporary root (tempfile.gettempdir()) are named <prefix><pid>-<start>-<random>, the
+# pid and start time (/proc's clock ticks since boot) of the process that owns them: a run killed with SIGKILL
+# cannot remove its folder (nor Dask's worker space inside it), and the next run removes it once that
+# process is gone. The start time tells a reused pid from the owner.
+SCRATCH_PREFIXES = ("jointcomp-dask-", "jointcomp-fleet-")
+
+
+def _start_time(pid):
+    """Process ``pid``'s start time as text, "0" when it runs but /proc cannot tell; None when it is gone."""
+    try:
+        with open("/proc/%d/stat" % pid, "rb") as stream:
+            return stream.read().rsplit(b")", 1)[1].split()[19].decode()  # field 22, starttime
+    except FileNotFoundError:
+        return None
+    except (OSError, IndexError):
+        pass
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return None
+    except OSError:  # another user's process: it runs
+        pass
+    return "0"
+
+
+def remove_stale_scratch_folders(root=None):
+    """Removes this user's scratch folders (SCRATCH_PREFIXES) in ``root`` (the temporary root by default)
+    whose owner process is gone; returns their paths. Others, and names of another form, are left alone."""
+    root = root or tempfile.gettempdir()
+    pattern = re.compile("(?:%s)([0-9]+)-([0-9]+)-" % "|".join(re.escape(p) for p in SCRATCH_PREFIXES))
+    removed = []
+    try:
+        entries = list(os.scandir(root))
+    except OSError:
+        return removed
+    for entry in entries:
+        match = pattern.match(entry.name)
+        if not match:
+            continue
+        try:
+            if not entry.is_dir(follow_symlinks=False) or entry.stat(follow_symlinks=False).st_uid != os.getuid():
+                continue
+        except OSError:
+            continue
+        now = _start_time(int(match.group(1)))
+        if now is None or ("0" not in (now, match.group(2)) and now != match.group(2)):
+            shutil.rmtree(entry.path, ignore_errors=True)
+            removed.append(entry.path)
+    return removed
+
+
+@contextlib.contextmanager
+def scratch_folder(prefix):
+    """A new scratch folder in the temporary root named for this process (see SCRATCH_PREFIXES), removed on
+    leaving; those that killed runs left behind are removed first."""
+    if prefix not in SCRATCH_PREFIXES:
+        raise ValueError("scratch folder prefix %r is not one of %s" % (prefix, SCRATCH_PREFIXES))
+    remove_stale_scratch_folders()
+    pid = os.getpid()
+    folder = tempfile.mkdtemp(prefix="%s%d-%s-" % (prefix, pid, _start_time(pid) or "0"))
+    try:
+        yield folder
+    finally:
+        shutil.rmtree(folder, ignore_errors=True)

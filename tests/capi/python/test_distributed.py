@@ -4,6 +4,7 @@ The quasi-static robot and a few draws keep the file short: one cluster serves m
 runs (this process, no Dask) are the reference the cluster's results must equal byte for byte.
 """
 
+import contextlib
 import io
 import json
 import math
@@ -284,6 +285,58 @@ def test_a_client_killed_at_half_way_resumes_to_the_same_bytes(serial_run, tmp_p
     jd.monte_carlo(RX170_URDF, RX170_PARAMETERS, samples=SAMPLES, seed=7, serial=True, out=tmp_path, resume=True)
     assert _bytes(tmp_path) == _bytes(serial_out)
     assert not (tmp_path / montecarlo.CHECKPOINT).exists()
+
+
+_KILLED_CLUSTER_CLIENT = """
+import os, signal, sys
+from jointcomp import distributed as jd
+def kill_at_the_first_batch(done, total, rate):
+    os.kill(os.getpid(), signal.SIGKILL)
+jd.monte_carlo(sys.argv[1], sys.argv[2], samples=2, seed=7, n_workers=1, out=sys.argv[3], batch_size=1,
+               start_timeout=120, progress=kill_at_the_first_batch)
+"""
+
+
+def test_a_killed_clients_scratch_folders_are_removed_by_the_next_run(tmp_path, monkeypatch):
+    """SIGKILL of a client whose LocalCluster works in the temporary root: its folder (with Dask's worker
+    space) stays behind, its worker processes end, and the next run, serial or not, removes it; a folder whose
+    owner runs and names of another form are kept."""
+    import psutil
+    from jointcomp import _paths
+    root = tmp_path / "tmp"
+    root.mkdir()
+    child = subprocess.Popen([sys.executable, "-c", _KILLED_CLUSTER_CLIENT, str(RX170_URDF), str(RX170_PARAMETERS),
+                              str(tmp_path / "killed")], env=dict(os.environ, TMPDIR=str(root)),
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    _, errors = child.communicate(timeout=120)
+    assert child.returncode == -signal.SIGKILL, errors.decode()[-2000:]
+    left = list(root.glob("jointcomp-dask-%d-*" % child.pid))
+    assert len(left) == 1, sorted(p.name for p in root.iterdir())
+    assert list(left[0].rglob("worker-*")), "the killed run's folder has no Dask worker space"
+
+    def in_root(process):
+        with contextlib.suppress(psutil.Error):
+            return process.environ().get("TMPDIR") == str(root)
+        return False
+    deadline = time.monotonic() + 20
+    while any(in_root(p) for p in psutil.process_iter()) and time.monotonic() < deadline:
+        time.sleep(0.2)
+    assert not [p.cmdline() for p in psutil.process_iter() if in_root(p)], "the killed client's workers live on"
+
+    monkeypatch.setattr(tempfile, "tempdir", str(root))
+    other_form = root / "jointcomp-dask-handmade"
+    other_form.mkdir()
+    live = root / ("jointcomp-fleet-%d-%s-x" % (os.getpid(), _paths._start_time(os.getpid())))  # its owner runs
+    live.mkdir()
+    reused = root / ("jointcomp-dask-%d-1-x" % os.getpid())  # its pid runs, but started at another time
+    reused.mkdir()
+    jd.monte_carlo(RX170_URDF, RX170_PARAMETERS, samples=1, seed=7, serial=True, out=tmp_path / "next")
+    assert not left[0].exists() and not reused.exists()
+    assert live.is_dir() and other_form.is_dir()
+    own = "jointcomp-dask-%d-%s-" % (os.getpid(), _paths._start_time(os.getpid()))
+    with _paths.scratch_folder("jointcomp-dask-") as made:  # named for this process, removed on leaving
+        assert pathlib.Path(made).name.startswith(own)
+    assert not pathlib.Path(made).exists() and live.is_dir()
 
 
 def test_an_interrupt_inside_a_merge_keeps_the_last_checkpoint(serial_run, tmp_path, monkeypatch):

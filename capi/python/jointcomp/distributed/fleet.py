@@ -8,11 +8,10 @@ import io
 import json
 import os
 import pathlib
-import tempfile
 
 import numpy as np
 
-from .._paths import plain_file_name, prepare_output_folder
+from .._paths import plain_file_name, prepare_output_folder, remove_stale_scratch_folders, scratch_folder
 from . import streaming as _cluster
 from .laws import DistributedError
 from .results import save_figure, write_text
@@ -141,7 +140,7 @@ def _fleet_task(job, item):
     written = {}
     try:
         with contextlib.ExitStack() as stack:
-            folder = stack.enter_context(tempfile.TemporaryDirectory(prefix="jointcomp-fleet-"))
+            folder = stack.enter_context(scratch_folder("jointcomp-fleet-"))
             for k, (path, text) in enumerate([(campaign_path, campaign_text)] + list(holdout_files)):
                 # Named as the user's file, so that the library's messages name it.
                 local = os.path.join(folder, str(k), os.path.basename(path))
@@ -216,6 +215,7 @@ def fleet(urdf, parameters, campaigns, out, *, method="calibrate", holdouts=None
     if method not in ("calibrate", "discover"):
         raise DistributedError("method is %r, must be \"calibrate\" or \"discover\"" % (method,))
     out = prepare_output_folder(out, DistributedError, "out")
+    remove_stale_scratch_folders()  # what killed runs left, whether this one runs on a cluster or not
     campaigns = [str(c) for c in ([campaigns] if isinstance(campaigns, (str, os.PathLike)) else campaigns)]
     if not campaigns:
         raise DistributedError("campaigns: none given")

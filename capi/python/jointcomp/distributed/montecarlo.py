@@ -18,7 +18,7 @@ import time
 
 import numpy as np
 
-from .._paths import prepare_output_folder, write_atomically
+from .._paths import prepare_output_folder, remove_stale_scratch_folders, write_atomically
 from . import streaming as _cluster
 from .laws import (BoundLaw, DistributedError, check_distribution, load_distribution, main_job_distribution,
                    report_distribution)
@@ -283,6 +283,7 @@ def monte_carlo(urdf, parameters, *, samples=100, seed=DEFAULT_SEED, report=None
     _check_arguments(samples, seed, band_points)
     if out is not None:
         out = prepare_output_folder(out, DistributedError, "out")
+    remove_stale_scratch_folders()  # what killed runs left, whether this one runs on a cluster or not
     job, not_propagated, seconds, band_time = _prepare_job(urdf, parameters, seed, report, distribution,
                                                            use_plant, band_points)
     job["key"] = _fingerprint(job, None)  # what the workers' prepared job depends on (not the number of draws)

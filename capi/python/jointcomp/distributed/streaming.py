@@ -3,19 +3,19 @@
 Failures say what happened: a scheduler without workers is an error within ``start_timeout`` naming it; a
 worker that cannot load the library is left out and its task runs elsewhere; a lost scheduler or Ctrl-C
 stop the run with the number of tasks done (the caller's checkpoint keeps them); a LocalCluster started here
-works in a temporary folder removed on leaving, and serves no dashboard unless asked.
+works in a temporary folder removed on leaving (or by the next run, when it was killed), and serves no
+dashboard unless asked.
 """
 
 import contextlib
 import os
 import pathlib
 import queue
-import shutil
 import signal
-import tempfile
 import threading
 import time
 
+from .._paths import scratch_folder
 from .laws import DistributedError
 
 
@@ -77,16 +77,13 @@ def cluster(client=None, scheduler=None, n_workers=None, start_timeout=30.0, das
     if n_workers < 1:
         raise DistributedError("n_workers is %d, must be at least 1" % n_workers)
     _export_environment()
-    scratch = tempfile.mkdtemp(prefix="jointcomp-dask-")
-    try:
+    with scratch_folder("jointcomp-dask-") as scratch:  # named for this process: a kill's is removed next time
         local = _start_local(distributed, n_workers, start_timeout, dashboard, scratch)
         try:
             with distributed.Client(local, set_as_default=False) as connected:
                 yield connected
         finally:
             local.close()
-    finally:
-        shutil.rmtree(scratch, ignore_errors=True)
 
 
 # Dask's periodic housekeeping, slowed down for the LocalCluster started here (a cluster you give keeps its
