@@ -235,6 +235,12 @@ void PeriodicTableEffect::setParameters(const std::vector<double>& values) {
   }
   for (std::size_t k = 0; k < values.size(); ++k) {
     if (!std::isfinite(values[k])) throw ParameterError("periodic_table: " + parameterNames()[k] + " is not finite");
+    // The reader's bound, so that a fit never makes an effect whose parameter file would be refused.
+    if (std::abs(values[k]) > kMaxStatedJointError) {
+      throw ParameterError("periodic_table: " + parameterNames()[k] + " is " + shortNumber(values[k]) +
+                           " rad, beyond the plausible +-" + shortNumber(kMaxStatedJointError) +
+                           " rad of a joint error");
+    }
   }
   std::size_t at = 0;
   for (PeriodicTable& t : tables_) {
@@ -326,6 +332,20 @@ std::unique_ptr<Effect> PeriodicTableDiscovery::makeEffect(const DiscoveryData& 
     tables.push_back(std::move(table));
   }
   return std::make_unique<PeriodicTableEffect>(*data.robot, *data.gears, tables);
+}
+
+std::string PeriodicTableDiscovery::physicalProblem(const DiscoveryData& data, const DiscoveryCandidate& candidate,
+                                                    const Eigen::VectorXd& theta, const JointVector&) const {
+  if (candidate.joint < 0 || theta.size() == 0) return {};
+  const double largest = theta.cwiseAbs().maxCoeff();
+  if (largest <= kMaxStatedJointError) return {};
+  char text[240];
+  std::snprintf(text, sizeof(text),
+                "not physical: %s's periodic_table of the %s (%d knots) has a coefficient of %.3g rad, beyond the "
+                "plausible %.3g rad of a joint error",
+                jointNameOf(data, candidate.joint).c_str(), candidate.part.c_str(), static_cast<int>(candidate.cycles),
+                largest, kMaxStatedJointError);
+  return text;
 }
 
 std::vector<NamedEstimate> PeriodicTableDiscovery::describe(const FittedCandidate& fitted,

@@ -84,6 +84,9 @@ public:
   std::unique_ptr<Effect> makeEffect(const DiscoveryData& data,
                                      const std::vector<FittedCandidate>& accepted) const override;
   std::vector<NamedEstimate> describe(const FittedCandidate& fitted, const JointErrorModel& model) const override;
+  // Physical: coefficients a parameter file may state (kMaxStatedJointError).
+  std::string physicalProblem(const DiscoveryData& data, const DiscoveryCandidate& candidate,
+                              const Eigen::VectorXd& theta, const JointVector& compliance) const override;
 };
 
 }  // namespace jointcomp

@@ -170,6 +170,14 @@ void TransmissionErrorEffect::setParameters(const std::vector<double>& values) {
     if (!std::isfinite(values[2 * i]) || !std::isfinite(values[2 * i + 1])) {
       throw ParameterError("transmission_error: harmonic " + std::to_string(i) + " has a value that is not finite");
     }
+    // The reader's bounds, so that a fit never makes an effect whose parameter file would be refused.
+    const double amplitude = values[2 * i];
+    if (amplitude < 0.0 || amplitude > kMaxStatedJointError) {
+      throw ParameterError(
+          "transmission_error: " + parameterNames()[2 * i] + " is " + shortNumber(amplitude) + " rad, " +
+          (amplitude < 0.0 ? std::string("negative (the phase carries the sign)")
+                           : "beyond the plausible " + shortNumber(kMaxStatedJointError) + " rad of a joint error"));
+    }
   }
   for (std::size_t i = 0; i < harmonics_.size(); ++i) {
     harmonics_[i].amplitude_rad = values[2 * i];
@@ -261,6 +269,20 @@ std::unique_ptr<Effect> HarmonicDiscovery::makeEffect(const DiscoveryData& data,
     harmonics.push_back(h);
   }
   return std::make_unique<TransmissionErrorEffect>(*data.robot, *data.gears, harmonics);
+}
+
+std::string HarmonicDiscovery::physicalProblem(const DiscoveryData& data, const DiscoveryCandidate& candidate,
+                                               const Eigen::VectorXd& theta, const JointVector&) const {
+  if (candidate.joint < 0 || theta.size() != 2) return {};
+  const double amplitude = std::hypot(theta[0], theta[1]);
+  if (amplitude <= kMaxStatedJointError) return {};
+  char text[240];
+  std::snprintf(text, sizeof(text),
+                "not physical: %s's transmission_error harmonic of order %g of the %s has an amplitude of %.3g rad, "
+                "beyond the plausible %.3g rad of a joint error",
+                jointNameOf(data, candidate.joint).c_str(), candidate.cycles, candidate.part.c_str(), amplitude,
+                kMaxStatedJointError);
+  return text;
 }
 
 std::vector<NamedEstimate> HarmonicDiscovery::describe(const FittedCandidate& fitted,

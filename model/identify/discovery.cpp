@@ -384,7 +384,7 @@ private:
   // were fitted together with that calibration's free parameters.
   void refit(bool released) {
     for (int it = 0; it < options_.refit_iterations; ++it) {
-      model_ = buildModel(prior_, active_, features_, data_, options_);
+      if (!rebuildModel()) return;
       if (it > 0 || released || active_.empty()) cal_ = calibrate(model_);
       if (active_.empty()) break;
       lin_ = linearise(model_, fittedRows(model_), cal_, features_, active_, cuts_, false);
@@ -395,7 +395,7 @@ private:
           active_[k].theta[static_cast<Eigen::Index>(c)] += base_fit_.d[columns[c]] / base_scale_[columns[c]];
       }
     }
-    model_ = buildModel(prior_, active_, features_, data_, options_);
+    if (!rebuildModel()) return;
     cal_ = calibrate(model_);
     lin_ = linearise(model_, fittedRows(model_), cal_, features_, active_, cuts_, false);
     fitBase(true);
@@ -407,6 +407,18 @@ private:
         const double variance = sigma2 * base_fit_.inverse(columns[c], columns[c]);
         active_[k].sigma[static_cast<Eigen::Index>(c)] = std::sqrt(std::max(0.0, variance)) / base_scale_[columns[c]];
       }
+    }
+  }
+
+  // model_ from the active coefficients; false, model_ kept, when a refit carried one beyond what its effect
+  // accepts and its family calls that not physical (the caller then undoes the step).
+  bool rebuildModel() {
+    try {
+      model_ = buildModel(prior_, active_, features_, data_, options_);
+      return true;
+    } catch (const ParameterError&) {
+      if (unphysicalActive().empty()) throw;
+      return false;
     }
   }
 

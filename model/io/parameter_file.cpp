@@ -2,6 +2,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <map>
 #include <memory>
@@ -74,6 +75,25 @@ void refuseRepeatedParameters(const std::vector<std::unique_ptr<Effect>>& effect
                         ") states already; list each effect of a joint once (they would be summed)");
       }
     }
+  }
+}
+
+// What is written reads back: the document goes through the reader (the built-in effect types; one of
+// another registry is left to that registry's reader), so that a command never writes a file it refuses.
+void requireReadable(const nlohmann::ordered_json& document, const JointErrorModel& model) {
+  const std::vector<std::string> known = EffectRegistry::builtin().effectTypes();
+  nlohmann::ordered_json checked = document;
+  nlohmann::ordered_json& effects = checked["effects"];
+  nlohmann::ordered_json kept = nlohmann::ordered_json::array();
+  for (const auto& effect : effects) {
+    if (std::find(known.begin(), known.end(), effect.value("type", "")) != known.end()) kept.push_back(effect);
+  }
+  effects = kept;
+  try {
+    parseParameterSet(checked.dump(), "the parameter file to be written", model.sharedRobot(),
+                      EffectRegistry::builtin());
+  } catch (const ParameterError& error) {
+    throw ParameterError(std::string("refusing to write a parameter file its own reader refuses: ") + error.what());
   }
 }
 
@@ -157,7 +177,9 @@ std::string parametersToJson(const JointErrorModel& model, const std::vector<Dri
                         {"target_in_flange_m", {tool->in_flange.x(), tool->in_flange.y(), tool->in_flange.z()}}};
   }
   requireFiniteNumbers(document, "parameters");
-  return document.dump(2) + "\n";
+  std::string text = document.dump(2) + "\n";
+  requireReadable(document, model);
+  return text;
 }
 
 void saveParameterFile(const JointErrorModel& model, const std::string& path,

@@ -14,6 +14,8 @@
 #include "model/effects/compliance.hpp"
 #include "model/effects/hysteresis.hpp"
 #include "model/effects/nonlinear_compliance.hpp"
+#include "model/effects/periodic_table.hpp"
+#include "model/effects/transmission_error.hpp"
 #include "model/identify/discovery.hpp"
 #include "model/identify/geometric_calibration.hpp"
 #include "tests/identify/identify_test_support.hpp"
@@ -138,6 +140,42 @@ TEST(DiscoveryPhysical, ALostMotionLagsAndStaysSmall) {
   EXPECT_EQ(hysteresisProblem(bound * 0.99), "");
   EXPECT_NE(hysteresisProblem(bound * 1.01).find("beyond the plausible"), std::string::npos);
   EXPECT_NE(hysteresisProblem(-1e-7).find("negative"), std::string::npos);
+}
+
+// A harmonic or a periodic table is physical up to what a parameter file may state (kMaxStatedJointError):
+// beyond it discovery refuses the candidate, naming the effect, the joint and the part, instead of building
+// an effect that refuses the values (or writing a file its reader refuses).
+TEST(DiscoveryPhysical, HarmonicsAndTablesStayWithinWhatAFileMayState) {
+  const JointErrorModel model = rx170Model();
+  const DiscoveryData data = joint2Data(model, {-50.0, 20.0, 40.0});
+  DiscoveryCandidate candidate;
+  candidate.joint = 1;
+  candidate.part = "stage_2";
+  candidate.cycles = 2;
+  const JointVector compliance = JointVector::Zero(6);
+  const HarmonicDiscovery harmonic;
+  const double bound = kMaxStatedJointError;
+  auto harmonicProblem = [&](double a, double b) {
+    return harmonic.physicalProblem(data, candidate, Eigen::Vector2d(a, b), compliance);
+  };
+  // The amplitude is |(a, b)|: 0.6 and 0.8 of the bound make exactly it.
+  EXPECT_EQ(harmonicProblem(0.6 * bound, -0.8 * bound * 0.999), "");
+  const std::string message = harmonicProblem(0.6 * bound, -0.8 * bound * 1.01);
+  EXPECT_NE(message.find("not physical: " + model.robot().joints[1].name +
+                         "'s transmission_error harmonic of "
+                         "order 2 of the stage_2"),
+            std::string::npos)
+      << message;
+  const PeriodicTableDiscovery table;
+  candidate.cycles = 16;
+  auto tableProblem = [&](double extreme) {
+    return table.physicalProblem(data, candidate, Eigen::Vector4d(0.01, extreme, -0.02, 0.0), compliance);
+  };
+  EXPECT_EQ(tableProblem(-bound), "");
+  const std::string table_message = tableProblem(-bound * 1.001);
+  EXPECT_NE(table_message.find(model.robot().joints[1].name + "'s periodic_table of the stage_2"), std::string::npos)
+      << table_message;
+  EXPECT_NE(table_message.find("beyond the plausible 0.1 rad"), std::string::npos) << table_message;
 }
 
 TEST(CalibrationPhysical, AComplianceIsPositiveStiffEnoughAndDeflectsLittle) {

@@ -182,6 +182,33 @@ TEST(TransmissionIdentification, UpdatedParameterFileHoldsTheHarmonics) {
   EXPECT_THAT(transmissionSummary(result, ReportSources{}, &truth), HasSubstr("stage_2"));
 }
 
+// A harmonic fitted beyond what a parameter file may state (kMaxStatedJointError, 0.1 rad) is refused when
+// it would become the model's, naming the effect, the joint and the part, rather than written into a file
+// its reader refuses. Two in-phase effects of 0.06 rad each drive the fit to 0.12 rad.
+TEST(TransmissionIdentification, AHarmonicFittedBeyondTheBoundIsRefusedNamingIt) {
+  const JointErrorModel nominal = rx170Model();
+  double amplitude = 0.0, phase = 0.0;
+  ASSERT_TRUE(trueHarmonic(nominal, 1, 2, 2.0, amplitude, phase));
+  JointErrorModel truth = nominal;
+  for (int copy = 0; copy < 2; ++copy) {
+    truth.addEffect(std::make_unique<TransmissionErrorEffect>(truth.robot(), truth.gears(),
+                                                              std::vector<Harmonic>{{1, 2, 2.0, 0.06, phase}}));
+  }
+  TransmissionIdentificationOptions options;
+  options.spectrum_step = 1.0;  // the spectrum is not under test here
+  const TransmissionIdentificationResult result = identifyTransmissionError(nominal, sweep(truth, 1, false), options);
+  const HarmonicEstimate* h = find(result.harmonics, 2.0);
+  ASSERT_NE(h, nullptr);
+  EXPECT_GT(h->amplitude_rad, kMaxStatedJointError);  // the fit itself follows the data
+  try {
+    withIdentifiedHarmonics(nominal, result, "sweep.csv");
+    ADD_FAILURE() << "a harmonic of " << h->amplitude_rad << " rad was taken into the model";
+  } catch (const ParameterError& error) {
+    EXPECT_THAT(error.what(), HasSubstr("transmission_error: joint_2.harmonic_stage_2_x2.amplitude_rad is"));
+    EXPECT_THAT(error.what(), HasSubstr("beyond the plausible 0.1 rad"));
+  }
+}
+
 TEST(TransmissionIdentification, JointAngleFromLevelsWhenNoPositions) {
   const JointErrorModel nominal = rx170Model();
   MeasurementCampaign campaign = sweep(nominal, 1, false);

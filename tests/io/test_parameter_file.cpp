@@ -18,6 +18,7 @@
 
 #include "model/common/errors.hpp"
 #include "model/effects/compliance.hpp"
+#include "model/effects/periodic_table.hpp"
 #include "model/effects/registry.hpp"
 #include "model/effects/spring_balancer.hpp"
 #include "model/effects/transmission_error.hpp"
@@ -169,6 +170,64 @@ TEST(ParameterFile, RoundTripsArbitraryValuesBitForBit) {
   }
   const JointErrorModel again = parseParameters(parametersToJson(model), "round trip", rx170());
   expectSameModel(model, again);
+}
+
+// The reader's 0.1 rad bound on a stated joint error (kMaxStatedJointError) holds for every way an effect
+// gets its values: a harmonic and a table at the bound are written and read back bit for bit; one ulp
+// beyond it no effect takes (a fit reaching it is refused, naming the effect, the joint and the part).
+TEST(ParameterFile, ValuesAtTheStatedJointErrorBoundRoundTripAndBeyondItAreRefused) {
+  JointErrorModel model = loadParameterFile(rx170ParametersPath(), rx170());
+  const double bound = kMaxStatedJointError;
+  model.addEffect(std::make_unique<TransmissionErrorEffect>(
+      *rx170(), model.gears(), std::vector<Harmonic>{{2, 1, 3.0, bound, -0.25}, {3, 1, 2.0, 0.0, 1.0}}));
+  model.addEffect(std::make_unique<PeriodicTableEffect>(
+      *rx170(), model.gears(), std::vector<PeriodicTable>{{4, 1, {bound, -bound, 0.5 * bound, 0.0}}}));
+  const JointErrorModel again = parseParameters(parametersToJson(model), "at the bound", rx170());
+  expectSameModel(model, again);
+
+  const double beyond = std::nextafter(bound, 1.0);
+  Effect& harmonics = model.effect(model.effectCount() - 2);
+  std::vector<double> values = harmonics.parameters();
+  values[0] = beyond;
+  try {
+    harmonics.setParameters(values);
+    ADD_FAILURE() << "a harmonic beyond the bound was taken";
+  } catch (const ParameterError& error) {
+    EXPECT_THAT(error.what(), HasSubstr("transmission_error: joint_3.harmonic_motor_x3.amplitude_rad is 0.1 rad, "
+                                        "beyond the plausible 0.1 rad"));
+  }
+  values[0] = -1e-9;  // the reader wants the sign in the phase
+  EXPECT_THROW(harmonics.setParameters(values), ParameterError);
+  Effect& table = model.effect(model.effectCount() - 1);
+  values = table.parameters();
+  values[1] = -beyond;
+  try {
+    table.setParameters(values);
+    ADD_FAILURE() << "a table coefficient beyond the bound was taken";
+  } catch (const ParameterError& error) {
+    EXPECT_THAT(error.what(), HasSubstr("periodic_table: joint_5.periodic_motor.c1_rad is -0.1 rad, beyond"));
+  }
+  // A refused value leaves the effect as it was, and it still writes a file that reads back.
+  expectSameModel(model, parseParameters(parametersToJson(model), "after refusals", rx170()));
+}
+
+// No command writes a file its own reader refuses: what the writer would write goes through the reader first
+// (here one compliance listed twice, which the reader refuses as summed), and nothing is written.
+TEST(ParameterFile, AFileItsReaderWouldRefuseIsNotWritten) {
+  JointErrorModel model = loadParameterFile(rx170ParametersPath(), rx170());
+  const int springs = model.jointSprings();
+  ASSERT_GE(springs, 0);
+  model.addEffect(model.effect(springs).clone());
+  const std::string path = ::testing::TempDir() + "/jointcomp_refused_by_reader.json";
+  std::filesystem::remove(path);
+  try {
+    saveParameterFile(model, path);
+    ADD_FAILURE() << "a file the reader refuses was written";
+  } catch (const ParameterError& error) {
+    EXPECT_THAT(error.what(), HasSubstr("refusing to write a parameter file its own reader refuses"));
+    EXPECT_THAT(error.what(), HasSubstr("list each effect of a joint once"));
+  }
+  EXPECT_FALSE(std::filesystem::exists(path));
 }
 
 TEST(ParameterFile, SaveWritesAFileThatLoadsBack) {
