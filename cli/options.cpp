@@ -25,7 +25,7 @@ constexpr OptionHelp kOptionHelp[] = {
     {"out", "output folder (a file for simulate, the importers and export-fmu); checked before any work"},
     {"campaign",
      "measurement campaign(s) to fit (docs/measurement-campaign.md), comma-separated or repeated; calibrate takes "
-     "at most 1,000,000 rows in all (about 6 KB of memory a row), discover at most 100,000 (about 50 KB a row)"},
+     "at most 1,000,000 rows in all (about 3.4 KB of memory a row), discover at most 100,000 (about 50 KB a row)"},
     {"holdout", "held-out campaign(s), evaluated with only their instrument frame refitted; repeatable"},
     {"seed", "random seed, 0 to 2^62"},
     {"compensate-joints", "joints whose references are compensated, e.g. 2,3 (default: all)"},

@@ -64,6 +64,12 @@ CalibrationData prepareCalibrationData(const JointErrorModel& prior, const Measu
     else if (!effect.calibrationParameter())
       others |= EffectMask(1) << i;
   }
+  // Room for every row at once: grown by doubling, the rows' vectors held up to twice their memory.
+  for (auto* joints : {&data.command, &data.load_torque, &data.approach, &data.other_error}) joints->reserve(rows);
+  data.row.reserve(rows);
+  data.measured.reserve(rows);
+  data.setup.reserve(rows);
+  data.campaign.reserve(rows);
   JointErrorWorkspace ws(robot);
   JointContext ctx(robot.dof());
   // The robot rests at each row: the side of each joint's lost motion is the one its last move set,

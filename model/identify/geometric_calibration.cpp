@@ -455,6 +455,7 @@ FitOutcome fitKeepingCompliancePlausible(const Robot& robot, const CalibrationDa
       free.erase(std::find(free.begin(), free.end(), i));
       fit.values[i] = nominal_values[i];
     }
+    fit.solver.jacobian.resize(0, 0);  // not kept through the refit (a matrix of 3 x rows x free)
     fit = fitSubset(robot, data, fit.values, free, options, fit.loss_scale, "calibrating");
   }
   return fit;
@@ -472,6 +473,7 @@ void refitOnCalibratedTorques(const JointErrorModel& prior, const std::vector<Me
   int iterations = fit.solver.iterations;  // all the fits', as the report counts them
   for (int round = 0; round < 2; ++round) {
     useTorquesOf(prior, estimate(), campaigns, setup_of_campaign, data);
+    fit.solver.jacobian.resize(0, 0);  // not kept through the refit (a matrix of 3 x rows x free)
     fit = fitSubset(robot, data, fit.values, choice.free, options, fit.loss_scale, "calibrating");
     iterations += fit.solver.iterations;
   }
@@ -504,7 +506,7 @@ void estimateCovariance(const FitOutcome& fit, int rows, const std::vector<int>&
   std::vector<int> all(static_cast<std::size_t>(k));
   for (Eigen::Index c = 0; c < k; ++c) all[static_cast<std::size_t>(c)] = static_cast<int>(c);
   result.condition_number = scaledConditionNumber(weighted, all);
-  const Eigen::HouseholderQR<Eigen::MatrixXd> qr(weighted);
+  const Eigen::HouseholderQR<Eigen::Ref<Eigen::MatrixXd>> qr(weighted);  // in place: no copy of 3 x rows x free
   const Eigen::MatrixXd r_factor = qr.matrixQR().topRows(k).triangularView<Eigen::Upper>();
   const Eigen::MatrixXd r_inverse = r_factor.triangularView<Eigen::Upper>().solve(Eigen::MatrixXd::Identity(k, k));
   const Eigen::MatrixXd scaled_covariance = r_inverse * r_inverse.transpose();
@@ -606,11 +608,19 @@ GeometricCalibrationResult calibrateGeometry(const JointErrorModel& prior,
                                              const GeometricCalibrationOptions& options) {
   const Robot& robot = prior.robot();
   const int n = robot.dof();
-  const MeasurementCampaign whole = concatenateCampaigns(campaigns);
-  const std::string& source = whole.source;
-  if (whole.size() > kMaxCalibrationRows) {
-    throw InvalidArgument(source + ": " + std::to_string(whole.size()) + " rows are more than a calibration takes (" +
-                          std::to_string(kMaxCalibrationRows) + " rows, about 6 KB of memory each)");
+  // What the fit needs of the campaigns joined (concatenateCampaigns) is their source and rows; the frame and
+  // the target are the first campaign's, checked the same in all. No copy of the rows is kept.
+  checkCampaignsAgree(campaigns);
+  const MeasurementCampaign& whole = campaigns.front();
+  std::string source = whole.source;
+  std::size_t whole_rows = 0;
+  for (const MeasurementCampaign& c : campaigns) {
+    whole_rows += c.size();
+    if (&c != &whole) source += "+" + c.source;
+  }
+  if (whole_rows > kMaxCalibrationRows) {
+    throw InvalidArgument(source + ": " + std::to_string(whole_rows) + " rows are more than a calibration takes (" +
+                          std::to_string(kMaxCalibrationRows) + " rows, about 3.4 KB of memory each)");
   }
   for (const MeasurementCampaign& c : campaigns) {
     if (c.has_target != whole.has_target || (c.has_target && c.target_in_flange != whole.target_in_flange)) {

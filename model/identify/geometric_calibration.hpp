@@ -261,8 +261,9 @@ struct GeometricCalibrationResult {
 GeometricCalibrationResult calibrateGeometry(const JointErrorModel& prior, const MeasurementCampaign& campaign,
                                              const GeometricCalibrationOptions& options = {});
 
-// The most rows a calibration takes, all campaigns together: its memory grows by about 6 KB a row (100,000
-// rows of a six-joint arm: 601 MB; the Jacobian by every parameter and its copies), 1e6 rows about 6 GB.
+// The most rows a calibration takes, all campaigns together: its memory grows by about 3.4 KB a row (100,000
+// rows of a six-joint arm: 335 MB; the Jacobian by every candidate parameter and its Gram-Schmidt copy in the
+// identifiability analysis, docs/performance.md), 1e6 rows about 3.4 GB.
 // Beyond it calibrateGeometry refuses, naming the number.
 constexpr std::size_t kMaxCalibrationRows = 1000000;
 

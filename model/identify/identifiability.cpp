@@ -19,8 +19,9 @@ double scaledConditionNumber(const Eigen::MatrixXd& jacobian, const std::vector<
     if (norm == 0.0) return std::numeric_limits<double>::infinity();
     scaled.col(static_cast<Eigen::Index>(k)) = jacobian.col(columns[k]) / norm;
   }
-  // cond(J) = cond(R) for J = Q R: the SVD of the small triangular factor.
-  const Eigen::HouseholderQR<Eigen::MatrixXd> qr(scaled);
+  // cond(J) = cond(R) for J = Q R: the SVD of the small triangular factor. In place: `scaled` is as large
+  // as the Jacobian (a copy per call was a calibration's largest memory per row).
+  const Eigen::HouseholderQR<Eigen::Ref<Eigen::MatrixXd>> qr(scaled);
   const Eigen::Index k = scaled.cols();
   const Eigen::MatrixXd r = qr.matrixQR().topLeftCorner(std::min(k, scaled.rows()), k).triangularView<Eigen::Upper>();
   const Eigen::JacobiSVD<Eigen::MatrixXd> svd(r);
@@ -40,7 +41,7 @@ void findRedundancies(const Eigen::MatrixXd& jacobian, IdentifiabilityResult& re
     for (std::size_t k = 0; k < result.kept.size(); ++k) {
       kept.col(static_cast<Eigen::Index>(k)) = jacobian.col(result.kept[k]) / result.column_norm[result.kept[k]];
     }
-    const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(kept);
+    const Eigen::ColPivHouseholderQR<Eigen::Ref<Eigen::MatrixXd>> qr(kept);  // in place, as above
     for (int j : result.fixed) {
       if (result.no_effect[static_cast<std::size_t>(j)]) continue;
       const Eigen::VectorXd c = qr.solve(Eigen::VectorXd(jacobian.col(j) / result.column_norm[j]));
@@ -107,18 +108,21 @@ void normaliseColumns(const Eigen::MatrixXd& jacobian, const std::vector<double>
 
 // Column-pivoted Gram-Schmidt (twice orthogonalised) of the unit columns `work`, pivots restricted to the
 // highest priority class: the pivot order and each column's pivot (its norm off the columns before it) into
-// result; the columns left below the threshold stay in `remaining`.
+// result; the columns left below the threshold stay in `remaining`. The orthonormal basis takes the place of
+// the columns it was made from: work's first `rank` columns are the basis, `at[j]` is where column j is now
+// (a basis of its own had been a third matrix of the Jacobian's size).
 void pivotColumns(const std::vector<int>& priority, const IdentifiabilityOptions& options,
                   IdentifiabilityResult& result, Eigen::MatrixXd& work, std::vector<int>& remaining) {
-  const Eigen::Index m = work.rows();
   const Eigen::Index n = work.cols();
-  Eigen::MatrixXd basis(m, n);
+  std::vector<Eigen::Index> at(static_cast<std::size_t>(n)), column_at(static_cast<std::size_t>(n));
+  for (Eigen::Index j = 0; j < n; ++j) at[static_cast<std::size_t>(j)] = column_at[static_cast<std::size_t>(j)] = j;
+  const auto column = [&](int j) { return work.col(at[static_cast<std::size_t>(j)]); };
   int rank = 0;
   Eigen::VectorXd residual_norm = Eigen::VectorXd::Zero(n);
   while (!remaining.empty()) {
     int best = -1;
     for (int j : remaining) {
-      residual_norm[j] = work.col(j).norm();
+      residual_norm[j] = column(j).norm();
       if (residual_norm[j] <= options.relative_pivot_threshold) continue;
       if (best < 0) {
         best = j;
@@ -132,13 +136,21 @@ void pivotColumns(const std::vector<int>& priority, const IdentifiabilityOptions
     }
     if (best < 0) break;
     result.pivot[best] = residual_norm[best];
-    Eigen::VectorXd q = work.col(best);
-    for (int pass = 0; pass < 2 && rank > 0; ++pass) q -= basis.leftCols(rank) * (basis.leftCols(rank).transpose() * q);
+    Eigen::VectorXd q = column(best);
+    for (int pass = 0; pass < 2 && rank > 0; ++pass) q -= work.leftCols(rank) * (work.leftCols(rank).transpose() * q);
     q.normalize();
-    basis.col(rank++) = q;
+    // Column `best` is done with: the column at position `rank` moves to its place, q takes position `rank`.
+    const Eigen::Index from = at[static_cast<std::size_t>(best)];
+    const int moved = static_cast<int>(column_at[static_cast<std::size_t>(rank)]);
+    if (from != rank) work.col(from) = work.col(rank);
+    at[static_cast<std::size_t>(moved)] = from;
+    column_at[static_cast<std::size_t>(from)] = moved;
+    at[static_cast<std::size_t>(best)] = rank;
+    column_at[static_cast<std::size_t>(rank)] = best;
+    work.col(rank++) = q;
     result.pivot_order.push_back(best);
     remaining.erase(std::find(remaining.begin(), remaining.end(), best));
-    for (int j : remaining) work.col(j) -= q * q.dot(work.col(j));
+    for (int j : remaining) column(j) -= q * q.dot(column(j));
   }
   for (int j : remaining) result.pivot[j] = residual_norm[j];
 }
@@ -159,11 +171,12 @@ IdentifiabilityResult analyseIdentifiability(const Eigen::MatrixXd& jacobian, co
   result.redundant_with.resize(static_cast<std::size_t>(n));
 
   // Unit-norm columns; those without effect take no part.
-  Eigen::MatrixXd work(m, n);
-  std::vector<int> remaining;
-  normaliseColumns(jacobian, typical_change, options, result, work, remaining);
-
-  pivotColumns(priority, options, result, work, remaining);
+  {
+    Eigen::MatrixXd work(m, n);  // freed before the condition number's and the redundancies' matrices
+    std::vector<int> remaining;
+    normaliseColumns(jacobian, typical_change, options, result, work, remaining);
+    pivotColumns(priority, options, result, work, remaining);
+  }
 
   result.kept = result.pivot_order;
   std::sort(result.kept.begin(), result.kept.end());

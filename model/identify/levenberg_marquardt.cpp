@@ -4,6 +4,7 @@
 #include <cmath>
 #include <optional>
 #include <string>
+#include <utility>
 
 #include <Eigen/Cholesky>
 
@@ -34,11 +35,12 @@ Weighted weigh(const Eigen::VectorXd& r, const LevenbergMarquardtOptions& option
   return out;
 }
 
-// Normal equations of the IRLS model at the current point: A = J^T W J, g = J^T W r.
+// Normal equations of the IRLS model at the current point: A = J^T W J, g = J^T W r. `weighted` is scratch of
+// J's size (the solver's trial Jacobian, free at this point: no third matrix of J's size).
 void normalEquations(const Eigen::MatrixXd& jacobian, const Eigen::VectorXd& r, const Eigen::VectorXd& block_weight,
-                     int block_size, Eigen::MatrixXd& a, Eigen::VectorXd& g) {
+                     int block_size, Eigen::MatrixXd& weighted, Eigen::MatrixXd& a, Eigen::VectorXd& g) {
   const Eigen::Index n = jacobian.cols();
-  Eigen::MatrixXd weighted = jacobian;
+  weighted = jacobian;
   Eigen::VectorXd weighted_r = r;
   for (Eigen::Index row = 0; row < r.size(); ++row) {
     const double root = std::sqrt(block_weight[row / block_size]);
@@ -137,16 +139,26 @@ public:
       throw SolverError("Levenberg-Marquardt: the Jacobian is not finite at the start point");
     current_ = weigh(result_.residual, options_);
     result_.initial_cost = current_.cost;
-    normalEquations(result_.jacobian, result_.residual, current_.block_weight, options_.block_size, a_, g_);
+    normalEquations(result_.jacobian, result_.residual, current_.block_weight, options_.block_size, trial_jacobian_, a_,
+                    g_);
   }
 
+  // The result is moved out (a copy was one more matrix of the Jacobian's size): call once.
   LevenbergMarquardtResult solve() {
     while (true) {
       const Scaled scaled = scaledSystem();
-      if (current_.weighted_norm == 0.0) return finish(true, "zero residual");
-      if (gradientCosine(scaled.d) <= options_.gradient_tolerance) return finish(true, "gradient below tolerance");
-      if (!takeStep(scaled)) return result_;
+      if (current_.weighted_norm == 0.0) {
+        finish(true, "zero residual");
+        break;
+      }
+      if (gradientCosine(scaled.d) <= options_.gradient_tolerance) {
+        finish(true, "gradient below tolerance");
+        break;
+      }
+      if (!takeStep(scaled)) break;
     }
+    trial_jacobian_.resize(0, 0);
+    return std::move(result_);
   }
 
 private:
@@ -176,12 +188,11 @@ private:
     return worst;
   }
 
-  LevenbergMarquardtResult finish(bool converged, const std::string& reason) {
+  void finish(bool converged, const std::string& reason) {
     result_.converged = converged;
     result_.stop_reason = reason;
     result_.cost = current_.cost;
     result_.block_weight = current_.block_weight;
-    return result_;
   }
 
   void raiseDamping() {
@@ -245,7 +256,8 @@ private:
     result_.residual.swap(trial_residual_);
     result_.jacobian.swap(trial_jacobian_);
     current_ = trial;
-    normalEquations(result_.jacobian, result_.residual, current_.block_weight, options_.block_size, a_, g_);
+    normalEquations(result_.jacobian, result_.residual, current_.block_weight, options_.block_size, trial_jacobian_, a_,
+                    g_);
     if (options_.on_accepted_step) options_.on_accepted_step(result_.iterations, current_.cost);
     if (actual <= options_.function_tolerance * previous_cost) {
       finish(true, "cost change below tolerance");
