@@ -14,7 +14,8 @@
 namespace jointcomp {
 namespace {
 constexpr double kDegree = 3.14159265358979323846 / 180.0;
-}
+constexpr double kPi = 3.14159265358979323846;
+}  // namespace
 
 TransmissionErrorEffect::TransmissionErrorEffect(const Robot& robot, GearTrain gears, std::vector<Harmonic> harmonics)
     : gears_(std::move(gears)), harmonics_(std::move(harmonics)) {
@@ -170,13 +171,14 @@ void TransmissionErrorEffect::setParameters(const std::vector<double>& values) {
     if (!std::isfinite(values[2 * i]) || !std::isfinite(values[2 * i + 1])) {
       throw ParameterError("transmission_error: harmonic " + std::to_string(i) + " has a value that is not finite");
     }
-    // The reader's bounds, so that a fit never makes an effect whose parameter file would be refused.
+    // The reader's bound, so that a fit never makes an effect whose parameter file would be refused. A
+    // negative amplitude (a Monte Carlo draw, a perturbation) is the harmonic with its phase turned by pi,
+    // and toJson writes it so.
     const double amplitude = values[2 * i];
-    if (amplitude < 0.0 || amplitude > kMaxStatedJointError) {
-      throw ParameterError(
-          "transmission_error: " + parameterNames()[2 * i] + " is " + shortNumber(amplitude) + " rad, " +
-          (amplitude < 0.0 ? std::string("negative (the phase carries the sign)")
-                           : "beyond the plausible " + shortNumber(kMaxStatedJointError) + " rad of a joint error"));
+    if (std::abs(amplitude) > kMaxStatedJointError) {
+      throw ParameterError("transmission_error: " + parameterNames()[2 * i] + " is " + shortNumber(amplitude) +
+                           " rad, beyond the plausible +-" + shortNumber(kMaxStatedJointError) +
+                           " rad of a joint error");
     }
   }
   for (std::size_t i = 0; i < harmonics_.size(); ++i) {
@@ -188,11 +190,13 @@ void TransmissionErrorEffect::setParameters(const std::vector<double>& values) {
 nlohmann::json TransmissionErrorEffect::toJson() const {
   nlohmann::json list = nlohmann::json::array();
   for (const Harmonic& h : harmonics_) {
+    // The reader takes amplitudes >= 0: a negative one is written as the same harmonic, phase turned by pi.
+    const bool negative = h.amplitude_rad < 0.0;
     list.push_back({{"joint", joint_names_[h.joint]},
                     {"of", partName(h.joint, h.stage)},
                     {"cycles_per_revolution", h.cycles_per_revolution},
-                    {"amplitude_rad", h.amplitude_rad},
-                    {"phase_rad", h.phase_rad}});
+                    {"amplitude_rad", negative ? -h.amplitude_rad : h.amplitude_rad},
+                    {"phase_rad", negative ? h.phase_rad + (h.phase_rad > 0.0 ? -kPi : kPi) : h.phase_rad}});
   }
   nlohmann::json json = {{"type", kType}, {"harmonics", list}};
   if (!estimate_note.empty()) json["estimate"] = estimate_note;
@@ -294,7 +298,6 @@ std::vector<NamedEstimate> HarmonicDiscovery::describe(const FittedCandidate& fi
   const double amp_sigma = amp > 0.0 ? std::hypot(a[0] * s[0], a[1] * s[1]) / amp : s[0];
   const std::string stem = model.robot().joints[static_cast<std::size_t>(c.joint)].name + "." + c.part + ".harmonic_" +
                            std::to_string(static_cast<int>(c.cycles));
-  constexpr double kPi = 3.14159265358979323846;
   return {{stem + ".amplitude_rad", amp, amp_sigma},
           {stem + ".phase_rad", std::atan2(a[1], a[0]), amp > 0.0 ? amp_sigma / amp : kPi}};
 }

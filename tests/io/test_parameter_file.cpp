@@ -194,9 +194,9 @@ TEST(ParameterFile, ValuesAtTheStatedJointErrorBoundRoundTripAndBeyondItAreRefus
     ADD_FAILURE() << "a harmonic beyond the bound was taken";
   } catch (const ParameterError& error) {
     EXPECT_THAT(error.what(), HasSubstr("transmission_error: joint_3.harmonic_motor_x3.amplitude_rad is 0.1 rad, "
-                                        "beyond the plausible 0.1 rad"));
+                                        "beyond the plausible +-0.1 rad"));
   }
-  values[0] = -1e-9;  // the reader wants the sign in the phase
+  values[0] = -beyond;
   EXPECT_THROW(harmonics.setParameters(values), ParameterError);
   Effect& table = model.effect(model.effectCount() - 1);
   values = table.parameters();
@@ -209,6 +209,25 @@ TEST(ParameterFile, ValuesAtTheStatedJointErrorBoundRoundTripAndBeyondItAreRefus
   }
   // A refused value leaves the effect as it was, and it still writes a file that reads back.
   expectSameModel(model, parseParameters(parametersToJson(model), "after refusals", rx170()));
+
+  // A negative amplitude (a Monte Carlo draw) is the harmonic turned by pi: written so, as the reader wants
+  // amplitudes, and the same joint error read back.
+  values = harmonics.parameters();
+  values[0] = -0.5 * bound;
+  harmonics.setParameters(values);
+  const JointErrorModel turned = parseParameters(parametersToJson(model), "negative amplitude", rx170());
+  const Effect& reread = turned.effect(turned.effectCount() - 2);
+  EXPECT_EQ(reread.parameters()[0], 0.5 * bound);
+  EXPECT_NEAR(reread.parameters()[1], -0.25 + 3.14159265358979323846, 1e-15);
+  JointContext ctx(6);
+  for (double angle : {0.0, 0.3, 1.7, -2.9}) {
+    ctx.motor = JointVector::Constant(6, angle);
+    JointVector written = JointVector::Zero(6), read = JointVector::Zero(6);
+    harmonics.addJointError(*rx170(), ctx, written);
+    reread.addJointError(*rx170(), ctx, read);
+    EXPECT_NEAR((written - read).norm(), 0.0, 1e-15) << angle;
+    EXPECT_GT(std::abs(written[2]), 0.0) << angle;
+  }
 }
 
 // No command writes a file its own reader refuses: what the writer would write goes through the reader first
