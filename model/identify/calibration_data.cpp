@@ -28,6 +28,15 @@ int findCalibrationEffect(const JointErrorModel& model, CalibrationParameter par
   return -1;
 }
 
+// Room for every row at once: grown by doubling, the rows' vectors held up to twice their memory.
+void reserveRows(CalibrationData& data, std::size_t rows) {
+  for (auto* joints : {&data.command, &data.load_torque, &data.approach, &data.other_error}) joints->reserve(rows);
+  data.row.reserve(rows);
+  data.measured.reserve(rows);
+  data.setup.reserve(rows);
+  data.campaign.reserve(rows);
+}
+
 }  // namespace
 
 // ---- data and model -------------------------------------------------------------------------------------
@@ -64,12 +73,7 @@ CalibrationData prepareCalibrationData(const JointErrorModel& prior, const Measu
     else if (!effect.calibrationParameter())
       others |= EffectMask(1) << i;
   }
-  // Room for every row at once: grown by doubling, the rows' vectors held up to twice their memory.
-  for (auto* joints : {&data.command, &data.load_torque, &data.approach, &data.other_error}) joints->reserve(rows);
-  data.row.reserve(rows);
-  data.measured.reserve(rows);
-  data.setup.reserve(rows);
-  data.campaign.reserve(rows);
+  reserveRows(data, rows);
   JointErrorWorkspace ws(robot);
   JointContext ctx(robot.dof());
   // The robot rests at each row: the side of each joint's lost motion is the one its last move set,

@@ -553,6 +553,24 @@ void tabulateEstimates(const Robot& robot, const Eigen::VectorXd& nominal_values
   }
 }
 
+// The campaigns' source joined as concatenateCampaigns joins it, after checking they agree and are not more
+// rows than a calibration takes. What the fit needs of the joined campaign is this and the first campaign's
+// frame and target: no copy of the rows is kept.
+std::string joinedSource(const std::vector<MeasurementCampaign>& campaigns) {
+  checkCampaignsAgree(campaigns);
+  std::string source = campaigns.front().source;
+  std::size_t rows = 0;
+  for (const MeasurementCampaign& c : campaigns) {
+    rows += c.size();
+    if (&c != &campaigns.front()) source += "+" + c.source;
+  }
+  if (rows > kMaxCalibrationRows) {
+    throw InvalidArgument(source + ": " + std::to_string(rows) + " rows are more than a calibration takes (" +
+                          std::to_string(kMaxCalibrationRows) + " rows, about 3.4 KB of memory each)");
+  }
+  return source;
+}
+
 }  // namespace
 int InstrumentSetUps::count() const {
   return setup_of_campaign.empty() ? 0 : 1 + *std::max_element(setup_of_campaign.begin(), setup_of_campaign.end());
@@ -608,20 +626,8 @@ GeometricCalibrationResult calibrateGeometry(const JointErrorModel& prior,
                                              const GeometricCalibrationOptions& options) {
   const Robot& robot = prior.robot();
   const int n = robot.dof();
-  // What the fit needs of the campaigns joined (concatenateCampaigns) is their source and rows; the frame and
-  // the target are the first campaign's, checked the same in all. No copy of the rows is kept.
-  checkCampaignsAgree(campaigns);
-  const MeasurementCampaign& whole = campaigns.front();
-  std::string source = whole.source;
-  std::size_t whole_rows = 0;
-  for (const MeasurementCampaign& c : campaigns) {
-    whole_rows += c.size();
-    if (&c != &whole) source += "+" + c.source;
-  }
-  if (whole_rows > kMaxCalibrationRows) {
-    throw InvalidArgument(source + ": " + std::to_string(whole_rows) + " rows are more than a calibration takes (" +
-                          std::to_string(kMaxCalibrationRows) + " rows, about 3.4 KB of memory each)");
-  }
+  const std::string source = joinedSource(campaigns);
+  const MeasurementCampaign& whole = campaigns.front();  // frame and target: the same in every campaign
   for (const MeasurementCampaign& c : campaigns) {
     if (c.has_target != whole.has_target || (c.has_target && c.target_in_flange != whole.target_in_flange)) {
       throw InvalidArgument("campaign '" + c.source + "' names another target in the flange than '" +
