@@ -190,6 +190,15 @@ def test_two_workers_equal_the_serial_run_byte_for_byte(client, serial_run, tmp_
     assert not list(tmp_path.glob("*.checkpoint.npz"))
 
 
+def test_the_scheduler_holds_only_the_tasks_in_flight(client):
+    # Twice as many as there are workers; a task whose result the client took is released at once.
+    scheduler, held = client.cluster.scheduler, []
+    jd.monte_carlo(RX170_URDF, RX170_PARAMETERS, samples=12, seed=7, client=client, batch_size=1,
+                   progress=lambda done, total, rate: held.append(len(scheduler.tasks)))
+    assert len(held) == 12 and max(held) <= 2 * 2 + 1  # + 1: the release reaches the scheduler a moment later
+    assert not scheduler.tasks
+
+
 def test_the_local_cluster_slows_dasks_housekeeping(client):
     # The settings are read in the worker processes, which the nannies spawn with the client's configuration.
     def settings():
