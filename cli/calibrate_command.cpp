@@ -14,6 +14,7 @@
 #include <sys/stat.h>
 #include <nlohmann/json.hpp>
 
+#include "cli/campaign_frames.hpp"
 #include "cli/commands.hpp"
 #include "cli/options.hpp"
 #include "cli/output_paths.hpp"
@@ -30,50 +31,6 @@
 namespace jointcomp::cli {
 
 namespace {
-
-// --fix takes parameter names, and "target" and "frame" for their groups.
-std::vector<std::string> expandedFixNames(const std::vector<std::string>& names) {
-  std::vector<std::string> out;
-  for (const std::string& name : names) {
-    if (name == "target") {
-      for (const char* axis : {"x", "y", "z"}) out.push_back(std::string("target.") + axis + "_m");
-    } else if (name == "frame") {
-      for (const char* p : {"tx_m", "ty_m", "tz_m", "rx_rad", "ry_rad", "rz_rad"})
-        out.push_back(std::string("frame.") + p);
-    } else {
-      out.push_back(name);
-    }
-  }
-  return out;
-}
-
-// The target on the flange every campaign is calibrated with: --target, else the campaigns' own `# target:`,
-// else the "tool" of the parameter file (a calibrated robot's, on the URDF it was measured from). Returns
-// where it came from ("" when from the campaigns or nowhere).
-std::string applyTarget(const Options& options, const RobotSetup& setup, std::vector<MeasurementCampaign>& campaigns,
-                        std::vector<std::pair<std::string, MeasurementCampaign>>& held) {
-  Eigen::Vector3d target;
-  std::string from;
-  if (options.has("target")) {
-    const std::vector<double> mm = numberList(options.get("target", ""), "target", {-1e4, 1e4});
-    if (mm.size() != 3) throw UsageError("--target takes x,y,z in mm");
-    target = Eigen::Vector3d(mm[0], mm[1], mm[2]) * 1e-3;
-    from = "--target";
-  } else if (setup.parameters.tool && !campaigns.front().has_target &&
-             setup.parameters.tool->flange_link == setup.robot->tip_link) {
-    target = setup.parameters.tool->in_flange;
-    from = setup.params + " (tool)";
-  } else {
-    return "";
-  }
-  const auto apply = [&](MeasurementCampaign& campaign) {
-    campaign.has_target = true;
-    campaign.target_in_flange = target;
-  };
-  for (MeasurementCampaign& campaign : campaigns) apply(campaign);
-  for (auto& entry : held) apply(entry.second);
-  return from;
-}
 
 std::string urdfHeader(const Robot& robot, const std::string& urdf, const std::string& campaign_path,
                        const CalibrationRun& run, const UrdfToolLink& tool) {
@@ -119,7 +76,7 @@ int runCalibrate(int argc, char** argv) {
   std::vector<char*> rest = takeCampaignArguments(argc, argv, campaign_paths, holdouts);
   const Options options(static_cast<int>(rest.size()), rest.data(),
                         {"urdf", "base-link", "tip-link", "campaign", "holdout", "params", "out", "loss",
-                         "loss-scale-mm", "pivot-threshold", "fix", "target", "no-plot", "quiet"},
+                         "loss-scale-mm", "pivot-threshold", "fix", "target", "base-frame", "no-plot", "quiet"},
                         {"no-plot", "quiet"});
   if (campaign_paths.empty() || !options.has("out")) {
     throw std::invalid_argument(
@@ -152,18 +109,32 @@ int runCalibrate(int argc, char** argv) {
   for (const std::string& path : campaign_paths) campaigns.push_back(readCampaignFile(path));
   std::vector<std::pair<std::string, MeasurementCampaign>> held;
   for (const std::string& path : holdouts) held.emplace_back(path, readCampaignFile(path));
-  const std::string target_from = applyTarget(options, setup, campaigns, held);
+  std::vector<MeasurementCampaign*> all;
+  for (MeasurementCampaign& campaign : campaigns) all.push_back(&campaign);
+  for (auto& entry : held) all.push_back(&entry.second);
+  const std::string target_from = applyTarget(options, setup, all);
   if (!target_from.empty()) std::printf("  target on the flange from %s\n", target_from.c_str());
+  const std::string base_from = applyBaseFrame(options, all);
+  if (!base_from.empty()) std::printf("  base frame from %s\n", base_from.c_str());
   const CalibrationRun run = runCalibration(prior, campaigns, held, calibration);
 
   // The tool point the calibration fitted, in both files: the URDF ends at it (a link of its own, so that
   // kinematics, compensation and the plant work there), the parameter file says where it is on the flange.
   const std::string urdf_out = out + "/" + plainFileName(robot->name) + "_calibrated.urdf";  // inside --out
   const UrdfToolLink tool_link{toolLinkName(*robot), run.result.estimate.target};
-  saveRobotUrdf(*run.calibrated_robot, urdf_out, urdfHeader(*robot, urdf, campaign_path, run, tool_link), &tool_link);
+  // The frame the campaigns were measured in, fitted or kept: a link fixed to the root in the URDF, the
+  // base's pose in it in the parameter file.
+  const std::optional<UrdfFrameLink> frame_link =
+      measurementFrameLink(*robot, campaigns.front(), run.result.estimate, tool_link.name);
+  saveRobotUrdf(*run.calibrated_robot, urdf_out, urdfHeader(*robot, urdf, campaign_path, run, tool_link), &tool_link,
+                frame_link ? &*frame_link : nullptr);
   const std::string params_out = out + "/parameters.json";
   const ToolTarget tool{robot->tip_link, tool_link.name, run.result.estimate.target};
-  saveParameterFile(run.calibrated, params_out, setup.parameters.drives, &tool);  // the prior's drives, if any
+  const std::optional<BaseFrame> base_frame =
+      frame_link ? std::optional<BaseFrame>(BaseFrame{robot->root_link, frame_link->name, frame_link->base_in_frame})
+                 : std::nullopt;
+  saveParameterFile(run.calibrated, params_out, setup.parameters.drives, &tool,  // the prior's drives, if any
+                    base_frame ? &*base_frame : nullptr);
 
   CalibrationSources sources;
   sources.urdf = urdf;

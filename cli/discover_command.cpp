@@ -15,6 +15,7 @@
 #include <sys/stat.h>
 #include <nlohmann/json.hpp>
 
+#include "cli/campaign_frames.hpp"
 #include "cli/commands.hpp"
 #include "cli/options.hpp"
 #include "cli/output_paths.hpp"
@@ -67,22 +68,30 @@ void readSelectionOptions(const Options& options, DiscoveryOptions& discovery) {
 
 // The discovered URDF and parameter file, report.json, steps.csv, summary.txt (printed too) and the plot.
 void writeDiscoveryOutputs(const DiscoveryResult& result, const DiscoveryOptions& discovery, const RobotSetup& setup,
-                           const std::vector<std::string>& campaigns, const std::vector<std::string>& holdouts,
-                           const std::string& out, double seconds, bool plot) {
+                           const MeasurementCampaign& first, const std::vector<std::string>& campaigns,
+                           const std::vector<std::string>& holdouts, const std::string& out, double seconds,
+                           bool plot) {
   const std::shared_ptr<const Robot>& robot = setup.robot;
   const std::string& urdf = setup.urdf;
   const std::string urdf_out = out + "/" + plainFileName(robot->name) + "_discovered.urdf";
   // The fitted target on the flange: the URDF ends at it (a link of its own), the parameter file says where.
   const UrdfToolLink tool_link{toolLinkName(*robot), result.calibration.estimate.target};
+  // The frame the campaigns were measured in (fitted or kept), as calibrate writes it.
+  const std::optional<UrdfFrameLink> frame_link =
+      measurementFrameLink(*robot, first, result.calibration.estimate, tool_link.name);
   saveRobotUrdf(result.model.robot(), urdf_out,
                 "  " + robot->name + " after jointcomp discover\n  nominal: " + urdf +
                     "\n  Joint placements corrected; the chain ends at link '" + tool_link.name +
                     "', the fitted target; joint offsets, compliance and the discovered effects are in the "
                     "parameter file.",
-                &tool_link);
+                &tool_link, frame_link ? &*frame_link : nullptr);
   const std::string params_out = out + "/parameters.json";
   const ToolTarget tool{robot->tip_link, tool_link.name, tool_link.offset};
-  saveParameterFile(result.model, params_out, setup.parameters.drives, &tool);  // the prior's drives, if any
+  const std::optional<BaseFrame> base_frame =
+      frame_link ? std::optional<BaseFrame>(BaseFrame{robot->root_link, frame_link->name, frame_link->base_in_frame})
+                 : std::nullopt;
+  saveParameterFile(result.model, params_out, setup.parameters.drives, &tool,  // the prior's drives, if any
+                    base_frame ? &*base_frame : nullptr);
 
   DiscoverySources sources;
   sources.urdf = urdf;
@@ -107,6 +116,7 @@ DiscoveryOptions discoveryOptionsFrom(const Options& options) {
   DiscoveryOptions discovery;
   discovery.calibration.loss = parseRobustLoss(options.get("loss", "huber"));
   discovery.calibration.progress = consoleProgress(options);
+  discovery.calibration.fixed = expandedFixNames(splitCommaList(options.get("fix", "")));
   const std::string base = options.get("base", "textbook");
   if (base != "frame" && base != "textbook")
     throw std::invalid_argument("--base must be frame or textbook, not '" + base + "'");
@@ -164,6 +174,9 @@ int runDiscover(int argc, char** argv) {
                          "transfer-significance",
                          "min-group-share",
                          "angle-ranges",
+                         "target",
+                         "base-frame",
+                         "fix",
                          "no-pairs",
                          "holdout-same-instrument",
                          "no-plot",
@@ -186,14 +199,22 @@ int runDiscover(int argc, char** argv) {
   for (const std::string& path : campaigns) fitted.push_back(readCampaignFile(path));
   for (const std::string& path : holdouts) held.push_back(readCampaignFile(path));
   checkFoldsFitRows(discovery.folds, fitted);
+  std::vector<MeasurementCampaign*> all;
+  for (MeasurementCampaign& campaign : fitted) all.push_back(&campaign);
+  for (MeasurementCampaign& campaign : held) all.push_back(&campaign);
+  const std::string target_from = applyTarget(options, setup, all);
+  const std::string base_from = applyBaseFrame(options, all);
   std::printf("jointcomp discover: robot %s, %zu fitted and %zu held-out campaign(s), base %s\n", robot->name.c_str(),
               fitted.size(), held.size(), base.c_str());
   if (!setup.assumed().empty()) std::printf("  %s\n", setup.assumed().c_str());
+  if (!target_from.empty()) std::printf("  target on the flange from %s\n", target_from.c_str());
+  if (!base_from.empty()) std::printf("  base frame from %s\n", base_from.c_str());
   const auto fit_started = std::chrono::steady_clock::now();
   const DiscoveryResult result = discoverEffects(prior, fitted, held, discovery);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - fit_started).count();
 
-  writeDiscoveryOutputs(result, discovery, setup, campaigns, holdouts, out, seconds, !options.has("no-plot"));
+  writeDiscoveryOutputs(result, discovery, setup, fitted.front(), campaigns, holdouts, out, seconds,
+                        !options.has("no-plot"));
 
   std::printf("done in %.2f s (discovery %.2f s)\n",
               std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count(), seconds);

@@ -57,6 +57,8 @@ void printUsage() {
       "                             joint stiffness or transmission-error harmonics from a campaign\n"
       "  calibrate --campaign FILE[,FILE] --out DIR [--urdf FILE] [--params FILE] [--holdout FILE ...]\n"
       "        [--loss huber|cauchy|none] [--loss-scale-mm X] [--pivot-threshold X] [--fix NAME,..] [--no-plot]\n"
+      "        [--target x,y,z (mm)] [--base-frame x,y,z,rx,ry,rz (mm, deg: the base in the instrument's frame)]\n"
+      "                             --fix target, --fix base (or frame): keep them as given\n"
       "                             kinematic calibration (instrument frame, target, joint offsets, placements,\n"
       "                             compliance) from measured positions; campaigns from several instrument\n"
       "                             set-ups are fitted together, one frame each; held-out campaigns re-fit theirs\n"
@@ -64,6 +66,7 @@ void printUsage() {
       "        [--base textbook|frame] [--max-steps N] [--orders N] [--folds K] [--types offset,harmonic,..]\n"
       "        [--noise-floor-mm X] [--min-cv-gain X] [--loss huber|cauchy|none] [--table-knots N,..]\n"
       "        [--max-prior-weight X] [--max-ridge-weight X] [--transfer-significance X] [--no-pairs] [--no-plot]\n"
+      "        [--target x,y,z] [--base-frame x,y,z,rx,ry,rz] [--fix target|base]: as calibrate\n"
       "                             residual discovery: from the textbook calibration, adds the candidate\n"
       "                             effects the data ask for, one (or a pair) at a time (time-blocked CV + BIC,\n"
       "                             a transfer check), and writes the extended parameter file;\n");

@@ -57,8 +57,9 @@ inline RobotSetup loadRobotSetup(const Options& options, const std::string& defa
   const std::string params = options.get(params_option, default_params);
   auto robot = std::make_shared<const Robot>(loadRobotFromUrdfFile(urdf, chainOptions(options)));
   ParameterSet parameters =
-      params.empty() ? ParameterSet{JointErrorModel(robot, GearTrain::direct(robot->dof()), {}), {}, std::nullopt}
-                     : loadParameterSet(params, robot);
+      params.empty()
+          ? ParameterSet{JointErrorModel(robot, GearTrain::direct(robot->dof()), {}), {}, std::nullopt, std::nullopt}
+          : loadParameterSet(params, robot);
   return RobotSetup{urdf, params, std::move(robot), std::move(parameters)};
 }
 

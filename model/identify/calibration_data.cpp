@@ -127,6 +127,7 @@ GeometricParameters nominalParameters(const JointErrorModel& prior, const Measur
   const int n = prior.robot().dof();
   GeometricParameters p = GeometricParameters::zero(n);
   if (campaign.has_target) p.target = campaign.target_in_flange;
+  if (campaign.has_base_frame) p.setInstrumentFromBase(campaign.base_frame);
   // The first effect holding each of the calibration's own per-joint parameters is where it starts.
   const int offset = findCalibrationEffect(prior, CalibrationParameter::Offset);
   if (offset >= 0) {

@@ -26,6 +26,8 @@
 namespace jointcomp {
 namespace {
 
+constexpr const char* kFixed = "fixed by request";
+
 // Median of a chi distribution with 3 degrees of freedom: |r| of a 3-D normal residual of unit sigma per axis.
 constexpr double kChi3Median = 1.5381722;
 
@@ -262,17 +264,18 @@ GeometricParameters startingPoint(const JointErrorModel& prior, const Measuremen
     }
     const std::vector<Eigen::Vector3d> points = basePoints(robot, start, own);
     checkPoses(own, points, source);
-    if (!fit_frame) continue;
+    if (!fit_frame || (s == 0 && campaign.has_base_frame)) continue;  // a known base frame is the start
     GeometricParameters single = start.ofSetUp(s);
     single.setInstrumentFromBase(fitRigidTransform(points, own.measured));
     start.setSetUp(s, single);
   }
 
   // "Before": the nominal robot with only its frames fitted (robustly, like the calibration).
-  if (fit_frame) {
-    const FitOutcome frame_fit =
-        fitSubset(robot, data, start.toVector(), frameIndices(GeometricParameterLayout(n, data.setups)), options, 0.0,
-                  "fitting the instrument frame of the nominal robot");
+  std::vector<int> frames = frameIndices(GeometricParameterLayout(n, data.setups));
+  if (baseFrameKept(options)) frames.erase(frames.begin(), frames.begin() + 6);  // set-up 0's: kept as given
+  if (fit_frame && !frames.empty()) {
+    const FitOutcome frame_fit = fitSubset(robot, data, start.toVector(), frames, options, 0.0,
+                                           "fitting the instrument frame of the nominal robot");
     start = GeometricParameters::fromVector(frame_fit.values, n, data.setups);
   }
   result.nominal = start;
@@ -330,7 +333,7 @@ ParameterChoice candidateParameters(const Robot& robot, const CalibrationData& d
       }
     }
     if (user_fixed.count(name)) {
-      reason[static_cast<std::size_t>(i)] = "fixed by request";
+      reason[static_cast<std::size_t>(i)] = kFixed;
       continue;
     }
     if (!enabled) {
@@ -392,7 +395,9 @@ void chooseIdentifiable(const Robot& robot, const CalibrationData& data, const G
   if (fit_frame) {
     std::string missing;
     for (int i : frameIndices(GeometricParameterLayout(robot.dof(), data.setups))) {
-      if (std::find(free.begin(), free.end(), i) != free.end()) continue;
+      if (std::find(free.begin(), free.end(), i) != free.end() || reason[static_cast<std::size_t>(i)] == kFixed) {
+        continue;
+      }
       missing += (missing.empty() ? "" : "; ") + result.names[static_cast<std::size_t>(i)] + ": " +
                  reason[static_cast<std::size_t>(i)];
     }
@@ -572,6 +577,15 @@ std::string joinedSource(const std::vector<MeasurementCampaign>& campaigns) {
 }
 
 }  // namespace
+bool baseFrameKept(const GeometricCalibrationOptions& options) {
+  for (const char* p : {"tx_m", "ty_m", "tz_m", "rx_rad", "ry_rad", "rz_rad"}) {
+    if (std::find(options.fixed.begin(), options.fixed.end(), std::string("frame.") + p) == options.fixed.end()) {
+      return false;
+    }
+  }
+  return true;
+}
+
 int InstrumentSetUps::count() const {
   return setup_of_campaign.empty() ? 0 : 1 + *std::max_element(setup_of_campaign.begin(), setup_of_campaign.end());
 }
@@ -662,7 +676,12 @@ GeometricCalibrationResult calibrateGeometry(const JointErrorModel& prior,
                           std::to_string(std::max(options.minimum_rows, 3)));
   }
   const bool fit_frame = options.fit_frame && whole.frame == MeasurementFrame::Instrument;
-  result.frame_fitted = whole.frame == MeasurementFrame::Instrument;
+  // A known base frame kept as given: no frame is fitted to set-up 0, as for a campaign in the base frame.
+  result.frame_fitted =
+      whole.frame == MeasurementFrame::Instrument && !(whole.has_base_frame && baseFrameKept(options));
+  if (whole.has_base_frame && !baseFrameKept(options) && !fit_frame) {
+    throw InvalidArgument(source + ": a base frame is given but neither fitted nor kept (fix all of frame.*)");
+  }
 
   result.names = geometricParameterNames(robot, setups);
   result.used_rows = rows;
@@ -707,7 +726,10 @@ HoldoutEvaluation evaluateOnCampaign(const JointErrorModel& prior, const Geometr
   evaluation.skipped_rows = data.skipped_rows;
   GeometricParameters used = parameters.ofSetUp(0);
   if (!options.same_instrument) used.instrument_scale = 0.0;  // another set-up: the fitted scale is not its own
-  const bool fit = refit_frame && campaign.frame == MeasurementFrame::Instrument;
+  // A campaign whose known base frame is kept is evaluated in it, like one in the base frame without one.
+  const bool known = campaign.has_base_frame && baseFrameKept(options);
+  if (known) used.setInstrumentFromBase(campaign.base_frame);
+  const bool fit = refit_frame && campaign.frame == MeasurementFrame::Instrument && !known;
   if (campaign.frame == MeasurementFrame::Base) {
     used.frame_translation.setZero();
     used.frame_rotation.setZero();

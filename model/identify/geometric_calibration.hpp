@@ -209,6 +209,12 @@ struct GeometricCalibrationOptions {
   Progress progress;                 // told the phases and each accepted step (may be empty)
 };
 
+// Whether the first set-up's frame is kept: all six frame.* names are fixed (`--fix base`). A campaign with
+// a known base frame (MeasurementCampaign::base_frame) is then predicted in it and fitted like a campaign
+// in the base frame (nothing re-fitted, held-out campaigns in their own base frames); otherwise the
+// given frame is where the fit of the first set-up's frame starts.
+bool baseFrameKept(const GeometricCalibrationOptions& options);
+
 struct ParameterEstimate {
   std::string name;
   std::string unit;

@@ -42,6 +42,10 @@ public:
   // The model to write: the corrected robot, the fitted offsets and compliance (calibratedJointErrorModel).
   static JointErrorModel calibratedModel(const JointErrorModel& model, const GeometricCalibrationResult& result,
                                          std::vector<std::string>& left_out);
+  // What the written files describe (asWritten): the model on the corrected robot, its load torques.
+  static CalibratedView written(const JointErrorModel& model, const GeometricParameters& estimate) {
+    return asWritten(model, estimate);
+  }
 
 private:
   std::vector<MeasurementCampaign> fitted_;

@@ -12,6 +12,7 @@
 #include "model/common/strict_json.hpp"
 #include "model/io/atomic_file.hpp"
 #include "model/io/text_cells.hpp"
+#include "model/io/urdf_writer.hpp"
 
 namespace jointcomp {
 namespace {
@@ -227,6 +228,15 @@ private:
     campaign.payload.push_back(payload);
   }
 
+  // The comma-separated numbers of metadata `key`.
+  std::vector<double> numberList(const std::string& text, const std::string& key) const {
+    std::stringstream list(text);
+    std::string item;
+    std::vector<double> values;
+    while (std::getline(list, item, ',')) values.push_back(number(trimmed(item), 1, "# " + key, true, 0.0));
+    return values;
+  }
+
   void interpretMetadata(MeasurementCampaign& campaign) const {
     const auto& meta = campaign.metadata;
     auto metaNumber = [&](const std::string& key, const std::string& text) {
@@ -246,17 +256,29 @@ private:
       }
     }
     if (meta.count("target")) {
-      std::stringstream list(meta.at("target"));
-      std::string item;
-      std::vector<double> values;
-      while (std::getline(list, item, ',')) {
-        const double mm = metaNumber("target", item);
+      std::vector<double> values = numberList(meta.at("target"), "target");
+      for (double& mm : values) {
         requirePlausible(mm, kMaxLengthMm, 1, "# target", "mm");
-        values.push_back(mm * 1e-3);
+        mm *= 1e-3;
       }
       if (values.size() != 3) throw MeasurementError(source_ + ": metadata 'target' must be 'x,y,z' in mm");
       campaign.has_target = true;
       campaign.target_in_flange = Eigen::Vector3d(values[0], values[1], values[2]);
+    }
+    if (meta.count("base_frame")) {
+      const std::vector<double> values = numberList(meta.at("base_frame"), "base_frame");
+      if (values.size() != 6) {
+        throw MeasurementError(source_ + ": metadata 'base_frame' must be 'x,y,z,rx,ry,rz' in mm and deg");
+      }
+      if (campaign.frame != MeasurementFrame::Instrument) {
+        throw MeasurementError(source_ +
+                               ": metadata 'base_frame' places the base in an instrument's frame; the "
+                               "campaign says 'frame: base' (give 'frame: instrument')");
+      }
+      for (int k = 0; k < 6; ++k)
+        requirePlausible(values[k], k < 3 ? kMaxLengthMm : 360.0, 1, "# base_frame", k < 3 ? "mm" : "deg");
+      campaign.has_base_frame = true;
+      campaign.base_frame = baseFrameFromValues(values);
     }
     if (meta.count("noise_mm")) campaign.position_noise = metaNumber("noise_mm", meta.at("noise_mm")) * 1e-3;
     if (meta.count("noise_deg")) campaign.angle_noise = metaNumber("noise_deg", meta.at("noise_deg")) * kDegree;
@@ -324,6 +346,24 @@ void MeasurementCampaign::validate() const {
   }
 }
 
+Eigen::Isometry3d baseFrameFromValues(const std::vector<double>& v) {
+  if (v.size() != 6) throw InvalidArgument("a base frame is x,y,z,rx,ry,rz (mm, deg): 6 numbers");
+  Eigen::Isometry3d frame = Eigen::Isometry3d::Identity();
+  frame.translation() = Eigen::Vector3d(v[0], v[1], v[2]) * 1e-3;
+  frame.linear() = (Eigen::AngleAxisd(v[5] * kDegree, Eigen::Vector3d::UnitZ()) *
+                    Eigen::AngleAxisd(v[4] * kDegree, Eigen::Vector3d::UnitY()) *
+                    Eigen::AngleAxisd(v[3] * kDegree, Eigen::Vector3d::UnitX()))
+                       .toRotationMatrix();
+  return frame;
+}
+
+std::string baseFrameText(const Eigen::Isometry3d& base_frame) {
+  const Eigen::Vector3d rpy = rotationToRpy(base_frame.linear()) / kDegree;
+  const Eigen::Vector3d mm = base_frame.translation() * 1e3;
+  return formatNumber(mm.x()) + "," + formatNumber(mm.y()) + "," + formatNumber(mm.z()) + "," + formatNumber(rpy.x()) +
+         "," + formatNumber(rpy.y()) + "," + formatNumber(rpy.z());
+}
+
 MeasurementCampaign parseCampaign(const std::string& text, const std::string& source_name) {
   std::string storage;
   return CampaignParser(source_name).parse(plainText<MeasurementError>(text, source_name, storage));
@@ -353,6 +393,7 @@ std::string campaignToText(const MeasurementCampaign& campaign) {
                          formatNumber(campaign.target_in_flange.y() * 1e3) + "," +
                          formatNumber(campaign.target_in_flange.z() * 1e3);
   }
+  if (campaign.has_base_frame) metadata["base_frame"] = baseFrameText(campaign.base_frame);
   if (campaign.position_noise > 0.0) metadata["noise_mm"] = formatNumber(campaign.position_noise * 1e3);
   if (campaign.angle_noise > 0.0) metadata["noise_deg"] = formatNumber(campaign.angle_noise / kDegree);
   for (const auto& entry : metadata) {

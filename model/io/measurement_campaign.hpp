@@ -22,8 +22,13 @@ struct MeasurementCampaign {
   MeasurementFrame frame = MeasurementFrame::Base;
   bool has_target = false;
   Eigen::Vector3d target_in_flange = Eigen::Vector3d::Zero();  // m
-  double position_noise = 0.0;                                 // m, 1 sigma per axis; 0 when the file does not say
-  double angle_noise = 0.0;                                    // rad, 1 sigma of qm; 0 when the file does not say
+  // A known base frame (`# base_frame: x,y,z,rx,ry,rz`: mm and degrees, URDF roll-pitch-yaw): the robot
+  // base's pose in the frame of an instrument-frame campaign, m = base_frame * p_base. Calibration starts
+  // from it and fits it, or keeps it (--fix base); a campaign in the base frame has none.
+  bool has_base_frame = false;
+  Eigen::Isometry3d base_frame = Eigen::Isometry3d::Identity();
+  double position_noise = 0.0;  // m, 1 sigma per axis; 0 when the file does not say
+  double angle_noise = 0.0;     // rad, 1 sigma of qm; 0 when the file does not say
 
   int dof = 0;
   std::vector<double> time;          // s, non-decreasing
@@ -50,6 +55,11 @@ MeasurementCampaign parseCampaign(const std::string& text, const std::string& so
 // The campaign with only the rows `keep` says true for (given the row's index), in their order, with every
 // column and the campaign's metadata: a subset to fit or hold out.
 MeasurementCampaign campaignRows(const MeasurementCampaign& campaign, const std::function<bool(std::size_t)>& keep);
+
+// A base frame from x,y,z (mm), rx,ry,rz (deg, URDF roll-pitch-yaw: R = Rz(rz) Ry(ry) Rx(rx)), as the
+// `# base_frame:` line and `--base-frame` give it, and the line's text of a base frame (17 digits).
+Eigen::Isometry3d baseFrameFromValues(const std::vector<double>& mm_and_deg);
+std::string baseFrameText(const Eigen::Isometry3d& base_frame);
 
 // Writes the campaign in the format (degrees and millimetres), whole or not at all.
 std::string campaignToText(const MeasurementCampaign& campaign);

@@ -12,6 +12,7 @@
 #include "model/common/strict_json.hpp"
 #include "model/effects/registry.hpp"
 #include "model/io/atomic_file.hpp"
+#include "model/io/urdf_writer.hpp"
 
 namespace jointcomp {
 namespace {
@@ -97,6 +98,26 @@ void requireReadable(const nlohmann::ordered_json& document, const JointErrorMod
   }
 }
 
+BaseFrame baseFrameFromJson(const nlohmann::json& node, const std::string& path) {
+  JsonFields fields(node, path);
+  BaseFrame frame;
+  frame.base_link = fields.text("base_link");
+  frame.link = fields.text("link");
+  const std::vector<double> xyz = fields.numbers("base_xyz_m", 3);
+  const std::vector<double> rpy = fields.numbers("base_rpy_rad", 3);
+  for (int a = 0; a < 3; ++a) {
+    if (!(std::abs(xyz[static_cast<std::size_t>(a)]) <= 100.0)) fields.fail("base_xyz_m", "more than 100 m away");
+    if (!(std::abs(rpy[static_cast<std::size_t>(a)]) <= 10.0)) fields.fail("base_rpy_rad", "an angle beyond 10 rad");
+  }
+  frame.base_in_frame.translation() = Eigen::Vector3d(xyz[0], xyz[1], xyz[2]);
+  frame.base_in_frame.linear() =
+      (Eigen::AngleAxisd(rpy[2], Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(rpy[1], Eigen::Vector3d::UnitY()) *
+       Eigen::AngleAxisd(rpy[0], Eigen::Vector3d::UnitX()))
+          .toRotationMatrix();
+  fields.rejectUnknownKeys();
+  return frame;
+}
+
 }  // namespace
 
 ParameterSet parseParameterSet(const std::string& json_text, const std::string& source_name,
@@ -117,6 +138,14 @@ ParameterSet parseParameterSet(const std::string& json_text, const std::string& 
                                         : GearTrain::direct(robot->dof());
   std::optional<ToolTarget> tool;
   if (fields.has("tool")) tool = toolFromJson(fields.object("tool"), source_name + ": tool");
+  std::optional<BaseFrame> base_frame;
+  if (fields.has("base_frame")) {
+    base_frame = baseFrameFromJson(fields.object("base_frame"), source_name + ": base_frame");
+    if (base_frame->base_link != robot->root_link) {
+      fields.fail("base_frame", "its base_link '" + base_frame->base_link + "' is not the URDF's root link '" +
+                                    robot->root_link + "'");
+    }
+  }
   std::vector<std::unique_ptr<Effect>> effects;
   const nlohmann::json& list = fields.array("effects");
   for (std::size_t i = 0; i < list.size(); ++i) {
@@ -126,7 +155,7 @@ ParameterSet parseParameterSet(const std::string& json_text, const std::string& 
   refuseRepeatedParameters(effects, fields);
   JointErrorModel model(std::move(robot), std::move(gears), std::move(effects));
   model.notes = notes;
-  return ParameterSet{std::move(model), std::move(drives), std::move(tool)};
+  return ParameterSet{std::move(model), std::move(drives), std::move(tool), std::move(base_frame)};
 }
 
 ParameterSet loadParameterSet(const std::string& path, std::shared_ptr<const Robot> robot,
@@ -161,7 +190,7 @@ std::vector<DriveParameters> loadDriveParameters(const std::string& path, const 
 }
 
 std::string parametersToJson(const JointErrorModel& model, const std::vector<DriveParameters>& drives,
-                             const ToolTarget* tool) {
+                             const ToolTarget* tool, const BaseFrame* base_frame) {
   nlohmann::ordered_json document;
   document["format"] = kFormat;
   document["robot"] = model.robot().name;
@@ -176,6 +205,14 @@ std::string parametersToJson(const JointErrorModel& model, const std::vector<Dri
                         {"link", tool->link},
                         {"target_in_flange_m", {tool->in_flange.x(), tool->in_flange.y(), tool->in_flange.z()}}};
   }
+  if (base_frame) {
+    const Eigen::Vector3d t = base_frame->base_in_frame.translation();
+    const Eigen::Vector3d rpy = rotationToRpy(base_frame->base_in_frame.linear());
+    document["base_frame"] = {{"base_link", base_frame->base_link},
+                              {"link", base_frame->link},
+                              {"base_xyz_m", {t.x(), t.y(), t.z()}},
+                              {"base_rpy_rad", {rpy.x(), rpy.y(), rpy.z()}}};
+  }
   requireFiniteNumbers(document, "parameters");
   std::string text = document.dump(2) + "\n";
   requireReadable(document, model);
@@ -183,8 +220,9 @@ std::string parametersToJson(const JointErrorModel& model, const std::vector<Dri
 }
 
 void saveParameterFile(const JointErrorModel& model, const std::string& path,
-                       const std::vector<DriveParameters>& drives, const ToolTarget* tool) {
-  writeFileAtomically(path, parametersToJson(model, drives, tool));
+                       const std::vector<DriveParameters>& drives, const ToolTarget* tool,
+                       const BaseFrame* base_frame) {
+  writeFileAtomically(path, parametersToJson(model, drives, tool, base_frame));
 }
 
 }  // namespace jointcomp

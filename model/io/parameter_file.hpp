@@ -4,7 +4,8 @@
 //    "gears": {"joints": [{"joint": "joint_1", "stage_ratios": [..]}, ..], "coupling": [..]},
 //    "effects": [{"type": "compliance", ..}, {"type": "spring_balancer", ..}, ..],
 //    "plant": {"joints": [{"joint": "joint_1", "motor_inertia_kgm2": .., ..}, ..]},
-//    "tool": {"flange_link": "flange", "link": "flange_target", "target_in_flange_m": [x, y, z]}}
+//    "tool": {"flange_link": "flange", "link": "flange_target", "target_in_flange_m": [x, y, z]},
+//    "base_frame": {"base_link": "base", "link": "measurement_frame", "base_xyz_m": [..], "base_rpy_rad": [..]}}
 #pragma once
 
 #include <memory>
@@ -27,12 +28,22 @@ struct ToolTarget {
   Eigen::Vector3d in_flange = Eigen::Vector3d::Zero();  // m, within 10 m
 };
 
+// The frame a calibration's campaigns were measured in (the "base_frame" object): the pose of the URDF's
+// root link in it (measured = base_in_frame * p_base; URDF roll-pitch-yaw, R = Rz Ry Rx) and the link the
+// calibrated URDF carries it as. A calibration on campaigns in the base frame writes none.
+struct BaseFrame {
+  std::string base_link;
+  std::string link;
+  Eigen::Isometry3d base_in_frame = Eigen::Isometry3d::Identity();  // translation within 100 m
+};
+
 // Everything a parameter file says, read once: the joint-error model and, when the file has a "plant"
 // object, the drives and controller gains of the plant, and the tool point when it has a "tool" object.
 struct ParameterSet {
   JointErrorModel model;
   std::vector<DriveParameters> drives;  // empty when the file has no "plant" object
   std::optional<ToolTarget> tool;
+  std::optional<BaseFrame> base_frame;
   bool hasDrives() const { return !drives.empty(); }
 };
 
@@ -58,11 +69,12 @@ std::vector<DriveParameters> parseDriveParameters(const std::string& json_text, 
                                                   const Robot& robot);
 
 // The file's text; the "plant" object is written when `drives` is not empty, the "tool" object when `tool`
-// is given.
+// is given, the "base_frame" object when `base_frame` is.
 std::string parametersToJson(const JointErrorModel& model, const std::vector<DriveParameters>& drives = {},
-                             const ToolTarget* tool = nullptr);
+                             const ToolTarget* tool = nullptr, const BaseFrame* base_frame = nullptr);
 // Writes whole or not at all (temporary file, then rename).
 void saveParameterFile(const JointErrorModel& model, const std::string& path,
-                       const std::vector<DriveParameters>& drives = {}, const ToolTarget* tool = nullptr);
+                       const std::vector<DriveParameters>& drives = {}, const ToolTarget* tool = nullptr,
+                       const BaseFrame* base_frame = nullptr);
 
 }  // namespace jointcomp

@@ -42,14 +42,29 @@ void requireFinite(bool finite, const std::string& robot, const std::string& wha
   if (!finite) throw InvalidArgument("robotToUrdf: robot '" + robot + "': " + what + " is not finite");
 }
 
-void writeToolLink(std::ostringstream& xml, const Robot& robot, const UrdfToolLink& tool) {
-  requireFinite(tool.offset.allFinite(), robot.name, "tool link '" + tool.name + "' offset");
-  bool taken = tool.name.empty() || tool.name == robot.root_link || tool.name == robot.tip_link;
-  for (const Joint& joint : robot.joints) taken = taken || tool.name == joint.child_link;
+void requireNewLink(const Robot& robot, const std::string& name, const std::string& what) {
+  bool taken = name.empty() || name == robot.root_link || name == robot.tip_link;
+  for (const Joint& joint : robot.joints) taken = taken || name == joint.child_link;
   if (taken) {
-    throw InvalidArgument("robotToUrdf: robot '" + robot.name + "': the tool link's name '" + tool.name +
+    throw InvalidArgument("robotToUrdf: robot '" + robot.name + "': the " + what + "'s name '" + name +
                           "' is empty or that of a link of the robot");
   }
+}
+
+void writeFrameLink(std::ostringstream& xml, const Robot& robot, const UrdfFrameLink& frame) {
+  requireFinite(frame.base_in_frame.matrix().allFinite(), robot.name, "frame link '" + frame.name + "' pose");
+  requireNewLink(robot, frame.name, "frame link");
+  xml << "  <joint name=\"" << escaped(frame.name) << "_joint\" type=\"fixed\">\n";
+  xml << "    <parent link=\"" << escaped(robot.root_link) << "\"/>\n";
+  xml << "    <child link=\"" << escaped(frame.name) << "\"/>\n";
+  xml << "    " << origin(frame.base_in_frame.inverse()) << "\n";
+  xml << "  </joint>\n";
+  xml << "  <link name=\"" << escaped(frame.name) << "\"/>\n";
+}
+
+void writeToolLink(std::ostringstream& xml, const Robot& robot, const UrdfToolLink& tool) {
+  requireFinite(tool.offset.allFinite(), robot.name, "tool link '" + tool.name + "' offset");
+  requireNewLink(robot, tool.name, "tool link");
   xml << "  <joint name=\"" << escaped(tool.name) << "_joint\" type=\"fixed\">\n";
   xml << "    <parent link=\"" << escaped(robot.tip_link) << "\"/>\n";
   xml << "    <child link=\"" << escaped(tool.name) << "\"/>\n";
@@ -69,7 +84,8 @@ Eigen::Vector3d rotationToRpy(const Eigen::Matrix3d& r) {
   return {roll, std::atan2(-m(2, 0), m(2, 2)), std::atan2(-m(0, 1), m(1, 1))};
 }
 
-std::string robotToUrdf(const Robot& robot, const std::string& comment, const UrdfToolLink* tool_link) {
+std::string robotToUrdf(const Robot& robot, const std::string& comment, const UrdfToolLink* tool_link,
+                        const UrdfFrameLink* frame_link) {
   if (robot.joints.empty()) throw InvalidArgument("robotToUrdf: robot '" + robot.name + "' has no joints");
   std::ostringstream xml;
   xml << "<?xml version=\"1.0\"?>\n";
@@ -130,13 +146,20 @@ std::string robotToUrdf(const Robot& robot, const std::string& comment, const Ur
                           "' but the tip link is that link itself");
   }
   if (tool_link) writeToolLink(xml, robot, *tool_link);
+  if (frame_link) {
+    if (tool_link && tool_link->name == frame_link->name) {
+      throw InvalidArgument("robotToUrdf: robot '" + robot.name + "': the tool and frame links are both named '" +
+                            frame_link->name + "'");
+    }
+    writeFrameLink(xml, robot, *frame_link);
+  }
   xml << "</robot>\n";
   return xml.str();
 }
 
 void saveRobotUrdf(const Robot& robot, const std::string& path, const std::string& comment,
-                   const UrdfToolLink* tool_link) {
-  writeFileAtomically(path, robotToUrdf(robot, comment, tool_link));
+                   const UrdfToolLink* tool_link, const UrdfFrameLink* frame_link) {
+  writeFileAtomically(path, robotToUrdf(robot, comment, tool_link, frame_link));
 }
 
 }  // namespace jointcomp

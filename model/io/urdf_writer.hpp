@@ -19,14 +19,24 @@ struct UrdfToolLink {
   Eigen::Vector3d offset = Eigen::Vector3d::Zero();
 };
 
+// The frame a calibration's campaigns were measured in (an instrument's or a cell's), written as one more
+// link fixed to the root link, so that positions in that frame are one transform away: `base_in_frame` is
+// the root link's pose in it (measured = base_in_frame * p_root). The root link stays the root, so the
+// loaded robot's base and gravity do not change.
+struct UrdfFrameLink {
+  std::string name;
+  Eigen::Isometry3d base_in_frame = Eigen::Isometry3d::Identity();
+};
+
 // `comment` (optional) goes into an XML comment at the top. Throws InvalidArgument for a robot the
 // format cannot hold: no joints, non-finite values, a tool offset without a tip link of its own, a tool
 // link named like a link of the robot.
-std::string robotToUrdf(const Robot& robot, const std::string& comment = "", const UrdfToolLink* tool_link = nullptr);
+std::string robotToUrdf(const Robot& robot, const std::string& comment = "", const UrdfToolLink* tool_link = nullptr,
+                        const UrdfFrameLink* frame_link = nullptr);
 
 // Writes whole or not at all (temporary file, then rename); throws Error naming the path.
 void saveRobotUrdf(const Robot& robot, const std::string& path, const std::string& comment = "",
-                   const UrdfToolLink* tool_link = nullptr);
+                   const UrdfToolLink* tool_link = nullptr, const UrdfFrameLink* frame_link = nullptr);
 
 // The URDF roll-pitch-yaw angles of a rotation (R = Rz(yaw) Ry(pitch) Rx(roll)); they give back the
 // rotation to rounding error everywhere, at and near pitch = +-pi/2 too.
