@@ -22,6 +22,7 @@
 #include "cli/robot_setup.hpp"
 #include "model/common/errors.hpp"
 #include "model/identify/calibration_report.hpp"
+#include "model/identify/kinematic_calibration.hpp"
 #include "model/io/atomic_file.hpp"
 #include "model/io/measurement_campaign.hpp"
 #include "model/io/parameter_file.hpp"
@@ -33,16 +34,16 @@ namespace jointcomp::cli {
 namespace {
 
 std::string urdfHeader(const Robot& robot, const std::string& urdf, const std::string& campaign_path,
-                       const CalibrationRun& run, const UrdfToolLink& tool) {
+                       const CalibrationRun& run, const ToolTarget& tool) {
   std::string rigid;
   for (const std::string& item : run.compliance_left_out) {
     rigid += (rigid.empty() ? "" : ", ") + item.substr(0, item.find(':'));
   }
   char target[160];
-  std::snprintf(target, sizeof(target), "%.6f, %.6f, %.6f mm", tool.offset.x() * 1e3, tool.offset.y() * 1e3,
-                tool.offset.z() * 1e3);
+  std::snprintf(target, sizeof(target), "%.6f, %.6f, %.6f mm", tool.in_flange.x() * 1e3, tool.in_flange.y() * 1e3,
+                tool.in_flange.z() * 1e3);
   return "  " + robot.name + " after kinematic calibration by jointcomp calibrate\n  nominal: " + urdf +
-         "\n  campaign: " + campaign_path + "\n  Joint placements corrected. The chain ends at link '" + tool.name +
+         "\n  campaign: " + campaign_path + "\n  Joint placements corrected. The chain ends at link '" + tool.link +
          "', the calibrated target (" + target + " from '" + robot.tip_link +
          "'): campaigns measured with this URDF need no target.\n" +
          "  Joint offsets and compliance are in the parameter file" +
@@ -109,32 +110,20 @@ int runCalibrate(int argc, char** argv) {
   for (const std::string& path : campaign_paths) campaigns.push_back(readCampaignFile(path));
   std::vector<std::pair<std::string, MeasurementCampaign>> held;
   for (const std::string& path : holdouts) held.emplace_back(path, readCampaignFile(path));
-  std::vector<MeasurementCampaign*> all;
-  for (MeasurementCampaign& campaign : campaigns) all.push_back(&campaign);
-  for (auto& entry : held) all.push_back(&entry.second);
-  const std::string target_from = applyTarget(options, setup, all);
-  if (!target_from.empty()) std::printf("  target on the flange from %s\n", target_from.c_str());
-  const std::string base_from = applyBaseFrame(options, all);
-  if (!base_from.empty()) std::printf("  base frame from %s\n", base_from.c_str());
+  std::vector<MeasurementCampaign*> held_campaigns;
+  for (auto& entry : held) held_campaigns.push_back(&entry.second);
+  applyCampaignFrames(options, setup, campaigns, held_campaigns);
   const CalibrationRun run = runCalibration(prior, campaigns, held, calibration);
 
   // The tool point the calibration fitted, in both files: the URDF ends at it (a link of its own, so that
-  // kinematics, compensation and the plant work there), the parameter file says where it is on the flange.
+  // kinematics, compensation and the plant work there), the parameter file says where it is on the flange;
+  // the frame the campaigns were measured in (fitted or kept): a link fixed to the root, "base_frame".
   const std::string urdf_out = out + "/" + plainFileName(robot->name) + "_calibrated.urdf";  // inside --out
-  const UrdfToolLink tool_link{toolLinkName(*robot), run.result.estimate.target};
-  // The frame the campaigns were measured in, fitted or kept: a link fixed to the root in the URDF, the
-  // base's pose in it in the parameter file.
-  const std::optional<UrdfFrameLink> frame_link =
-      measurementFrameLink(*robot, campaigns.front(), run.result.estimate, tool_link.name);
-  saveRobotUrdf(*run.calibrated_robot, urdf_out, urdfHeader(*robot, urdf, campaign_path, run, tool_link), &tool_link,
-                frame_link ? &*frame_link : nullptr);
   const std::string params_out = out + "/parameters.json";
-  const ToolTarget tool{robot->tip_link, tool_link.name, run.result.estimate.target};
-  const std::optional<BaseFrame> base_frame =
-      frame_link ? std::optional<BaseFrame>(BaseFrame{robot->root_link, frame_link->name, frame_link->base_in_frame})
-                 : std::nullopt;
-  saveParameterFile(run.calibrated, params_out, setup.parameters.drives, &tool,  // the prior's drives, if any
-                    base_frame ? &*base_frame : nullptr);
+  const CalibratedFrames frames = calibratedFrames(*robot, campaigns.front(), run.result.estimate);
+  saveCalibratedRobot(run.calibrated, setup.parameters.drives,  // the prior's drives, if any
+                      &frames.tool, frames.base_frame ? &*frames.base_frame : nullptr, urdf_out,
+                      urdfHeader(*robot, urdf, campaign_path, run, frames.tool), params_out);
 
   CalibrationSources sources;
   sources.urdf = urdf;

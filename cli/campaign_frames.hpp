@@ -1,11 +1,11 @@
 // What calibrate and discover share about where the campaigns were measured: the target on the flange
 // (--target, the campaigns' `# target:`, the parameter file's "tool") and the robot base's pose in the
 // instrument's frame (--base-frame, the campaigns' `# base_frame:`),
-// the --fix groups ("target", "frame", "base"), and the tool and frame links the written URDF and parameter
-// file carry.
+// and the --fix groups ("target", "frame", "base").
 #pragma once
 
 #include <cmath>
+#include <cstdio>
 #include <optional>
 #include <string>
 #include <vector>
@@ -92,21 +92,17 @@ inline std::string applyBaseFrame(const Options& options, const std::vector<Meas
   return from;
 }
 
-// The frame link of a calibrated robot measured in an instrument's frame: "<root link>_measurement_frame",
-// made unique, at the calibration's first set-up frame. None for campaigns in the base frame.
-inline std::optional<UrdfFrameLink> measurementFrameLink(const Robot& robot, const MeasurementCampaign& first,
-                                                         const GeometricParameters& estimate,
-                                                         const std::string& tool_link) {
-  if (first.frame != MeasurementFrame::Instrument) return std::nullopt;
-  std::string name = robot.root_link + "_measurement_frame";
-  const auto taken = [&](const std::string& n) {
-    if (n == robot.root_link || n == robot.tip_link || n == tool_link) return true;
-    for (const Joint& joint : robot.joints)
-      if (n == joint.child_link) return true;
-    return false;
-  };
-  while (taken(name)) name += "_";
-  return UrdfFrameLink{name, estimate.instrumentFromBase()};
+// Both of the above on the fitted and held-out campaigns, each source said on the console.
+inline void applyCampaignFrames(const Options& options, const RobotSetup& setup,
+                                std::vector<MeasurementCampaign>& fitted,
+                                const std::vector<MeasurementCampaign*>& held) {
+  std::vector<MeasurementCampaign*> all;  // the first fitted campaign first
+  for (MeasurementCampaign& campaign : fitted) all.push_back(&campaign);
+  all.insert(all.end(), held.begin(), held.end());
+  const std::string target_from = applyTarget(options, setup, all);
+  if (!target_from.empty()) std::printf("  target on the flange from %s\n", target_from.c_str());
+  const std::string base_from = applyBaseFrame(options, all);
+  if (!base_from.empty()) std::printf("  base frame from %s\n", base_from.c_str());
 }
 
 }  // namespace jointcomp::cli

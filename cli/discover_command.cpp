@@ -24,6 +24,7 @@
 #include "model/common/errors.hpp"
 #include "model/effects/periodic_table.hpp"
 #include "model/identify/discovery_report.hpp"
+#include "model/identify/kinematic_calibration.hpp"
 #include "model/io/atomic_file.hpp"
 #include "model/io/measurement_campaign.hpp"
 #include "model/io/parameter_file.hpp"
@@ -74,24 +75,17 @@ void writeDiscoveryOutputs(const DiscoveryResult& result, const DiscoveryOptions
   const std::shared_ptr<const Robot>& robot = setup.robot;
   const std::string& urdf = setup.urdf;
   const std::string urdf_out = out + "/" + plainFileName(robot->name) + "_discovered.urdf";
-  // The fitted target on the flange: the URDF ends at it (a link of its own), the parameter file says where.
-  const UrdfToolLink tool_link{toolLinkName(*robot), result.calibration.estimate.target};
-  // The frame the campaigns were measured in (fitted or kept), as calibrate writes it.
-  const std::optional<UrdfFrameLink> frame_link =
-      measurementFrameLink(*robot, first, result.calibration.estimate, tool_link.name);
-  saveRobotUrdf(result.model.robot(), urdf_out,
-                "  " + robot->name + " after jointcomp discover\n  nominal: " + urdf +
-                    "\n  Joint placements corrected; the chain ends at link '" + tool_link.name +
-                    "', the fitted target; joint offsets, compliance and the discovered effects are in the "
-                    "parameter file.",
-                &tool_link, frame_link ? &*frame_link : nullptr);
+  // The fitted target on the flange: the URDF ends at it (a link of its own), the parameter file says where;
+  // the frame the campaigns were measured in (fitted or kept), as calibrate writes it.
   const std::string params_out = out + "/parameters.json";
-  const ToolTarget tool{robot->tip_link, tool_link.name, tool_link.offset};
-  const std::optional<BaseFrame> base_frame =
-      frame_link ? std::optional<BaseFrame>(BaseFrame{robot->root_link, frame_link->name, frame_link->base_in_frame})
-                 : std::nullopt;
-  saveParameterFile(result.model, params_out, setup.parameters.drives, &tool,  // the prior's drives, if any
-                    base_frame ? &*base_frame : nullptr);
+  const CalibratedFrames frames = calibratedFrames(*robot, first, result.calibration.estimate);
+  saveCalibratedRobot(result.model, setup.parameters.drives,  // the prior's drives, if any
+                      &frames.tool, frames.base_frame ? &*frames.base_frame : nullptr, urdf_out,
+                      "  " + robot->name + " after jointcomp discover\n  nominal: " + urdf +
+                          "\n  Joint placements corrected; the chain ends at link '" + frames.tool.link +
+                          "', the fitted target; joint offsets, compliance and the discovered effects are in the "
+                          "parameter file.",
+                      params_out);
 
   DiscoverySources sources;
   sources.urdf = urdf;
@@ -199,16 +193,12 @@ int runDiscover(int argc, char** argv) {
   for (const std::string& path : campaigns) fitted.push_back(readCampaignFile(path));
   for (const std::string& path : holdouts) held.push_back(readCampaignFile(path));
   checkFoldsFitRows(discovery.folds, fitted);
-  std::vector<MeasurementCampaign*> all;
-  for (MeasurementCampaign& campaign : fitted) all.push_back(&campaign);
-  for (MeasurementCampaign& campaign : held) all.push_back(&campaign);
-  const std::string target_from = applyTarget(options, setup, all);
-  const std::string base_from = applyBaseFrame(options, all);
   std::printf("jointcomp discover: robot %s, %zu fitted and %zu held-out campaign(s), base %s\n", robot->name.c_str(),
               fitted.size(), held.size(), base.c_str());
   if (!setup.assumed().empty()) std::printf("  %s\n", setup.assumed().c_str());
-  if (!target_from.empty()) std::printf("  target on the flange from %s\n", target_from.c_str());
-  if (!base_from.empty()) std::printf("  base frame from %s\n", base_from.c_str());
+  std::vector<MeasurementCampaign*> held_pointers;
+  for (MeasurementCampaign& campaign : held) held_pointers.push_back(&campaign);
+  applyCampaignFrames(options, setup, fitted, held_pointers);
   const auto fit_started = std::chrono::steady_clock::now();
   const DiscoveryResult result = discoverEffects(prior, fitted, held, discovery);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - fit_started).count();

@@ -63,17 +63,4 @@ inline RobotSetup loadRobotSetup(const Options& options, const std::string& defa
   return RobotSetup{urdf, params, std::move(robot), std::move(parameters)};
 }
 
-// A calibrated URDF's tool link (calibrate, discover): the tip link's name with "_target", made unique.
-inline std::string toolLinkName(const Robot& robot) {
-  std::string name = robot.tip_link + "_target";
-  const auto taken = [&robot](const std::string& n) {
-    if (n == robot.root_link || n == robot.tip_link) return true;
-    for (const Joint& joint : robot.joints)
-      if (n == joint.child_link) return true;
-    return false;
-  };
-  while (taken(name)) name += "_";
-  return name;
-}
-
 }  // namespace jointcomp::cli

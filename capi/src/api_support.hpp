@@ -6,6 +6,7 @@
 #include <cstring>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -14,6 +15,7 @@
 #include "model/common/errors.hpp"
 #include "model/common/progress.hpp"
 #include "model/effects/joint_error_model.hpp"
+#include "model/io/parameter_file.hpp"
 #include "model/plant/flexible_joint_plant.hpp"
 #include "model/robot/drive_parameters.hpp"
 #include "model/robot/inverse_kinematics.hpp"
@@ -36,6 +38,10 @@ struct jc_robot : jointcomp::capi::HandleHeader {
   double payload_mass = 0.0;
   Eigen::Vector3d payload_com = Eigen::Vector3d::Zero();
   jointcomp::Vector6 tool_wrench = jointcomp::Vector6::Zero();
+  // Where a calibration put the target and the instrument's frame (jc_calibrate, jc_discover, or a parameter
+  // file's "tool" and "base_frame"); set before the handle is handed out, then never changed.
+  std::optional<jointcomp::ToolTarget> tool;
+  std::optional<jointcomp::BaseFrame> base_frame;
 };
 
 struct jc_plant : jointcomp::capi::HandleHeader {

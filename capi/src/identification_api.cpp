@@ -19,6 +19,7 @@
 #include "model/identify/calibration_report.hpp"
 #include "model/identify/discovery_report.hpp"
 #include "model/identify/identification_report.hpp"
+#include "model/identify/kinematic_calibration.hpp"
 #include "model/io/measurement_campaign.hpp"
 #include "model/io/parameter_file.hpp"
 #include "model/io/urdf_writer.hpp"
@@ -114,8 +115,14 @@ jc_status jc_robot_save(jc_robot* robot, const char* urdf_path, const char* para
     if (!urdf_path && !parameter_path) invalid("urdf_path and parameter_path are both NULL: nothing to save");
     if (urdf_path && !*urdf_path) invalid("urdf_path is empty");
     if (parameter_path && !*parameter_path) invalid("parameter_path is empty");
-    if (urdf_path) saveRobotUrdf(*handle.robot, urdf_path, "  written by jc_robot_save");
-    if (parameter_path) saveParameterFile(handle.model, parameter_path, handle.drives);
+    // The URDF of the handle's chain (it ends where the handle's does), with the instrument's frame as a link
+    // fixed to the root; the parameter file with the target and that frame.
+    saveCalibratedRobot(handle.model, handle.drives, nullptr, handle.base_frame ? &*handle.base_frame : nullptr,
+                        urdf_path ? urdf_path : "", "  written by jc_robot_save", "");
+    if (parameter_path) {
+      saveParameterFile(handle.model, parameter_path, handle.drives, handle.tool ? &*handle.tool : nullptr,
+                        handle.base_frame ? &*handle.base_frame : nullptr);
+    }
   });
 }
 
@@ -280,6 +287,9 @@ jc_status jc_calibrate(jc_robot* nominal, const char* campaign_path, const char*
     auto made = std::make_unique<jc_report>(calibrationReportJson(run, options, sources).dump(2),
                                             calibrationSummary(run, sources));
     auto updated = std::make_unique<jc_robot>(run.calibrated_robot, std::move(run.calibrated), handle.drives);
+    const CalibratedFrames frames = calibratedFrames(*handle.robot, campaigns.front(), run.result.estimate);
+    updated->tool = frames.tool;
+    updated->base_frame = frames.base_frame;
     deliver(std::move(updated), calibrated, std::move(made), report);
   });
 }
@@ -331,7 +341,10 @@ jc_status jc_discover(jc_robot* nominal, const char* campaign_paths, const char*
     sources.held_out = holdouts;
     auto made = std::make_unique<jc_report>(discoveryReportJson(result, options, sources, seconds).dump(2),
                                             discoverySummary(result, options, sources));
+    const CalibratedFrames frames = calibratedFrames(*handle.robot, fitted.front(), result.calibration.estimate);
     auto updated = std::make_unique<jc_robot>(result.model.sharedRobot(), std::move(result.model), handle.drives);
+    updated->tool = frames.tool;
+    updated->base_frame = frames.base_frame;
     deliver(std::move(updated), extended, std::move(made), report);
   });
 }

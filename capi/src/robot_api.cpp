@@ -16,7 +16,10 @@ namespace {
 std::unique_ptr<jc_robot> robotFromParameters(const std::shared_ptr<const Robot>& robot, const std::string& json_text,
                                               const std::string& source_name) {
   ParameterSet parameters = parseParameterSet(json_text, source_name, robot, EffectRegistry::builtin());
-  return std::make_unique<jc_robot>(robot, std::move(parameters.model), std::move(parameters.drives));
+  auto made = std::make_unique<jc_robot>(robot, std::move(parameters.model), std::move(parameters.drives));
+  made->tool = std::move(parameters.tool);
+  made->base_frame = std::move(parameters.base_frame);
+  return made;
 }
 
 // Kinematics and dynamics only: no joint errors, no drives.
@@ -122,7 +125,36 @@ jc_status jc_robot_has_drives(jc_robot* robot, int32_t* has_drives) {
 jc_status jc_robot_parameters_json(jc_robot* robot, char* buffer, int32_t capacity, int32_t* length) {
   return CAPI_ENTRY({
     const jc_robot& handle = robotHandle(robot);
-    copyText(parametersToJson(handle.model, handle.drives), buffer, capacity, length);
+    copyText(parametersToJson(handle.model, handle.drives, handle.tool ? &*handle.tool : nullptr,
+                              handle.base_frame ? &*handle.base_frame : nullptr),
+             buffer, capacity, length);
+  });
+}
+
+jc_status jc_robot_tool_target(jc_robot* robot, double* target, int32_t target_len, int32_t* has_target) {
+  return CAPI_ENTRY({
+    const jc_robot& handle = robotHandle(robot);
+    requirePointer(has_target, "has_target");
+    requireOutput(target, target_len, 3, "target", "x, y, z in m");
+    double* out = target;
+    const Eigen::Vector3d value = handle.tool ? handle.tool->in_flange : Eigen::Vector3d::Zero();
+    for (int k = 0; k < 3; ++k) out[k] = value[k];
+    *has_target = handle.tool ? 1 : 0;
+  });
+}
+
+jc_status jc_robot_base_frame(jc_robot* robot, double* pose, int32_t pose_len, int32_t* has_base_frame) {
+  return CAPI_ENTRY({
+    const jc_robot& handle = robotHandle(robot);
+    requirePointer(has_base_frame, "has_base_frame");
+    requireOutput(pose, pose_len, 16, "pose", "a 4 x 4 transform, row-major");
+    double* out = pose;
+    const Eigen::Matrix4d value =
+        handle.base_frame ? handle.base_frame->base_in_frame.matrix() : Eigen::Matrix4d::Identity();
+    for (int r = 0; r < 4; ++r) {
+      for (int c = 0; c < 4; ++c) out[r * 4 + c] = value(r, c);
+    }
+    *has_base_frame = handle.base_frame ? 1 : 0;
   });
 }
 

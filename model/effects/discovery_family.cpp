@@ -37,6 +37,36 @@ double largestTorque(const DiscoveryData& data, int joint) {
   return most;
 }
 
+double partAnglePerJointAngle(const DiscoveryData& data, int joint, int stage) {
+  const int n = data.robot->dof();
+  JointVector unit = JointVector::Zero(n), unit_motor(n);
+  unit[joint] = 1.0;
+  data.gears->motorAngles(unit, unit_motor);
+  return data.gears->stageInputAngle(joint, stage, unit_motor);
+}
+
+std::string transmissionProblem(const DiscoveryData& data, const DiscoveryCandidate& candidate, double largest_error,
+                                double largest_part_slope) {
+  const int j = candidate.joint;
+  const double slope = std::abs(largest_part_slope * partAnglePerJointAngle(data, j, candidate.stage));
+  char text[300];
+  if (!(largest_error <= kMaxPlausibleJointError)) {
+    std::snprintf(text, sizeof(text),
+                  "not physical: %s's %s%s turns the joint by %.3g rad, beyond the plausible %.3g rad",
+                  jointNameOf(data, j).c_str(), candidate.type.c_str(), candidate.detail.c_str(), largest_error,
+                  kMaxPlausibleJointError);
+  } else if (!(slope < kMaxTransmissionSlope)) {
+    std::snprintf(text, sizeof(text),
+                  "not physical: %s's %s%s changes by %.3g rad per rad of the joint: the link would turn against "
+                  "the motor (the most a transmission error may is %.3g)",
+                  jointNameOf(data, j).c_str(), candidate.type.c_str(), candidate.detail.c_str(), slope,
+                  kMaxTransmissionSlope);
+  } else {
+    return {};
+  }
+  return text;
+}
+
 void CalibrationParameterDiscovery::offer(const DiscoveryData& data, int joint,
                                           std::vector<DiscoveryCandidate>& candidates) const {
   if (joint < 0 || (needs_torque_ && !data.torque_known)) return;

@@ -176,4 +176,15 @@ constexpr double kMaxPlausibleJointError = 0.01;  // rad
 // The largest |load torque| of `joint` over the fitted rows (N m).
 double largestTorque(const DiscoveryData& data, int joint);
 
+// The constraint of a transmission error (harmonics, periodic tables) of a part of a joint's gear train:
+// it turns the joint by at most kMaxPlausibleJointError over the fitted rows, and the link turns with the
+// motor, never against it: |d(error)/d(joint angle)| = |slope per part angle| * |part angle per joint
+// angle| stays below kMaxTransmissionSlope (at 1 the link would stand while the motor turns). Empty when
+// physical; else why not, naming the joint and the part.
+constexpr double kMaxTransmissionSlope = 1.0;
+std::string transmissionProblem(const DiscoveryData& data, const DiscoveryCandidate& candidate, double largest_error,
+                                double largest_part_slope);
+// The part's angle per joint angle (the gear ratios up to part `stage` of `joint`).
+double partAnglePerJointAngle(const DiscoveryData& data, int joint, int stage);
+
 }  // namespace jointcomp

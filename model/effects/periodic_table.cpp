@@ -17,29 +17,6 @@ constexpr double kTwoPi = 2.0 * 3.14159265358979323846;
 // A knot is fitted only where the rows give it this much weight (a row at its centre gives 2/3).
 constexpr double kMinimumSupport = 2.0;
 
-// The knots of a table of `knots` for (joint, stage) that the rows support, but for the most supported
-// one: the B-splines sum to one, so all of them together would repeat the joint's offset; leaving one at
-// zero spans the same functions with the offset and keeps the fit regular.
-std::vector<int> fittedKnots(const DiscoveryData& data, int joint, int stage, int knots) {
-  std::vector<double> support(static_cast<std::size_t>(knots), 0.0);
-  for (int i = 0; i < data.rows(); ++i) {
-    const PeriodicSplineWeights w =
-        periodicSplineWeights(knots, data.gears->stageInputAngle(joint, stage, data.motor[i]));
-    for (int k = 0; k < 4; ++k) support[static_cast<std::size_t>((w.first + k) % knots)] += w.weight[k];
-  }
-  std::vector<int> kept;
-  for (int k = 0; k < knots; ++k) {
-    if (support[static_cast<std::size_t>(k)] >= kMinimumSupport) kept.push_back(k);
-  }
-  if (!kept.empty()) {
-    const auto most = std::max_element(kept.begin(), kept.end(), [&](int a, int b) {
-      return support[static_cast<std::size_t>(a)] < support[static_cast<std::size_t>(b)];
-    });
-    kept.erase(most);
-  }
-  return kept;
-}
-
 // The angle ranges (deg, within one revolution of the part) where the fitted knots shape the table.
 nlohmann::ordered_json coveredRanges(const std::vector<int>& kept, int knots) {
   std::vector<bool> segment(static_cast<std::size_t>(knots), false);  // segment s: u in [s, s + 1)
@@ -58,6 +35,29 @@ nlohmann::ordered_json coveredRanges(const std::vector<int>& kept, int knots) {
 }
 
 }  // namespace
+
+// The knots of a table of `knots` for (joint, stage) that the rows support, but for the most supported
+// one: the B-splines sum to one, so all of them together would repeat the joint's offset; leaving one at
+// zero spans the same functions with the offset and keeps the fit regular.
+std::vector<int> fittedTableKnots(const DiscoveryData& data, int joint, int stage, int knots) {
+  std::vector<double> support(static_cast<std::size_t>(knots), 0.0);
+  for (int i = 0; i < data.rows(); ++i) {
+    const PeriodicSplineWeights w =
+        periodicSplineWeights(knots, data.gears->stageInputAngle(joint, stage, data.motor[i]));
+    for (int k = 0; k < 4; ++k) support[static_cast<std::size_t>((w.first + k) % knots)] += w.weight[k];
+  }
+  std::vector<int> kept;
+  for (int k = 0; k < knots; ++k) {
+    if (support[static_cast<std::size_t>(k)] >= kMinimumSupport) kept.push_back(k);
+  }
+  if (!kept.empty()) {
+    const auto most = std::max_element(kept.begin(), kept.end(), [&](int a, int b) {
+      return support[static_cast<std::size_t>(a)] < support[static_cast<std::size_t>(b)];
+    });
+    kept.erase(most);
+  }
+  return kept;
+}
 
 PeriodicSplineWeights periodicSplineWeights(int knots, double angle) {
   double u = angle / kTwoPi * knots;
@@ -268,7 +268,7 @@ void PeriodicTableDiscovery::offer(const DiscoveryData& data, int joint,
     const std::string part = gears.partName(joint, s);
     for (const int knots : data.table_knots) {
       if (knots < PeriodicTableEffect::kMinKnots || knots > PeriodicTableEffect::kMaxKnots) continue;
-      const std::vector<int> kept = fittedKnots(data, joint, s, knots);
+      const std::vector<int> kept = fittedTableKnots(data, joint, s, knots);
       const int columns = static_cast<int>(kept.size());
       if (columns < 2 || data.rows() < 4 * columns) continue;
       DiscoveryCandidate candidate;
@@ -317,7 +317,7 @@ std::unique_ptr<Effect> PeriodicTableDiscovery::makeEffect(const DiscoveryData& 
   for (const FittedCandidate& a : accepted) {
     const DiscoveryCandidate& c = *a.candidate;
     const int knots = static_cast<int>(c.cycles);
-    const std::vector<int> kept = fittedKnots(data, c.joint, c.stage, knots);
+    const std::vector<int> kept = fittedTableKnots(data, c.joint, c.stage, knots);
     if (static_cast<Eigen::Index>(kept.size()) != a.theta.size()) {
       throw SolverError("periodic table of joint " + std::to_string(c.joint + 1) + ": " +
                         std::to_string(a.theta.size()) + " coefficients for " + std::to_string(kept.size()) +
@@ -332,20 +332,6 @@ std::unique_ptr<Effect> PeriodicTableDiscovery::makeEffect(const DiscoveryData& 
     tables.push_back(std::move(table));
   }
   return std::make_unique<PeriodicTableEffect>(*data.robot, *data.gears, tables);
-}
-
-std::string PeriodicTableDiscovery::physicalProblem(const DiscoveryData& data, const DiscoveryCandidate& candidate,
-                                                    const Eigen::VectorXd& theta, const JointVector&) const {
-  if (candidate.joint < 0 || theta.size() == 0) return {};
-  const double largest = theta.cwiseAbs().maxCoeff();
-  if (largest <= kMaxStatedJointError) return {};
-  char text[240];
-  std::snprintf(text, sizeof(text),
-                "not physical: %s's periodic_table of the %s (%d knots) has a coefficient of %.3g rad, beyond the "
-                "plausible %.3g rad of a joint error",
-                jointNameOf(data, candidate.joint).c_str(), candidate.part.c_str(), static_cast<int>(candidate.cycles),
-                largest, kMaxStatedJointError);
-  return text;
 }
 
 std::vector<NamedEstimate> PeriodicTableDiscovery::describe(const FittedCandidate& fitted,
@@ -379,6 +365,33 @@ std::vector<NamedEstimate> PeriodicTableDiscovery::describe(const FittedCandidat
     estimates.push_back({stem + ".fitted_knot_" + std::to_string(k) + "_rad", fitted.theta[k], fitted.sigma[k]});
   }
   return estimates;
+}
+
+std::string PeriodicTableDiscovery::physicalProblem(const DiscoveryData& data, const DiscoveryCandidate& candidate,
+                                                    const Eigen::VectorXd& theta, const JointVector&) const {
+  const int knots = static_cast<int>(candidate.cycles);
+  if (candidate.joint < 0 || knots < PeriodicTableEffect::kMinKnots) return {};
+  const std::vector<int> kept = fittedTableKnots(data, candidate.joint, candidate.stage, knots);
+  if (static_cast<Eigen::Index>(kept.size()) != theta.size()) return {};
+  std::vector<double> value(static_cast<std::size_t>(knots), 0.0);  // the unvisited knots stay at zero
+  for (std::size_t c = 0; c < kept.size(); ++c)
+    value[static_cast<std::size_t>(kept[c])] = theta[static_cast<Eigen::Index>(c)];
+  double largest = 0.0;
+  for (int i = 0; i < data.rows(); ++i) {
+    const PeriodicSplineWeights w =
+        periodicSplineWeights(knots, data.gears->stageInputAngle(candidate.joint, candidate.stage, data.motor[i]));
+    double at = 0.0;
+    for (int k = 0; k < 4; ++k) at += w.weight[k] * value[static_cast<std::size_t>((w.first + k) % knots)];
+    largest = std::max(largest, std::abs(at));
+  }
+  double steepest = 0.0;  // rad per rad of the part's angle, over the whole period (32 samples per knot)
+  for (int n = 0; n < 32 * knots; ++n) {
+    const PeriodicSplineWeights w = periodicSplineWeights(knots, kTwoPi * n / (32.0 * knots));
+    double slope = 0.0;
+    for (int k = 0; k < 4; ++k) slope += w.slope[k] * value[static_cast<std::size_t>((w.first + k) % knots)];
+    steepest = std::max(steepest, std::abs(slope));
+  }
+  return transmissionProblem(data, candidate, largest, steepest);
 }
 
 }  // namespace jointcomp

@@ -73,6 +73,11 @@ private:
   std::vector<PeriodicTable> tables_;
 };
 
+// The knots of a table of `knots` for (joint, stage) that the fitted rows support (a weight of at least 2),
+// but for the most supported one (the B-splines sum to one: all of them would repeat the joint's offset):
+// the coefficients of a "periodic" candidate, in this order.
+std::vector<int> fittedTableKnots(const DiscoveryData& data, int joint, int stage, int knots);
+
 // Discovery: "periodic", per joint and distinct part, a table of each knot count of
 // DiscoveryData::table_knots (one column per knot the fitted rows visit), with a roughness prior (discovery
 // adds a ridge toward zero). Cross-validation picks the count and the priors' weights, and against the
@@ -84,7 +89,9 @@ public:
   std::unique_ptr<Effect> makeEffect(const DiscoveryData& data,
                                      const std::vector<FittedCandidate>& accepted) const override;
   std::vector<NamedEstimate> describe(const FittedCandidate& fitted, const JointErrorModel& model) const override;
-  // Physical: coefficients a parameter file may state (kMaxStatedJointError).
+  // transmissionProblem: the table's largest |value| over the fitted rows within kMaxPlausibleJointError,
+  // its steepest slope over the period (the unvisited knots at zero, 32 samples per knot) times the part
+  // angle per joint angle below kMaxTransmissionSlope.
   std::string physicalProblem(const DiscoveryData& data, const DiscoveryCandidate& candidate,
                               const Eigen::VectorXd& theta, const JointVector& compliance) const override;
 };

@@ -275,20 +275,6 @@ std::unique_ptr<Effect> HarmonicDiscovery::makeEffect(const DiscoveryData& data,
   return std::make_unique<TransmissionErrorEffect>(*data.robot, *data.gears, harmonics);
 }
 
-std::string HarmonicDiscovery::physicalProblem(const DiscoveryData& data, const DiscoveryCandidate& candidate,
-                                               const Eigen::VectorXd& theta, const JointVector&) const {
-  if (candidate.joint < 0 || theta.size() != 2) return {};
-  const double amplitude = std::hypot(theta[0], theta[1]);
-  if (amplitude <= kMaxStatedJointError) return {};
-  char text[240];
-  std::snprintf(text, sizeof(text),
-                "not physical: %s's transmission_error harmonic of order %g of the %s has an amplitude of %.3g rad, "
-                "beyond the plausible %.3g rad of a joint error",
-                jointNameOf(data, candidate.joint).c_str(), candidate.cycles, candidate.part.c_str(), amplitude,
-                kMaxStatedJointError);
-  return text;
-}
-
 std::vector<NamedEstimate> HarmonicDiscovery::describe(const FittedCandidate& fitted,
                                                        const JointErrorModel& model) const {
   const DiscoveryCandidate& c = *fitted.candidate;
@@ -300,6 +286,13 @@ std::vector<NamedEstimate> HarmonicDiscovery::describe(const FittedCandidate& fi
                            std::to_string(static_cast<int>(c.cycles));
   return {{stem + ".amplitude_rad", amp, amp_sigma},
           {stem + ".phase_rad", std::atan2(a[1], a[0]), amp > 0.0 ? amp_sigma / amp : kPi}};
+}
+
+std::string HarmonicDiscovery::physicalProblem(const DiscoveryData& data, const DiscoveryCandidate& candidate,
+                                               const Eigen::VectorXd& theta, const JointVector&) const {
+  if (candidate.joint < 0 || theta.size() != 2) return {};
+  const double amplitude = std::hypot(theta[0], theta[1]);
+  return transmissionProblem(data, candidate, amplitude, amplitude * candidate.cycles);
 }
 
 }  // namespace jointcomp

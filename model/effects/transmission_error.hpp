@@ -84,7 +84,8 @@ public:
   std::unique_ptr<Effect> makeEffect(const DiscoveryData& data,
                                      const std::vector<FittedCandidate>& accepted) const override;
   std::vector<NamedEstimate> describe(const FittedCandidate& fitted, const JointErrorModel& model) const override;
-  // Physical: an amplitude a parameter file may state (kMaxStatedJointError).
+  // transmissionProblem: the amplitude sqrt(a^2 + b^2) within kMaxPlausibleJointError, the slope
+  // amplitude * order * (part angle per joint angle) below kMaxTransmissionSlope.
   std::string physicalProblem(const DiscoveryData& data, const DiscoveryCandidate& candidate,
                               const Eigen::VectorXd& theta, const JointVector& compliance) const override;
 };

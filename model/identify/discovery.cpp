@@ -328,13 +328,15 @@ private:
   // The fitted rows as `model` predicts them: the campaigns' concatenation, each row with its set-up.
   CalibrationData fittedRows(const JointErrorModel& model) const { return calibration_.fittedRows(model); }
 
-  // Errors on the fitted rows, on every held-out campaign (frame re-fitted) and the paths' Ra and Rz.
-  DiscoveryState evaluate(double cv_sse) const {
+  // Errors on the fitted rows, on every held-out campaign (frame re-fitted) and the paths' Ra and Rz, as
+  // `model` with the calibration's parameters `p` predicts them (the step's model and estimate by default).
+  DiscoveryState evaluate(double cv_sse) const { return evaluate(cv_sse, model_, cal_.estimate); }
+  DiscoveryState evaluate(double cv_sse, const JointErrorModel& model, const GeometricParameters& p) const {
     DiscoveryState state;
     state.fitted = cal_.after;
     if (fitted_path_) {
-      const CalibrationData data = fittedRows(model_);
-      const std::vector<double> z = zErrors(model_, cal_.estimate, data);
+      const CalibrationData data = fittedRows(model);
+      const std::vector<double> z = zErrors(model, p, data);
       for (std::size_t c = 0; c < calibration_.fitted().size(); ++c) {
         if (!isPathCampaign(calibration_.fitted()[c])) continue;
         std::vector<double> part;
@@ -348,10 +350,10 @@ private:
     GeometricCalibrationOptions cal_options = calibrationOptions();
     cal_options.same_instrument = options_.heldout_same_instrument;
     for (std::size_t k = 0; k < heldout_.size(); ++k) {
-      const HoldoutEvaluation e = KinematicCalibration::evaluate(model_, cal_.estimate, heldout_[k], cal_options);
+      const HoldoutEvaluation e = KinematicCalibration::evaluate(model, p, heldout_[k], cal_options);
       state.heldout.push_back(e.statistics);
       if (isPathCampaign(heldout_[k])) {
-        state.paths.push_back(roughness(zErrors(model_, e.parameters, KinematicCalibration::rows(model_, heldout_[k])),
+        state.paths.push_back(roughness(zErrors(model, e.parameters, KinematicCalibration::rows(model, heldout_[k])),
                                         true, static_cast<int>(k)));
       }
     }
@@ -539,8 +541,15 @@ private:
     return record;
   }
 
-  // The joint-space residual and the calibrated model.
+  // The joint-space residual and the calibrated model. The steps were judged on the prior geometry's load
+  // torques; the written files are the final geometry's: the calibration is refitted on those (the effects
+  // as accepted) and the final figures are what the written URDF and parameter file give.
   void finish() {
+    GeometricCalibrationOptions written_options = calibrationOptions();
+    written_options.calibrated_torques = true;
+    cal_ = calibration_.calibrate(model_, written_options);
+    const CalibratedView written = KinematicCalibration::written(model_, cal_.estimate);
+    state_ = evaluate(base_fit_.cv, written.model, written.parameters);
     lin_ = linearise(model_, fittedRows(model_), cal_, features_, active_, cuts_, true);
     result_.joint_residual_rms_final = jointRms(lin_);
     // Where what is left lies (reported when it is well above the noise floor).

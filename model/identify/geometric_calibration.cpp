@@ -576,6 +576,16 @@ std::string joinedSource(const std::vector<MeasurementCampaign>& campaigns) {
   return source;
 }
 
+// One target for all campaigns: they may not name different ones.
+void checkOneTarget(const std::vector<MeasurementCampaign>& campaigns, const MeasurementCampaign& whole) {
+  for (const MeasurementCampaign& c : campaigns) {
+    if (c.has_target != whole.has_target || (c.has_target && c.target_in_flange != whole.target_in_flange)) {
+      throw InvalidArgument("campaign '" + c.source + "' names another target in the flange than '" +
+                            campaigns.front().source + "'; one calibration fits one target");
+    }
+  }
+}
+
 }  // namespace
 bool baseFrameKept(const GeometricCalibrationOptions& options) {
   for (const char* p : {"tx_m", "ty_m", "tz_m", "rx_rad", "ry_rad", "rz_rad"}) {
@@ -641,13 +651,8 @@ GeometricCalibrationResult calibrateGeometry(const JointErrorModel& prior,
   const Robot& robot = prior.robot();
   const int n = robot.dof();
   const std::string source = joinedSource(campaigns);
-  const MeasurementCampaign& whole = campaigns.front();  // frame and target: the same in every campaign
-  for (const MeasurementCampaign& c : campaigns) {
-    if (c.has_target != whole.has_target || (c.has_target && c.target_in_flange != whole.target_in_flange)) {
-      throw InvalidArgument("campaign '" + c.source + "' names another target in the flange than '" +
-                            campaigns.front().source + "'; one calibration fits one target");
-    }
-  }
+  const MeasurementCampaign& whole = campaigns.front();  // frame, target and base frame: one for all campaigns
+  checkOneTarget(campaigns, whole);
   CalibrationData data = prepareCalibrationData(prior, campaigns, setup_of_campaign);
   data.source = source;
   const int setups = data.setups;
@@ -679,9 +684,6 @@ GeometricCalibrationResult calibrateGeometry(const JointErrorModel& prior,
   // A known base frame kept as given: no frame is fitted to set-up 0, as for a campaign in the base frame.
   result.frame_fitted =
       whole.frame == MeasurementFrame::Instrument && !(whole.has_base_frame && baseFrameKept(options));
-  if (whole.has_base_frame && !baseFrameKept(options) && !fit_frame) {
-    throw InvalidArgument(source + ": a base frame is given but neither fitted nor kept (fix all of frame.*)");
-  }
 
   result.names = geometricParameterNames(robot, setups);
   result.used_rows = rows;

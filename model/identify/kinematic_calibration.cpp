@@ -3,6 +3,7 @@
 #include <algorithm>
 
 #include "model/common/errors.hpp"
+#include "model/io/urdf_writer.hpp"
 
 namespace jointcomp {
 
@@ -53,6 +54,18 @@ JointErrorModel KinematicCalibration::calibratedModel(const JointErrorModel& mod
                                                       std::vector<std::string>& left_out) {
   return calibratedJointErrorModel(model, std::make_shared<const Robot>(correctedRobot(model.robot(), result.estimate)),
                                    result, left_out);
+}
+
+CalibratedFrames calibratedFrames(const Robot& nominal, const MeasurementCampaign& first,
+                                  const GeometricParameters& estimate) {
+  CalibratedFrames frames;
+  frames.tool = ToolTarget{nominal.tip_link, uniqueLinkName(nominal, nominal.tip_link + "_target"), estimate.target};
+  if (first.frame == MeasurementFrame::Instrument) {
+    frames.base_frame = BaseFrame{nominal.root_link,
+                                  uniqueLinkName(nominal, nominal.root_link + "_measurement_frame", {frames.tool.link}),
+                                  estimate.instrumentFromBase()};
+  }
+  return frames;
 }
 
 }  // namespace jointcomp

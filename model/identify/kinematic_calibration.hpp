@@ -6,10 +6,12 @@
 #pragma once
 
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "model/identify/geometric_calibration.hpp"
+#include "model/io/parameter_file.hpp"
 
 namespace jointcomp {
 
@@ -53,5 +55,16 @@ private:
   MeasurementCampaign whole_;
   int setups_ = 1;
 };
+
+// Where a calibration's written files put the fitted target and the instrument's frame: the tool point on
+// the nominal robot's tip link, as the link "<tip>_target", and, for campaigns in an instrument's frame,
+// the base's pose in the first set-up's frame as the link "<root>_measurement_frame" (none in the base
+// frame). calibrate and discover write them into the URDF and parameter file; jc_calibrate's handle holds them.
+struct CalibratedFrames {
+  ToolTarget tool;
+  std::optional<BaseFrame> base_frame;
+};
+CalibratedFrames calibratedFrames(const Robot& nominal, const MeasurementCampaign& first,
+                                  const GeometricParameters& estimate);
 
 }  // namespace jointcomp

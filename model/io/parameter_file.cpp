@@ -225,4 +225,21 @@ void saveParameterFile(const JointErrorModel& model, const std::string& path,
   writeFileAtomically(path, parametersToJson(model, drives, tool, base_frame));
 }
 
+void saveCalibratedRobot(const JointErrorModel& model, const std::vector<DriveParameters>& drives,
+                         const ToolTarget* tool, const BaseFrame* base_frame, const std::string& urdf_path,
+                         const std::string& urdf_comment, const std::string& parameter_path) {
+  const Robot& robot = model.robot();
+  if (!urdf_path.empty()) {
+    std::optional<UrdfToolLink> tool_link;
+    if (tool && tool->flange_link == robot.tip_link) tool_link = UrdfToolLink{tool->link, tool->in_flange};
+    std::optional<UrdfFrameLink> frame_link;
+    if (base_frame && base_frame->base_link == robot.root_link) {
+      frame_link = UrdfFrameLink{base_frame->link, base_frame->base_in_frame};
+    }
+    saveRobotUrdf(robot, urdf_path, urdf_comment, tool_link ? &*tool_link : nullptr,
+                  frame_link ? &*frame_link : nullptr);
+  }
+  if (!parameter_path.empty()) saveParameterFile(model, parameter_path, drives, tool, base_frame);
+}
+
 }  // namespace jointcomp

@@ -77,4 +77,11 @@ void saveParameterFile(const JointErrorModel& model, const std::string& path,
                        const std::vector<DriveParameters>& drives = {}, const ToolTarget* tool = nullptr,
                        const BaseFrame* base_frame = nullptr);
 
+// A calibrated robot's two files: the URDF of model.robot() with the tool link (when `tool` is given and
+// its flange is the robot's tip link) and the frame link (when `base_frame` is given), and the parameter
+// file with "tool" and "base_frame". An empty path skips that file.
+void saveCalibratedRobot(const JointErrorModel& model, const std::vector<DriveParameters>& drives,
+                         const ToolTarget* tool, const BaseFrame* base_frame, const std::string& urdf_path,
+                         const std::string& urdf_comment, const std::string& parameter_path);
+
 }  // namespace jointcomp

@@ -75,6 +75,19 @@ void writeToolLink(std::ostringstream& xml, const Robot& robot, const UrdfToolLi
 
 }  // namespace
 
+std::string uniqueLinkName(const Robot& robot, std::string wanted, const std::vector<std::string>& also_taken) {
+  const auto taken = [&](const std::string& n) {
+    if (n == robot.root_link || n == robot.tip_link) return true;
+    for (const std::string& other : also_taken)
+      if (n == other) return true;
+    for (const Joint& joint : robot.joints)
+      if (n == joint.child_link) return true;
+    return false;
+  };
+  while (taken(wanted)) wanted += "_";
+  return wanted;
+}
+
 Eigen::Vector3d rotationToRpy(const Eigen::Matrix3d& r) {
   // R = Rz(yaw) Ry(pitch) Rx(roll). Roll from the last row (any value at gimbal lock, where r21 = r22 = 0),
   // then pitch and yaw from M = R Rx(roll)^T = Rz(yaw) Ry(pitch), whose entries used here have magnitude 1

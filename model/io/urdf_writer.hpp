@@ -6,6 +6,7 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include "model/robot/robot.hpp"
 
@@ -27,6 +28,11 @@ struct UrdfFrameLink {
   std::string name;
   Eigen::Isometry3d base_in_frame = Eigen::Isometry3d::Identity();
 };
+
+// `wanted`, with '_' appended until it names no link of the robot's chain and none of `also_taken`: the
+// name of a link a calibrated URDF adds (the tool link "<tip>_target", the frame link
+// "<root>_measurement_frame").
+std::string uniqueLinkName(const Robot& robot, std::string wanted, const std::vector<std::string>& also_taken = {});
 
 // `comment` (optional) goes into an XML comment at the top. Throws InvalidArgument for a robot the
 // format cannot hold: no joints, non-finite values, a tool offset without a tip link of its own, a tool

@@ -162,6 +162,19 @@ static void test_queries(jc_robot* robot, jc_robot* bare) {
   CHECK(has_drives == 0);
   EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "has_drives is NULL", jc_robot_has_drives(robot, NULL));
 
+  /* A maker's parameter file carries no calibrated target and no base frame: zero, the identity, and 0. */
+  {
+    double target[3] = {1, 1, 1};
+    double frame[16];
+    int32_t has = 7;
+    EXPECT_OK(jc_robot_tool_target(robot, target, 3, &has));
+    CHECK(has == 0 && target[0] == 0.0 && target[1] == 0.0 && target[2] == 0.0);
+    EXPECT_OK(jc_robot_base_frame(robot, frame, 16, &has));
+    CHECK(has == 0 && frame[0] == 1.0 && frame[3] == 0.0 && frame[5] == 1.0 && frame[15] == 1.0);
+    EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "has_target is NULL", jc_robot_tool_target(robot, target, 3, NULL));
+    EXPECT_STATUS(JC_ERROR_INVALID_ARGUMENT, "pose_len is 15", jc_robot_base_frame(robot, frame, 15, &has));
+  }
+
   /* The parameters written out load back into a robot that predicts the same errors. */
   EXPECT_OK(jc_robot_parameters_json(robot, NULL, 0, &length));
   CHECK(length > 100);

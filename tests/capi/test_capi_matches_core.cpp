@@ -15,6 +15,7 @@
 #include "model/experiment/spiral_experiment.hpp"
 #include "model/identify/calibration_report.hpp"
 #include "model/identify/discovery.hpp"
+#include "model/identify/kinematic_calibration.hpp"
 #include "model/identify/identification_report.hpp"
 #include "model/io/atomic_file.hpp"
 #include "model/io/parameter_file.hpp"
@@ -472,8 +473,25 @@ TEST_F(CapiMatchesCore, SimulationIdentificationAndCalibration) {
       << jc_last_error();
   GeometricCalibrationOptions calibration;
   calibration.loss = RobustLoss::None;
-  const CalibrationRun run = runCalibration(*model_, readCampaignFile(poses_path), {}, calibration);
-  EXPECT_EQ(parametersOf(calibrated), parametersToJson(run.calibrated, drives_));
+  const MeasurementCampaign poses = readCampaignFile(poses_path);
+  const CalibrationRun run = runCalibration(*model_, poses, {}, calibration);
+  const CalibratedFrames frames = calibratedFrames(model_->robot(), poses, run.result.estimate);
+  EXPECT_EQ(parametersOf(calibrated), parametersToJson(run.calibrated, drives_, &frames.tool,
+                                                       frames.base_frame ? &*frames.base_frame : nullptr));
+  // The fitted target through the handle, bit for bit; the identity and "none" for a base-frame campaign.
+  double target[3];
+  double base_pose[16];
+  int32_t has_target = 0;
+  int32_t has_base_frame = 1;
+  ASSERT_EQ(jc_robot_tool_target(calibrated, target, 3, &has_target), JC_OK) << jc_last_error();
+  ASSERT_EQ(jc_robot_base_frame(calibrated, base_pose, 16, &has_base_frame), JC_OK) << jc_last_error();
+  EXPECT_EQ(has_target, 1);
+  for (int k = 0; k < 3; ++k) EXPECT_EQ(target[k], run.result.estimate.target[k]);
+  EXPECT_EQ(has_base_frame, poses.frame == MeasurementFrame::Instrument ? 1 : 0);
+  EXPECT_EQ(jc_robot_tool_target(calibrated, target, 2, &has_target), JC_ERROR_INVALID_ARGUMENT);
+  EXPECT_EQ(jc_robot_base_frame(calibrated, base_pose, 16, nullptr), JC_ERROR_INVALID_ARGUMENT);
+  ASSERT_EQ(jc_robot_tool_target(handle_, target, 3, &has_target), JC_OK);
+  EXPECT_EQ(has_target, 0);  // a maker's parameter file has no target
   double pose_capi[16];
   ASSERT_EQ(jc_forward_kinematics(calibrated, postures()[1].data(), 6, pose_capi, 16), JC_OK);
   RobotWorkspace ws(*run.calibrated_robot);
@@ -494,7 +512,9 @@ TEST_F(CapiMatchesCore, SimulationIdentificationAndCalibration) {
   discovery.max_steps = 1;
   discovery.types = {"offset"};
   const DiscoveryResult found = discoverEffects(*model_, {readCampaignFile(poses_path)}, {}, discovery);
-  EXPECT_EQ(parametersOf(extended), parametersToJson(found.model, drives_));
+  const CalibratedFrames found_frames = calibratedFrames(model_->robot(), poses, found.calibration.estimate);
+  EXPECT_EQ(parametersOf(extended), parametersToJson(found.model, drives_, &found_frames.tool,
+                                                     found_frames.base_frame ? &*found_frames.base_frame : nullptr));
   EXPECT_EQ(jc_robot_free(extended), JC_OK);
   std::remove(sweep_path.c_str());
   std::remove(poses_path.c_str());

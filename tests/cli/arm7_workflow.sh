@@ -208,8 +208,9 @@ for name in ("calibrate", "base_kept", "base_fitted"):
     assert robot.dof == 7
     parameters = json.load(open(folder + "/parameters.json"))
     offset = np.array(next(e for e in parameters["effects"] if e["type"] == "offset")["offset_rad"])
-    stiffness = np.array(next(e for e in parameters["effects"] if e["type"] == "compliance")["stiffness_nm_per_rad"],
-                         dtype=float)
+    stiffness = np.array([np.inf if k is None else k  # null: rigid
+                          for k in next(e for e in parameters["effects"] if e["type"] == "compliance")[
+                              "stiffness_nm_per_rad"]])
     rotation, translation = np.eye(3), np.zeros(3)
     if "base_frame" in parameters:
         rotation = rpy(*parameters["base_frame"]["base_rpy_rad"])
@@ -230,15 +231,29 @@ for name in ("calibrate", "base_kept", "base_fitted"):
         for key, value in recomputed.items():
             worst["files"] = max(worst["files"], abs(value - expected[key]))
             assert abs(value - expected[key]) < 1e-6, (name, campaign["file"], key, value, expected[key])
-        # The quasi-static robot of the library settles where the torque at the deflected pose balances: the
-        # same figures to within a micrometre (the torque's change over the deflection).
+        # The library's quasi-static robot (predict_joint_errors) settles where the gravity torque at the
+        # deflected pose balances, q = q_c + offset - tau(q) / k, to 1e-12 rad (checked against the same fixed
+        # point iterated here); the calibration's model takes the torque at the commanded pose. The figures
+        # differ by that alone: each row's error by at most the distance between the two predicted points
+        # (the triangle inequality), here below a micrometre.
         settled = q + robot.predict_joint_errors(q)
-        again = statistics(np.linalg.norm(robot.forward_kinematics(settled)[:, :3, 3] * 1e3 - measured, axis=1))
+        fixed_point = q.copy()
+        for _ in range(60):
+            fixed_point = q + offset - robot.gravity_torques(fixed_point) / stiffness
+        assert np.abs(settled - fixed_point).max() < 1e-11, np.abs(settled - fixed_point).max()
+        settled_points = robot.forward_kinematics(settled)[:, :3, 3] * 1e3
+        model_points = robot.forward_kinematics(actual)[:, :3, 3] * 1e3
+        errors = np.linalg.norm(settled_points - measured, axis=1)
+        bound = np.linalg.norm(settled_points - model_points, axis=1)
+        assert np.all(np.abs(errors - np.linalg.norm(model_points - measured, axis=1)) <= bound + 1e-12)
+        again = statistics(errors)
         for key, value in again.items():
             worst["settled"] = max(worst["settled"], abs(value - expected[key]))
-            assert abs(value - expected[key]) < 1e-3, (name, campaign["file"], key, value, expected[key])
-print("arm7_workflow: recomputed from the written files: worst %.2e mm, settled prediction %.2e mm"
-      % (worst["files"], worst["settled"]))
+            assert abs(value - expected[key]) <= bound.max() + 1e-9, (name, key, value, expected[key], bound.max())
+        worst["bound"] = max(worst.get("bound", 0.0), bound.max())
+print("arm7_workflow: recomputed from the written files: worst %.2e mm; settled prediction %.2e mm, "
+      "the torque's change over the deflection moves the point by at most %.2e mm"
+      % (worst["files"], worst["settled"], worst["bound"]))
 # Compensation with the calibrated robot: the compensated command plus its predicted joint error is the plan.
 robot = jointcomp.Robot(f"{work}/base_kept/arm7_calibrated.urdf", f"{work}/base_kept/parameters.json")
 planned = np.radians([[10, 30, -20, -60, 15, 40, 5], [-40, 50, 30, -80, -20, 60, -30]])
@@ -265,4 +280,40 @@ assert abs(parameters["tool"]["target_in_flange_m"][2] - 0.08) < 1e-5, parameter
 PY
 grep -c '<link name="flange_target"/>' "$work/discover/arm7_discovered.urdf" >/dev/null ||
   fail "the discovered URDF has no tool link at the target"
+# discover's final figures, recomputed from its written files alone: the offsets, the compliance and the
+# cubic compliance (the types it may take) under the discovered URDF's gravity torques at the commanded pose.
+if [ -n "$library" ]; then
+  JOINTCOMP_LIBRARY="$library" PYTHONPATH="$source_dir/capi/python" "$python" - "$work/discover" "$work/fit.csv" \
+    "$data/campaign_holdout.csv" <<'PY'
+import json, sys
+import numpy as np
+import jointcomp
+folder, fit_path, held_path = sys.argv[1:4]
+report = json.load(open(folder + "/report.json"))
+parameters = json.load(open(folder + "/parameters.json"))
+robot = jointcomp.Robot(folder + "/arm7_discovered.urdf", folder + "/parameters.json")
+effects = {e["type"]: e for e in parameters["effects"]}
+assert set(effects) <= {"offset", "compliance", "nonlinear_compliance"}, effects.keys()
+offset = np.array(effects["offset"]["offset_rad"]) if "offset" in effects else np.zeros(7)
+stiffness = np.array([np.inf if k is None else k for k in effects["compliance"]["stiffness_nm_per_rad"]])  # null: rigid
+cubic = np.array(effects["nonlinear_compliance"]["cubic_compliance_rad_per_nm3"]) if "nonlinear_compliance" in \
+    effects else np.zeros(7)
+def rows(path):
+    lines = [l.strip().split(",") for l in open(path) if not l.startswith("#")]
+    head = lines[0]
+    q = np.array([[float(r[head.index(f"q{j}")]) for j in range(1, 8)] for r in lines[1:]])
+    return np.radians(q), np.array([[float(r[head.index(c)]) for c in "xyz"] for r in lines[1:]])
+worst = 0.0
+for path, expected in ((fit_path, report["final"]["fitted"]), (held_path, report["final"]["held_out"][0])):
+    q, measured = rows(path)
+    tau = robot.gravity_torques(q)
+    actual = q + offset - tau / stiffness - cubic * tau ** 3
+    errors = np.linalg.norm(robot.forward_kinematics(actual)[:, :3, 3] * 1e3 - measured, axis=1)
+    for key, value in {"mean_mm": errors.mean(), "rms_mm": np.sqrt((errors ** 2).mean()),
+                       "max_mm": errors.max()}.items():
+        worst = max(worst, abs(value - expected[key]))
+        assert abs(value - expected[key]) < 1e-6, (path, key, value, expected[key])
+print("arm7_workflow: discover's final figures from its written files: worst %.2e mm" % worst)
+PY
+fi
 echo "arm7_workflow: ok"

@@ -2,7 +2,8 @@
 // (DiscoveryFamily::physicalProblem, ComplianceEffect::implausibility) and a fit that crosses it is refused,
 // however well it fits: a cubic compliance whose softening turns the joint's deflection back inside the
 // torques the fitted rows carried, a deflection or lost motion beyond kMaxPlausibleJointError, a negative
-// lost motion, a stiffness below the plausible.
+// lost motion, a stiffness below the plausible, a transmission error (harmonic or table) so large or so
+// steep that the link would turn against its motor.
 #include <cmath>
 #include <cstdio>
 #include <string>
@@ -142,40 +143,107 @@ TEST(DiscoveryPhysical, ALostMotionLagsAndStaysSmall) {
   EXPECT_NE(hysteresisProblem(-1e-7).find("negative"), std::string::npos);
 }
 
-// A harmonic or a periodic table is physical up to what a parameter file may state (kMaxStatedJointError):
-// beyond it discovery refuses the candidate, naming the effect, the joint and the part, instead of building
-// an effect that refuses the values (or writing a file its reader refuses).
-TEST(DiscoveryPhysical, HarmonicsAndTablesStayWithinWhatAFileMayState) {
+// Rows sweeping joint 2 (index 1) over +-1 rad, the others at rest, with the motor angles of `model`'s gears.
+DiscoveryData sweptJoint2(const JointErrorModel& model) {
+  DiscoveryData data;
+  data.robot = &model.robot();
+  data.gears = &model.gears();
+  for (int i = 0; i < 400; ++i) {
+    JointVector q = JointVector::Zero(6), motor(6);
+    q[1] = -1.0 + 2.0 * i / 399.0;
+    model.gears().motorAngles(q, motor);
+    data.command.push_back(q);
+    data.motor.push_back(motor);
+    data.load_torque.push_back(JointVector::Zero(6));
+  }
+  return data;
+}
+
+TEST(DiscoveryPhysical, AHarmonicStaysSmallAndNeverTurnsTheLinkAgainstTheMotor) {
   const JointErrorModel model = rx170Model();
-  const DiscoveryData data = joint2Data(model, {-50.0, 20.0, 40.0});
+  const DiscoveryData data = sweptJoint2(model);
+  const int motor = model.gears().distinctParts(1).front();
+  JointVector unit = JointVector::Zero(6), unit_motor(6);
+  unit[1] = 1.0;
+  model.gears().motorAngles(unit, unit_motor);
+  const double ratio = std::abs(model.gears().stageInputAngle(1, motor, unit_motor));  // motor rad per joint rad
+  ASSERT_GT(ratio, 10.0);
   DiscoveryCandidate candidate;
+  candidate.type = "harmonic";
   candidate.joint = 1;
-  candidate.part = "stage_2";
-  candidate.cycles = 2;
-  const JointVector compliance = JointVector::Zero(6);
-  const HarmonicDiscovery harmonic;
-  const double bound = kMaxStatedJointError;
-  auto harmonicProblem = [&](double a, double b) {
-    return harmonic.physicalProblem(data, candidate, Eigen::Vector2d(a, b), compliance);
+  candidate.stage = motor;
+  candidate.cycles = 3;
+  const HarmonicDiscovery family;
+  const auto problem = [&](double amplitude) {  // split between the sine and the cosine at 3:4
+    return family.physicalProblem(data, candidate, Eigen::Vector2d(0.6 * amplitude, 0.8 * amplitude),
+                                  JointVector::Zero(6));
   };
-  // The amplitude is |(a, b)|: 0.6 and 0.8 of the bound make exactly it.
-  EXPECT_EQ(harmonicProblem(0.6 * bound, -0.8 * bound * 0.999), "");
-  const std::string message = harmonicProblem(0.6 * bound, -0.8 * bound * 1.01);
-  EXPECT_NE(message.find("not physical: " + model.robot().joints[1].name +
-                         "'s transmission_error harmonic of "
-                         "order 2 of the stage_2"),
-            std::string::npos)
-      << message;
-  const PeriodicTableDiscovery table;
-  candidate.cycles = 16;
-  auto tableProblem = [&](double extreme) {
-    return table.physicalProblem(data, candidate, Eigen::Vector4d(0.01, extreme, -0.02, 0.0), compliance);
+  // The link stands still when the error's slope, amplitude * order * ratio, reaches 1.
+  const double standing = 1.0 / (3.0 * ratio);
+  EXPECT_EQ(problem(0.99 * standing), "");
+  const std::string steep = problem(1.01 * standing);
+  EXPECT_NE(steep.find("against the motor"), std::string::npos) << steep;
+  EXPECT_NE(steep.find(model.robot().joints[1].name), std::string::npos) << steep;
+  candidate.cycles = 1;
+  candidate.stage = model.gears().distinctParts(1).back();  // the output: slope = amplitude
+  EXPECT_EQ(problem(0.009), "");
+  const std::string large = problem(0.011);
+  EXPECT_NE(large.find("beyond the plausible"), std::string::npos) << large;
+}
+
+TEST(DiscoveryPhysical, APeriodicTableStaysSmallAndNeverTurnsTheLinkAgainstTheMotor) {
+  const JointErrorModel model = rx170Model();
+  const DiscoveryData data = sweptJoint2(model);
+  const int motor = model.gears().distinctParts(1).front();
+  JointVector unit = JointVector::Zero(6), unit_motor(6);
+  unit[1] = 1.0;
+  model.gears().motorAngles(unit, unit_motor);
+  const double ratio = std::abs(model.gears().stageInputAngle(1, motor, unit_motor));
+  const int knots = 16;
+  DiscoveryCandidate candidate;
+  candidate.type = "periodic";
+  candidate.joint = 1;
+  candidate.stage = motor;
+  candidate.cycles = knots;
+  // A table of two cycles per motor turn, values A sin(4 pi k / 16) at every knot (the sweep visits them
+  // all). Its steepest slope per motor radian, from the values alone by central differences of the spline.
+  // The candidate's coefficients are the fitted knots' values (one knot is left at zero).
+  const std::vector<int> kept = fittedTableKnots(data, 1, motor, knots);
+  ASSERT_EQ(kept.size(), static_cast<std::size_t>(knots - 1));
+  const auto full = [&](double amplitude) {
+    Eigen::VectorXd values = Eigen::VectorXd::Zero(knots);
+    for (int k : kept) values[k] = amplitude * std::sin(4.0 * M_PI * k / knots);
+    return values;
   };
-  EXPECT_EQ(tableProblem(-bound), "");
-  const std::string table_message = tableProblem(-bound * 1.001);
-  EXPECT_NE(table_message.find(model.robot().joints[1].name + "'s periodic_table of the stage_2"), std::string::npos)
-      << table_message;
-  EXPECT_NE(table_message.find("beyond the plausible 0.1 rad"), std::string::npos) << table_message;
+  const auto table = [&](double amplitude) {
+    Eigen::VectorXd theta(static_cast<Eigen::Index>(kept.size()));
+    for (std::size_t c = 0; c < kept.size(); ++c) theta[static_cast<Eigen::Index>(c)] = full(amplitude)[kept[c]];
+    return theta;
+  };
+  const auto valueAt = [&](const Eigen::VectorXd& values, double angle) {
+    const PeriodicSplineWeights w = periodicSplineWeights(knots, angle);
+    double v = 0.0;
+    for (int k = 0; k < 4; ++k) v += w.weight[k] * values[(w.first + k) % knots];
+    return v;
+  };
+  double steepest = 0.0;
+  const double h = 1e-6;
+  for (int n = 0; n < 64 * knots; ++n) {
+    const double angle = 2.0 * M_PI * (n + 0.5) / (64 * knots);
+    steepest = std::max(steepest, std::abs(valueAt(full(1.0), angle + h) - valueAt(full(1.0), angle - h)) / (2 * h));
+  }
+  const double standing = 1.0 / (steepest * ratio);  // the amplitude at which the link stands still
+  const PeriodicTableDiscovery family;
+  const auto problem = [&](double amplitude) {
+    return family.physicalProblem(data, candidate, table(amplitude), JointVector::Zero(6));
+  };
+  EXPECT_EQ(problem(0.98 * standing), "");
+  const std::string steep = problem(1.02 * standing);
+  EXPECT_NE(steep.find("against the motor"), std::string::npos) << steep;
+  ASSERT_LT(standing, 0.008);
+  // Larger than the plausible (the spline's largest value is 0.97 of the knots'), whatever its slope.
+  const std::string large = problem(0.013);
+  EXPECT_NE(large.find("beyond the plausible"), std::string::npos) << large;
 }
 
 TEST(CalibrationPhysical, AComplianceIsPositiveStiffEnoughAndDeflectsLittle) {

@@ -125,9 +125,23 @@ JOINTCOMP_API jc_status jc_robot_has_drives(jc_robot* robot, int32_t* has_drives
 /** The joint-error parameters (and drives) as parameter-file JSON; buffer as for jc_robot_name. */
 JOINTCOMP_API jc_status jc_robot_parameters_json(jc_robot* robot, char* buffer, int32_t capacity, int32_t* length);
 
+/** Where a calibration put the measured target (robots from jc_calibrate and jc_discover, or loaded with a
+   parameter file that has a "tool" object): target (3, m) on the nominal robot's tip link (the flange).
+   *has_target = 0 (and zeros written) when the robot carries none. */
+JOINTCOMP_API jc_status jc_robot_tool_target(jc_robot* robot, double* target, int32_t target_len,
+                                             int32_t* has_target);
+/** The base's pose in the instrument's frame of a calibration's first campaign (robots from jc_calibrate
+   and jc_discover on campaigns in an instrument's frame, or loaded with a parameter file that has a
+   "base_frame" object): pose (16, row-major), measured = pose * p_base. *has_base_frame = 0 (and the
+   identity written) when the robot carries none: campaigns in the base frame have no base frame. */
+JOINTCOMP_API jc_status jc_robot_base_frame(jc_robot* robot, double* pose, int32_t pose_len, int32_t* has_base_frame);
+
 /** Writes the robot's URDF (its geometry, as calibrated when it came from jc_calibrate or jc_discover) and
    its parameter file (joint-error effects and drives), each whole or not at all (temporary file and
-   rename). Either path may be NULL to skip that file. */
+   rename). Either path may be NULL to skip that file. The URDF's chain ends where the handle's does (the
+   flange); a calibrated robot's URDF has a link fixed to the root at the instrument's frame, and its
+   parameter file says where the target and that frame are ("tool", "base_frame"), so that a robot loaded
+   from the two files gives the same jc_robot_tool_target and jc_robot_base_frame. */
 JOINTCOMP_API jc_status jc_robot_save(jc_robot* robot, const char* urdf_path, const char* parameter_path);
 
 /** Conditions of the robot handle, used by jc_predict_joint_errors and jc_compensate_* (not by the spiral):

@@ -66,6 +66,8 @@ PROTOTYPES = {
     "jc_robot_joint_limits": (_i32, [_handle, _double_p, _i32, _double_p, _i32]),
     "jc_robot_has_drives": (_i32, [_handle, _int32_p]),
     "jc_robot_parameters_json": (_i32, [_handle, ctypes.c_char_p, _i32, _int32_p]),
+    "jc_robot_tool_target": (_i32, [_handle, _double_p, _i32, _int32_p]),
+    "jc_robot_base_frame": (_i32, [_handle, _double_p, _i32, _int32_p]),
     "jc_robot_save": (_i32, [_handle, _text, _text]),
     "jc_robot_set_payload": (_i32, [_handle, _f64, _double_p, _i32]),
     "jc_robot_set_tool_wrench": (_i32, [_handle, _double_p, _i32]),

@@ -189,6 +189,22 @@ class Robot(OwnedHandle):
         """The joint-error parameters (and drives) as parameter-file JSON text."""
         return self._text(_native.lib.jc_robot_parameters_json)
 
+    @property
+    def tool_target(self):
+        """The measured target (3, m) on the flange where a calibration put it (jc_calibrate, jc_discover, or
+        a parameter file's "tool"), or None."""
+        target, has = np.zeros(3), ctypes.c_int32(0)
+        _native.check(_native.lib.jc_robot_tool_target(self.handle, _native.pointer(target), 3, ctypes.byref(has)))
+        return target if has.value else None
+
+    @property
+    def base_frame(self):
+        """The base's pose in the instrument's frame (4 x 4, measured = pose @ p_base) where a calibration on
+        campaigns in an instrument's frame put it (or a parameter file's "base_frame"), or None."""
+        pose, has = np.zeros((4, 4)), ctypes.c_int32(0)
+        _native.check(_native.lib.jc_robot_base_frame(self.handle, _native.pointer(pose), 16, ctypes.byref(has)))
+        return pose if has.value else None
+
     # ---- conditions ----
 
     def set_payload(self, mass, com):

@@ -118,6 +118,15 @@ def test_calibration_finds_joint_offsets_and_generalises(tmp_path):
                                    atol=1e-12, rtol=0)
                 assert np.allclose(reloaded.predict_joint_errors(POSTURE), calibrated.predict_joint_errors(POSTURE),
                                    atol=1e-12, rtol=0)
+            # The fitted target on the flange, as the report gives it, kept through the files.
+            target = [values["target.%s_m" % axis]["value"] for axis in "xyz"]
+            assert np.array_equal(calibrated.tool_target, target), (calibrated.tool_target, target)
+            assert calibrated.base_frame is None  # simulated in the base frame: no instrument's frame
+            with jointcomp.Robot(tmp_path / "calibrated.urdf", tmp_path / "calibrated.json") as reloaded:
+                assert np.array_equal(reloaded.tool_target, calibrated.tool_target)
+                assert reloaded.base_frame is None
+        with jointcomp.Robot(RX170_URDF, RX170_PARAMETERS) as plain:
+            assert plain.tool_target is None and plain.base_frame is None
         # Both campaigns in one calibration: each is reported (simulated in the base frame: one set-up).
         both, report = jointcomp.calibrate(nominal, [fit, held])
         with both:
@@ -198,3 +207,50 @@ def test_identify_and_compensate_beats_the_nominal_model_and_refuses_bad_input(r
             jointcomp.identify_and_compensate(robot, bare_robot, use_plant=True)
         with pytest.raises(TypeError, match="truth must be a jointcomp.Robot"):
             jointcomp.identify_and_compensate(robot, "truth.json")
+
+
+def _rotation(rx, ry, rz):
+    cx, sx, cy, sy, cz, sz = np.cos(rx), np.sin(rx), np.cos(ry), np.sin(ry), np.cos(rz), np.sin(rz)
+    return (np.array([[cz, -sz, 0], [sz, cz, 0], [0, 0, 1]]) @ np.array([[cy, 0, sy], [0, 1, 0], [-sy, 0, cy]]) @
+            np.array([[1, 0, 0], [0, cx, -sx], [0, sx, cx]]))
+
+
+def test_calibration_in_an_instrument_frame_exposes_the_base_frame(tmp_path):
+    """A campaign measured in a tracker's frame: the calibrated handle holds the base's pose in it (the
+    report's frame.* values), the target, and both survive jc_robot_save and loading."""
+    with jointcomp.Robot(RX170_URDF, RX170_PARAMETERS) as nominal:
+        base = jointcomp.simulate_campaign(nominal, tmp_path / "base.csv", protocol="random", seed=31, count=80)
+        rotation, translation = _rotation(0.02, -0.01, 0.6), np.array([1.2, -0.4, 0.3])
+        lines, head = [], None
+        for line in base.read_text().splitlines():
+            if line.startswith("# frame:"):
+                line = "# frame: instrument"
+            elif not line.startswith("#"):
+                cells = line.split(",")
+                if head is None:
+                    head = cells
+                else:
+                    at = [head.index(c) for c in "xyz"]
+                    moved = rotation @ (np.array([float(cells[k]) for k in at]) * 1e-3) + translation
+                    for k, v in zip(at, moved):
+                        cells[k] = repr(float(v) * 1e3)
+                    line = ",".join(cells)
+            lines.append(line)
+        moved_path = tmp_path / "tracker.csv"
+        moved_path.write_text("\n".join(lines) + "\n")
+        calibrated, report = jointcomp.calibrate(nominal, moved_path)
+        with calibrated:
+            values = {p["name"]: p["value"] for p in report["parameters"]}
+            pose = calibrated.base_frame
+            assert pose is not None
+            assert np.array_equal(pose[:3, 3], [values["frame.t%s_m" % a] for a in "xyz"]), pose
+            # The nominal robot measured from a known frame: the fit finds it (to the noise).
+            assert np.abs(pose[:3, :3] - rotation).max() < 1e-4 and np.abs(pose[:3, 3] - translation).max() < 1e-4
+            calibrated.save(tmp_path / "c.urdf", tmp_path / "c.json")
+            assert "_measurement_frame" in (tmp_path / "c.urdf").read_text()
+            assert json.loads(calibrated.parameters_json())["base_frame"]["link"] == "base_link_measurement_frame"
+            with jointcomp.Robot(tmp_path / "c.urdf", tmp_path / "c.json") as reloaded:
+                assert np.abs(reloaded.base_frame - pose).max() < 1e-14
+                assert np.array_equal(reloaded.tool_target, calibrated.tool_target)
+                assert np.allclose(reloaded.forward_kinematics(POSTURE), calibrated.forward_kinematics(POSTURE),
+                                   atol=1e-12, rtol=0)
