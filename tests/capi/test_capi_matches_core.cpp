@@ -15,8 +15,8 @@
 #include "model/experiment/spiral_experiment.hpp"
 #include "model/identify/calibration_report.hpp"
 #include "model/identify/discovery.hpp"
-#include "model/identify/kinematic_calibration.hpp"
 #include "model/identify/identification_report.hpp"
+#include "model/identify/kinematic_calibration.hpp"
 #include "model/io/atomic_file.hpp"
 #include "model/io/parameter_file.hpp"
 #include "model/robot/dynamics.hpp"
@@ -476,8 +476,8 @@ TEST_F(CapiMatchesCore, SimulationIdentificationAndCalibration) {
   const MeasurementCampaign poses = readCampaignFile(poses_path);
   const CalibrationRun run = runCalibration(*model_, poses, {}, calibration);
   const CalibratedFrames frames = calibratedFrames(model_->robot(), poses, run.result.estimate);
-  EXPECT_EQ(parametersOf(calibrated), parametersToJson(run.calibrated, drives_, &frames.tool,
-                                                       frames.base_frame ? &*frames.base_frame : nullptr));
+  EXPECT_EQ(parametersOf(calibrated),
+            parametersToJson(run.calibrated, drives_, &frames.tool, frames.base_frame ? &*frames.base_frame : nullptr));
   // The fitted target through the handle, bit for bit; the identity and "none" for a base-frame campaign.
   double target[3];
   double base_pose[16];

@@ -128,8 +128,7 @@ JOINTCOMP_API jc_status jc_robot_parameters_json(jc_robot* robot, char* buffer, 
 /** Where a calibration put the measured target (robots from jc_calibrate and jc_discover, or loaded with a
    parameter file that has a "tool" object): target (3, m) on the nominal robot's tip link (the flange).
    *has_target = 0 (and zeros written) when the robot carries none. */
-JOINTCOMP_API jc_status jc_robot_tool_target(jc_robot* robot, double* target, int32_t target_len,
-                                             int32_t* has_target);
+JOINTCOMP_API jc_status jc_robot_tool_target(jc_robot* robot, double* target, int32_t target_len, int32_t* has_target);
 /** The base's pose in the instrument's frame of a calibration's first campaign (robots from jc_calibrate
    and jc_discover on campaigns in an instrument's frame, or loaded with a parameter file that has a
    "base_frame" object): pose (16, row-major), measured = pose * p_base. *has_base_frame = 0 (and the
