@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 
 #include "model/effects/joint_error_model.hpp"
 
@@ -20,9 +21,46 @@ std::vector<NamedEstimate> DiscoveryFamily::describe(const FittedCandidate&, con
   return {};
 }
 
-std::string DiscoveryFamily::physicalProblem(const DiscoveryData&, const DiscoveryCandidate&, const Eigen::VectorXd&,
-                                             const JointVector&) const {
-  return {};
+std::string DiscoveryFamily::physicalProblem(const DiscoveryData& data, const DiscoveryCandidate& candidate,
+                                             const Eigen::VectorXd& theta, const JointVector& compliance) const {
+  return jointErrorBeyondThePlausible(data, candidate, theta, compliance);
+}
+
+LargestJointError largestJointError(const DiscoveryData& data, const DiscoveryCandidate& candidate,
+                                    const Eigen::VectorXd& theta, const JointVector& compliance) {
+  LargestJointError most;
+  const int dof = data.robot->dof();
+  if (candidate.columns.size() == 0 || theta.size() != candidate.coefficients(dof)) return most;
+  auto consider = [&most](double dq, int joint, int row) {
+    if (!(std::abs(dq) <= most.value) && !std::isnan(most.value)) most = {std::abs(dq), joint, row};
+  };
+  const int rows = static_cast<int>(candidate.columns.rows());
+  if (!candidate.through_compliance && !candidate.joint_error_blocks) {
+    if (candidate.joint < 0) return most;
+    const Eigen::VectorXd dq = candidate.columns * theta;
+    for (int i = 0; i < rows; ++i) consider(dq[i], candidate.joint, i);
+    return most;
+  }
+  for (int i = 0; i < rows; ++i) {
+    for (int j = 0; j < dof && j < compliance.size(); ++j) {
+      double sum = 0.0;
+      for (int k = 0; k < theta.size(); ++k) sum += candidate.columns(i, k * dof + j) * theta[k];
+      consider(candidate.through_compliance ? compliance[j] * sum : sum, j, i);
+    }
+  }
+  return most;
+}
+
+std::string jointErrorBeyondThePlausible(const DiscoveryData& data, const DiscoveryCandidate& candidate,
+                                         const Eigen::VectorXd& theta, const JointVector& compliance) {
+  const LargestJointError most = largestJointError(data, candidate, theta, compliance);
+  if (most.value <= kMaxPlausibleJointError) return {};
+  char text[300];
+  std::snprintf(text, sizeof(text),
+                "not physical: %s turns %s by %.3g rad at fitted row %d, beyond the plausible %.3g rad",
+                candidate.label().c_str(), jointNameOf(data, most.joint).c_str(), most.value, most.row + 1,
+                kMaxPlausibleJointError);
+  return text;
 }
 
 const std::string& jointNameOf(const DiscoveryData& data, int joint) {

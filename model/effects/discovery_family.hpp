@@ -106,7 +106,9 @@ public:
   virtual std::vector<NamedEstimate> describe(const FittedCandidate& fitted, const JointErrorModel& model) const;
   // Empty when `theta` (the candidate's coefficients, SI) make a physical effect over the fitted rows (their
   // torques, angles, times), given each joint's linear compliance `compliance` (rad/(N m)); else why not.
-  // Discovery refuses a candidate whose fit is not physical, however well it fits.
+  // Discovery refuses a candidate whose fit is not physical, however well it fits. By default the bound every
+  // joint-error family shares (jointErrorBeyondThePlausible); a family with constraints of its own (a sign,
+  // a monotone curve) states them in its override.
   virtual std::string physicalProblem(const DiscoveryData& data, const DiscoveryCandidate& candidate,
                                       const Eigen::VectorXd& theta, const JointVector& compliance) const;
 };
@@ -175,6 +177,22 @@ const std::string& jointNameOf(const DiscoveryData& data, int joint);
 constexpr double kMaxPlausibleJointError = 0.01;  // rad
 // The largest |load torque| of `joint` over the fitted rows (N m).
 double largestTorque(const DiscoveryData& data, int joint);
+
+// The largest joint error (rad) a candidate's columns make at `theta` over the fitted rows, with the joint
+// and the row where: plain columns move the candidate's own joint, joint-error blocks every joint, load-torque
+// blocks every joint through its compliance. NaN when any is not finite; 0 for a candidate without columns
+// (one that only frees calibration parameters).
+struct LargestJointError {
+  double value = 0.0;  // rad
+  int joint = -1;
+  int row = -1;
+};
+LargestJointError largestJointError(const DiscoveryData& data, const DiscoveryCandidate& candidate,
+                                    const Eigen::VectorXd& theta, const JointVector& compliance);
+// Empty when the candidate turns no joint by more than kMaxPlausibleJointError over the fitted rows; else
+// why not, naming the effect, the joint, the row and the turn.
+std::string jointErrorBeyondThePlausible(const DiscoveryData& data, const DiscoveryCandidate& candidate,
+                                         const Eigen::VectorXd& theta, const JointVector& compliance);
 
 // The constraint of a transmission error (harmonics, periodic tables) of a part of a joint's gear train:
 // it turns the joint by at most kMaxPlausibleJointError over the fitted rows, and the link turns with the

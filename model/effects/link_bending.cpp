@@ -1,6 +1,7 @@
 #include "model/effects/link_bending.hpp"
 
 #include <cmath>
+#include <cstdio>
 
 #include <nlohmann/json.hpp>
 
@@ -117,6 +118,19 @@ std::vector<NamedEstimate> LinkBendingDiscovery::describe(const FittedCandidate&
     out.push_back({name + ".link_bending_stiffness_n_m2", stiffness, stiffness * fitted.sigma[0] / fitted.theta[0]});
   }
   return out;
+}
+
+std::string LinkBendingDiscovery::physicalProblem(const DiscoveryData& data, const DiscoveryCandidate& candidate,
+                                                  const Eigen::VectorXd& theta, const JointVector& compliance) const {
+  if (candidate.joint >= 0 && theta.size() == 1 && theta[0] < 0.0) {
+    char text[300];
+    std::snprintf(text, sizeof(text),
+                  "not physical: the link from %s to the next joint would bend against its load (deflection "
+                  "%.3g m/N is negative; a beam's L^3 / (3 E I) is positive)",
+                  jointNameOf(data, candidate.joint).c_str(), theta[0]);
+    return text;
+  }
+  return jointErrorBeyondThePlausible(data, candidate, theta, compliance);
 }
 
 }  // namespace jointcomp

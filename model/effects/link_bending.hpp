@@ -66,6 +66,10 @@ public:
   std::unique_ptr<Effect> makeEffect(const DiscoveryData& data,
                                      const std::vector<FittedCandidate>& accepted) const override;
   std::vector<NamedEstimate> describe(const FittedCandidate& fitted, const JointErrorModel& model) const override;
+  // A link bends the way its load pushes it (s = L^3 / (3 E I) > 0) and by little: its joints' turns stay
+  // within the shared plausible bound over the fitted rows.
+  std::string physicalProblem(const DiscoveryData& data, const DiscoveryCandidate& candidate,
+                              const Eigen::VectorXd& theta, const JointVector& compliance) const override;
 };
 
 }  // namespace jointcomp
