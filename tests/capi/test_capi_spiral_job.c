@@ -3,33 +3,12 @@
  * batch of poses is the poses one by one; every error path names its argument. */
 #define _POSIX_C_SOURCE 200809L
 
-#include <jointcomp/jointcomp.h>
+#include "capi_check.h"
 
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-
-static int checks = 0;
-static int failures = 0;
-
-#define CHECK(condition)                                                                                             \
-  do {                                                                                                               \
-    ++checks;                                                                                                        \
-    if (!(condition)) {                                                                                              \
-      ++failures;                                                                                                    \
-      fprintf(stderr, "%s:%d: CHECK(%s) failed; last error: %s\n", __FILE__, __LINE__, #condition, jc_last_error()); \
-    }                                                                                                                \
-  } while (0)
-
-/* A call returning `expected` whose message (on failure) contains `fragment`. */
-#define EXPECT_STATUS(expected, fragment, call)                                \
-  do {                                                                         \
-    const jc_status got_ = (call);                                             \
-    CHECK(got_ == (expected));                                                 \
-    CHECK((expected) == JC_OK || strstr(jc_last_error(), (fragment)) != NULL); \
-  } while (0)
-#define EXPECT_OK(call) EXPECT_STATUS(JC_OK, "", call)
 
 static char* read_file(const char* path) {
   FILE* file = fopen(path, "rb");
