@@ -1,5 +1,5 @@
-/* What the C tests of the API share (test_capi.c, test_capi_plant.c, test_capi_spiral_job.c): the check macros and
- * comparisons of arrays, temporary files, and the posture the tests use. */
+/* What the C tests of the API share (test_capi.c, test_capi_plant.c, test_capi_spiral_job.c): the check macros
+ * and their counters, comparisons of arrays, temporary files, and the posture the tests use. */
 #ifndef JOINTCOMP_TESTS_CAPI_CHECK_H
 #define JOINTCOMP_TESTS_CAPI_CHECK_H
 
