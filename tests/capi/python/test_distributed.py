@@ -239,7 +239,9 @@ def test_a_stopped_run_resumes_to_the_same_bytes(serial_run, tmp_path):
 
 
 def _dask_scratch_folders():
-    return set(pathlib.Path(tempfile.gettempdir()).glob("jointcomp-dask-*"))
+    """This process's cluster folders (jointcomp-dask-<pid>-<start time>-*): other tests that run at the same
+    time (ctest -j) make folders of their own in the same temporary root."""
+    return set(pathlib.Path(tempfile.gettempdir()).glob("jointcomp-dask-%d-*" % os.getpid()))
 
 
 def test_ctrl_c_on_a_local_cluster_stops_its_workers_and_removes_its_folder(serial_run, tmp_path):
