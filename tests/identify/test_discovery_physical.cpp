@@ -159,14 +159,19 @@ DiscoveryData sweptJoint2(const JointErrorModel& model) {
   return data;
 }
 
+// Joint 2's motor radians per joint radian, from the gear train's own motor angles of a unit joint turn.
+double joint2MotorRatio(const JointErrorModel& model, int motor) {
+  JointVector unit = JointVector::Zero(6), unit_motor(6);
+  unit[1] = 1.0;
+  model.gears().motorAngles(unit, unit_motor);
+  return std::abs(model.gears().stageInputAngle(1, motor, unit_motor));
+}
+
 TEST(DiscoveryPhysical, AHarmonicStaysSmallAndNeverTurnsTheLinkAgainstTheMotor) {
   const JointErrorModel model = rx170Model();
   const DiscoveryData data = sweptJoint2(model);
   const int motor = model.gears().distinctParts(1).front();
-  JointVector unit = JointVector::Zero(6), unit_motor(6);
-  unit[1] = 1.0;
-  model.gears().motorAngles(unit, unit_motor);
-  const double ratio = std::abs(model.gears().stageInputAngle(1, motor, unit_motor));  // motor rad per joint rad
+  const double ratio = joint2MotorRatio(model, motor);
   ASSERT_GT(ratio, 10.0);
   DiscoveryCandidate candidate;
   candidate.type = "harmonic";
@@ -195,10 +200,7 @@ TEST(DiscoveryPhysical, APeriodicTableStaysSmallAndNeverTurnsTheLinkAgainstTheMo
   const JointErrorModel model = rx170Model();
   const DiscoveryData data = sweptJoint2(model);
   const int motor = model.gears().distinctParts(1).front();
-  JointVector unit = JointVector::Zero(6), unit_motor(6);
-  unit[1] = 1.0;
-  model.gears().motorAngles(unit, unit_motor);
-  const double ratio = std::abs(model.gears().stageInputAngle(1, motor, unit_motor));
+  const double ratio = joint2MotorRatio(model, motor);
   const int knots = 16;
   DiscoveryCandidate candidate;
   candidate.type = "periodic";
