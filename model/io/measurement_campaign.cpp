@@ -350,10 +350,7 @@ Eigen::Isometry3d baseFrameFromValues(const std::vector<double>& v) {
   if (v.size() != 6) throw InvalidArgument("a base frame is x,y,z,rx,ry,rz (mm, deg): 6 numbers");
   Eigen::Isometry3d frame = Eigen::Isometry3d::Identity();
   frame.translation() = Eigen::Vector3d(v[0], v[1], v[2]) * 1e-3;
-  frame.linear() = (Eigen::AngleAxisd(v[5] * kDegree, Eigen::Vector3d::UnitZ()) *
-                    Eigen::AngleAxisd(v[4] * kDegree, Eigen::Vector3d::UnitY()) *
-                    Eigen::AngleAxisd(v[3] * kDegree, Eigen::Vector3d::UnitX()))
-                       .toRotationMatrix();
+  frame.linear() = rpyToRotation(Eigen::Vector3d(v[3], v[4], v[5]) * kDegree);
   return frame;
 }
 

@@ -110,10 +110,7 @@ BaseFrame baseFrameFromJson(const nlohmann::json& node, const std::string& path)
     if (!(std::abs(rpy[static_cast<std::size_t>(a)]) <= 10.0)) fields.fail("base_rpy_rad", "an angle beyond 10 rad");
   }
   frame.base_in_frame.translation() = Eigen::Vector3d(xyz[0], xyz[1], xyz[2]);
-  frame.base_in_frame.linear() =
-      (Eigen::AngleAxisd(rpy[2], Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(rpy[1], Eigen::Vector3d::UnitY()) *
-       Eigen::AngleAxisd(rpy[0], Eigen::Vector3d::UnitX()))
-          .toRotationMatrix();
+  frame.base_in_frame.linear() = rpyToRotation(Eigen::Vector3d(rpy[0], rpy[1], rpy[2]));
   fields.rejectUnknownKeys();
   return frame;
 }

@@ -88,6 +88,12 @@ std::string uniqueLinkName(const Robot& robot, std::string wanted, const std::ve
   return wanted;
 }
 
+Eigen::Matrix3d rpyToRotation(const Eigen::Vector3d& rpy) {
+  return (Eigen::AngleAxisd(rpy.z(), Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(rpy.y(), Eigen::Vector3d::UnitY()) *
+          Eigen::AngleAxisd(rpy.x(), Eigen::Vector3d::UnitX()))
+      .toRotationMatrix();
+}
+
 Eigen::Vector3d rotationToRpy(const Eigen::Matrix3d& r) {
   // R = Rz(yaw) Ry(pitch) Rx(roll). Roll from the last row (any value at gimbal lock, where r21 = r22 = 0),
   // then pitch and yaw from M = R Rx(roll)^T = Rz(yaw) Ry(pitch), whose entries used here have magnitude 1

@@ -47,5 +47,7 @@ void saveRobotUrdf(const Robot& robot, const std::string& path, const std::strin
 // The URDF roll-pitch-yaw angles of a rotation (R = Rz(yaw) Ry(pitch) Rx(roll)); they give back the
 // rotation to rounding error everywhere, at and near pitch = +-pi/2 too.
 Eigen::Vector3d rotationToRpy(const Eigen::Matrix3d& rotation);
+// The rotation of URDF roll-pitch-yaw angles (rad): R = Rz(yaw) Ry(pitch) Rx(roll).
+Eigen::Matrix3d rpyToRotation(const Eigen::Vector3d& rpy);
 
 }  // namespace jointcomp

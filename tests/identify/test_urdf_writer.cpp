@@ -110,6 +110,7 @@ TEST(UrdfWriter, RpyAnglesGiveBackTheRotationEverywhere) {
          Eigen::AngleAxisd(rpy.x(), Eigen::Vector3d::UnitX()))
             .toRotationMatrix();
     ASSERT_LE((back - rotation).cwiseAbs().maxCoeff(), 1e-14) << "case " << k;
+    ASSERT_EQ(rpyToRotation(rpy), back) << "case " << k;  // the library's inverse is this composition
   }
 }
 
