@@ -70,6 +70,13 @@ inline std::vector<std::string> refusals(const DiscoveryResult& r) {
   return parts;
 }
 
+// "<what> <value>", for the printed outcome of a case.
+inline std::string caseName(const std::string& what, double value) {
+  char text[32];
+  std::snprintf(text, sizeof(text), " %.4g", value);
+  return what + text;
+}
+
 inline void printOutcome(const std::string& name, const DiscoveryResult& r) {
   std::printf("[ tempting ] %s: %zu step(s)", name.c_str(), r.steps.size());
   for (const DiscoveryStep& s : r.steps) std::printf(" %s%s", s.type.c_str(), s.detail.c_str());

@@ -57,6 +57,7 @@ JointErrorModel withDrift(double thermal_rad_per_degc, double drift_rad_per_s, i
 // the bound: a coefficient times the largest temperature change from the rows' mean, a drift times the
 // longest time from the campaign's start.
 void expectDriftsWithinTheBound(const DiscoveryResult& r, const MeasurementCampaign& fit) {
+  ASSERT_EQ(r.fitted_rows, static_cast<int>(fit.size()));  // the rows' mean is the campaign's
   const double kelvin = fit.temperature.empty() || !std::isfinite(fit.temperature[0])
                             ? 0.0
                             : largestChange(fit.temperature, mean(fit.temperature));
@@ -80,7 +81,7 @@ TEST(DiscoveryTempting, AThermalDriftBeyondThePlausibleIsNotAccepted) {
     const JointErrorModel truth = withDrift(coefficient, 0.0, 2);
     const Campaigns c = warmUpCampaigns(truth, 201);
     const DiscoveryResult r = discoverOnly(c, {"thermal"});
-    printOutcome("thermal j3 x" + std::to_string(times_bound), r);
+    printOutcome(caseName("thermal j3 [rad/degC]", coefficient), r);
     expectDriftsWithinTheBound(r, c.fit);
     if (times_bound > 1.0) {
       expectRefused(r, "thermal", truth.robot().joints[2].name, "beyond the plausible");
@@ -100,7 +101,7 @@ TEST(DiscoveryTempting, ATimeDriftBeyondThePlausibleIsNotAccepted) {
     const JointErrorModel truth = withDrift(0.0, drift, 1);
     const Campaigns c = plainCampaigns(truth, 211);
     const DiscoveryResult r = discoverOnly(c, {"thermal"});
-    printOutcome("time drift j2 x" + std::to_string(times_bound), r);
+    printOutcome(caseName("time drift j2 [rad/s]", drift), r);
     expectDriftsWithinTheBound(r, c.fit);
     if (times_bound > 1.0) {
       expectRefused(r, "thermal", truth.robot().joints[1].name, "beyond the plausible");
@@ -146,8 +147,9 @@ TEST(DiscoveryTempting, AnUndeclaredPayloadBeyondThePlausibleIsNotAccepted) {
     JointErrorModel truth = rx170Model();
     truth.addEffect(std::make_unique<PayloadEffect>(truth.robot(), mass, com));
     const Campaigns c = plainCampaigns(truth, 221);
+    ASSERT_EQ(c.fit.command, nominal.fit.command);  // the truth's turn is as chosen
     const DiscoveryResult r = discoverOnly(c, {"payload"});
-    printOutcome("payload " + std::to_string(mass) + " kg", r);
+    printOutcome(caseName("payload [kg]", mass), r);
     // What discovery kept (the final model's payload, deflecting the joints through its compliances).
     const int index = r.model.findEffect(PayloadEffect::kType);
     if (index >= 0) {
@@ -167,14 +169,20 @@ TEST(DiscoveryTempting, AnUndeclaredPayloadBeyondThePlausibleIsNotAccepted) {
   }
 }
 
-// Every accepted lost-motion width (`parameter`, rad or rad/(N m)) is not negative and, times `scale`,
-// turns its joint by at most the bound.
+// Every accepted lost-motion width (`parameter`, rad or rad/(N m), named "<joint>.<parameter>") is not
+// negative and turns its joint by at most the bound: half the width times `scale` of its joint (1 for a
+// backlash, the joint's largest |load torque| over the rows for a hysteresis).
 void expectLostMotionPhysical(const DiscoveryResult& r, const std::string& family, const char* type,
-                              const std::string& parameter, double scale) {
+                              const std::string& parameter, const JointVector& scale) {
+  const std::vector<Joint>& joints = r.model.robot().joints;
   for (const NamedValue& p : acceptedValues(r, family, type)) {
     if (p.name.find(parameter) == std::string::npos) continue;
+    int joint = -1;
+    for (std::size_t j = 0; j < joints.size(); ++j)
+      if (p.name == joints[j].name + "." + parameter) joint = static_cast<int>(j);
+    ASSERT_GE(joint, 0) << p.name;
     EXPECT_GE(p.value, 0.0) << p.where << " " << p.name;
-    EXPECT_LE(0.5 * std::abs(p.value) * scale, kBound) << p.where << " " << p.name << " = " << p.value;
+    EXPECT_LE(0.5 * std::abs(p.value) * scale[joint], kBound) << p.where << " " << p.name << " = " << p.value;
   }
 }
 
@@ -196,8 +204,8 @@ TEST(DiscoveryTempting, ABacklashThatLeadsOrLosesTooMuchIsNotAccepted) {
     const JointErrorModel truth = withBacklash(k.width, 1);
     const Campaigns c = plainCampaigns(truth, 231);
     const DiscoveryResult r = discoverOnly(c, {"backlash"});
-    printOutcome("backlash j2 " + std::to_string(k.width), r);
-    expectLostMotionPhysical(r, "backlash", BacklashEffect::kType, "backlash_width_rad", 1.0);
+    printOutcome(caseName("backlash j2 [rad]", k.width), r);
+    expectLostMotionPhysical(r, "backlash", BacklashEffect::kType, "backlash_width_rad", JointVector::Ones(6));
     const std::string joint = truth.robot().joints[1].name;
     if (*k.refusal) {
       expectRefused(r, "backlash", joint, k.refusal);
@@ -207,22 +215,45 @@ TEST(DiscoveryTempting, ABacklashThatLeadsOrLosesTooMuchIsNotAccepted) {
   }
 }
 
-TEST(DiscoveryTempting, AHysteresisThatLeadsIsNotAccepted) {
-  for (double width : {-1.5e-6, 1.5e-6}) {  // rad/(N m)
+// The largest |load torque| of each joint over the rows, as the model computes it (gravity and its loads).
+JointVector largestLoadTorques(const JointErrorModel& model, const std::vector<JointVector>& commands) {
+  JointErrorWorkspace ws(model.robot());
+  JointContext ctx(model.robot().dof());
+  JointVector most = JointVector::Zero(model.robot().dof());
+  for (const JointVector& q : commands) {
+    ctx.q = q;
+    ctx.command = q;
+    computeLoadTorque(model, model.loadsAnd({}), ws, ctx);
+    most = most.cwiseMax(ctx.load_torque.cwiseAbs());
+  }
+  return most;
+}
+
+TEST(DiscoveryTempting, AHysteresisThatLeadsOrLosesTooMuchIsNotAccepted) {
+  // Joint 2 loses h |tau| / 2 each way: at h = 4 * 0.01 rad / max |tau| twice the bound, at a quarter of that
+  // half of it.
+  const JointVector torque = largestLoadTorques(rx170Model(), plainCampaigns(rx170Model(), 241).fit.command);
+  ASSERT_GT(torque[1], 100.0);
+  struct Case {
+    double width;         // rad/(N m)
+    const char* refusal;  // empty: accepted
+  };
+  for (const Case& k : {Case{-1.5e-6, "negative"}, Case{4.0 * kBound / torque[1], "beyond the plausible"},
+                        Case{kBound / torque[1], ""}}) {
     JointErrorModel truth = rx170Model();
     std::vector<double> w(6, 0.0);
-    w[1] = width;
+    w[1] = k.width;
     truth.addEffect(std::make_unique<HysteresisEffect>(truth.robot(), w));
     const Campaigns c = plainCampaigns(truth, 241);
+    ASSERT_EQ(largestLoadTorques(rx170Model(), c.fit.command), torque);  // the same poses as the nominal's
     const DiscoveryResult r = discoverOnly(c, {"hysteresis"});
-    printOutcome("hysteresis j2 " + std::to_string(width), r);
-    // The joints' torques stay far below 0.01 rad / 1.5e-6 rad/(N m): only the sign is tempted here.
-    expectLostMotionPhysical(r, "hysteresis", HysteresisEffect::kType, "hysteresis_width", 0.0);
+    printOutcome(caseName("hysteresis j2 [rad/(N m)]", k.width), r);
+    expectLostMotionPhysical(r, "hysteresis", HysteresisEffect::kType, "hysteresis_width_rad_per_nm", torque);
     const std::string joint = truth.robot().joints[1].name;
-    if (width < 0.0) {
-      expectRefused(r, "hysteresis", joint, "negative");
+    if (*k.refusal) {
+      expectRefused(r, "hysteresis", joint, k.refusal);
     } else {
-      EXPECT_NEAR(acceptedValue(r, joint + ".hysteresis_width_rad_per_nm"), width, 0.1 * width);
+      EXPECT_NEAR(acceptedValue(r, joint + ".hysteresis_width_rad_per_nm"), k.width, 0.1 * k.width);
     }
   }
 }
