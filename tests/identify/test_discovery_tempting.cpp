@@ -3,7 +3,9 @@
 // restricted to that family, must accept nothing of it beyond the constraint (the turn re-derived here by hand
 // from the accepted values and the campaign's rows) and say why, naming the constraint and the joint. The same
 // truth at half the bound is accepted, so the tests prove the bound rather than a blanket refusal. The drifts,
-// the payload and the lost motions here; the transmission errors in test_discovery_tempting_transmission.cpp.
+// the payload, the lost motions, a stiffening compliance and a bent link here (the cubic that turns back and the
+// link bent against its load are test_discovery_physical.cpp's and test_discovery_bounds.cpp's); the
+// transmission errors in test_discovery_tempting_transmission.cpp.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -14,6 +16,8 @@
 
 #include "model/effects/backlash.hpp"
 #include "model/effects/hysteresis.hpp"
+#include "model/effects/link_bending.hpp"
+#include "model/effects/nonlinear_compliance.hpp"
 #include "model/effects/payload.hpp"
 #include "model/effects/thermal_drift.hpp"
 #include "model/identify/discovery.hpp"
@@ -215,24 +219,32 @@ TEST(DiscoveryTempting, ABacklashThatLeadsOrLosesTooMuchIsNotAccepted) {
   }
 }
 
-// The largest |load torque| of each joint over the rows, as the model computes it (gravity and its loads).
-JointVector largestLoadTorques(const JointErrorModel& model, const std::vector<JointVector>& commands) {
+// Each row's load torques as the nominal model computes them (gravity and its loads), as discovery's rows carry.
+std::vector<JointVector> loadTorques(const std::vector<JointVector>& commands) {
+  const JointErrorModel model = rx170Model();
   JointErrorWorkspace ws(model.robot());
   JointContext ctx(model.robot().dof());
-  JointVector most = JointVector::Zero(model.robot().dof());
+  std::vector<JointVector> torques;
   for (const JointVector& q : commands) {
     ctx.q = q;
     ctx.command = q;
     computeLoadTorque(model, model.loadsAnd({}), ws, ctx);
-    most = most.cwiseMax(ctx.load_torque.cwiseAbs());
+    torques.push_back(ctx.load_torque);
   }
+  return torques;
+}
+
+// The largest |load torque| of each joint over the rows.
+JointVector largestLoadTorques(const std::vector<JointVector>& commands) {
+  JointVector most = JointVector::Zero(6);
+  for (const JointVector& tau : loadTorques(commands)) most = most.cwiseMax(tau.cwiseAbs());
   return most;
 }
 
 TEST(DiscoveryTempting, AHysteresisThatLeadsOrLosesTooMuchIsNotAccepted) {
   // Joint 2 loses h |tau| / 2 each way: at h = 4 * 0.01 rad / max |tau| twice the bound, at a quarter of that
   // half of it.
-  const JointVector torque = largestLoadTorques(rx170Model(), plainCampaigns(rx170Model(), 241).fit.command);
+  const JointVector torque = largestLoadTorques(plainCampaigns(rx170Model(), 241).fit.command);
   ASSERT_GT(torque[1], 100.0);
   struct Case {
     double width;         // rad/(N m)
@@ -245,7 +257,7 @@ TEST(DiscoveryTempting, AHysteresisThatLeadsOrLosesTooMuchIsNotAccepted) {
     w[1] = k.width;
     truth.addEffect(std::make_unique<HysteresisEffect>(truth.robot(), w));
     const Campaigns c = plainCampaigns(truth, 241);
-    ASSERT_EQ(largestLoadTorques(rx170Model(), c.fit.command), torque);  // the same poses as the nominal's
+    ASSERT_EQ(largestLoadTorques(c.fit.command), torque);  // the same poses as the nominal's
     const DiscoveryResult r = discoverOnly(c, {"hysteresis"});
     printOutcome(caseName("hysteresis j2 [rad/(N m)]", k.width), r);
     expectLostMotionPhysical(r, "hysteresis", HysteresisEffect::kType, "hysteresis_width_rad_per_nm", torque);
@@ -254,6 +266,76 @@ TEST(DiscoveryTempting, AHysteresisThatLeadsOrLosesTooMuchIsNotAccepted) {
       expectRefused(r, "hysteresis", joint, k.refusal);
     } else {
       EXPECT_NEAR(acceptedValue(r, joint + ".hysteresis_width_rad_per_nm"), k.width, 0.1 * k.width);
+    }
+  }
+}
+
+TEST(DiscoveryTempting, AStiffeningComplianceBeyondThePlausibleIsNotAccepted) {
+  // Joint 2 deflects by C tau + c3 tau^3 (C its linear compliance, the prior's): c3 chosen so that the largest
+  // torque of the rows (M) deflects it by twice the bound (and by half of it).
+  const JointVector torque = largestLoadTorques(plainCampaigns(rx170Model(), 271).fit.command);
+  const double m = torque[1], linear = 1.0 / stiffnessOf(rx170Model(), 1);
+  ASSERT_LT(linear * m, 0.1 * kBound);
+  for (double times_bound : {2.0, 0.5}) {
+    const double cubic = (times_bound * kBound - linear * m) / (m * m * m);
+    JointErrorModel truth = rx170Model();
+    std::vector<double> c3(6, 0.0);
+    c3[1] = cubic;
+    truth.addEffect(std::make_unique<NonlinearComplianceEffect>(truth.robot(), c3));
+    const Campaigns c = plainCampaigns(truth, 271);
+    ASSERT_EQ(largestLoadTorques(c.fit.command), torque);
+    const DiscoveryResult r = discoverOnly(c, {"nonlinear_compliance"});
+    printOutcome(caseName("nonlinear compliance j2 [rad/(N m)^3]", cubic), r);
+    const std::vector<Joint>& joints = r.model.robot().joints;
+    for (const NamedValue& p : acceptedValues(r, "nonlinear_compliance", NonlinearComplianceEffect::kType)) {
+      for (std::size_t j = 0; j < joints.size(); ++j) {
+        if (p.name != joints[j].name + ".cubic_compliance_rad_per_nm3") continue;
+        const double t = torque[static_cast<int>(j)];  // the deflection is monotone: largest at the largest torque
+        EXPECT_LE(std::abs(t / stiffnessOf(r.model, static_cast<int>(j)) + p.value * t * t * t), kBound)
+            << p.where << " " << p.name << " = " << p.value;
+      }
+    }
+    if (times_bound > 1.0) {
+      expectRefused(r, "nonlinear_compliance", joints[1].name, "beyond the plausible");
+    } else {
+      EXPECT_NEAR(acceptedValue(r, joints[1].name + ".cubic_compliance_rad_per_nm3"), cubic, 0.1 * cubic);
+    }
+  }
+}
+
+TEST(DiscoveryTempting, ALinkBentBeyondThePlausibleIsNotAccepted) {
+  // The upper arm (joint 2 to joint 3, lever L) bends by s F: both joints turn by s |tau_2 - tau_3| / L^2,
+  // at most at the rows' largest torque difference D. s chosen to turn them by twice the bound (and half).
+  const double lever = parallelLinkLevers(*rx170())[1];
+  ASSERT_GT(lever, 0.1);
+  const auto largestDifference = [](const std::vector<JointVector>& commands) {
+    double most = 0.0;
+    for (const JointVector& tau : loadTorques(commands)) most = std::max(most, std::abs(tau[1] - tau[2]));
+    return most;
+  };
+  const double difference = largestDifference(plainCampaigns(rx170Model(), 281).fit.command);
+  for (double times_bound : {2.0, 0.5}) {
+    const double s = times_bound * kBound * lever * lever / difference;
+    JointErrorModel truth = rx170Model();
+    truth.addEffect(std::make_unique<LinkBendingEffect>(truth.robot(), std::vector<double>{0, s, 0, 0, 0, 0}));
+    const Campaigns c = plainCampaigns(truth, 281);
+    ASSERT_EQ(largestDifference(c.fit.command), difference);
+    const DiscoveryResult r = discoverOnly(c, {"link_bending"});
+    printOutcome(caseName("link bending j2 [m/N]", s), r);
+    const std::string name = truth.robot().joints[1].name + ".link_bending_deflection_m_per_n";
+    for (const NamedValue& p : acceptedValues(r, "link_bending", LinkBendingEffect::kType)) {
+      if (p.name.find("link_bending_deflection") == std::string::npos) continue;  // EI, reported beside s
+      if (p.name != name) {  // the RX170's only link between parallel joints is the upper arm
+        EXPECT_EQ(p.value, 0.0) << p.where << " " << p.name;
+        continue;
+      }
+      EXPECT_GE(p.value, 0.0) << p.where;
+      EXPECT_LE(std::abs(p.value) * difference / (lever * lever), kBound) << p.where << " " << p.value;
+    }
+    if (times_bound > 1.0) {
+      expectRefused(r, "link_bending", truth.robot().joints[1].name, "beyond the plausible");
+    } else {
+      EXPECT_NEAR(acceptedValue(r, name), s, 0.1 * s);
     }
   }
 }
