@@ -75,10 +75,11 @@ std::vector<char*> takeCampaignArguments(int argc, char** argv, std::vector<std:
 int runCalibrate(int argc, char** argv) {
   std::vector<std::string> campaign_paths, holdouts;
   std::vector<char*> rest = takeCampaignArguments(argc, argv, campaign_paths, holdouts);
-  const Options options(static_cast<int>(rest.size()), rest.data(),
-                        {"urdf", "base-link", "tip-link", "campaign", "holdout", "params", "out", "loss",
-                         "loss-scale-mm", "pivot-threshold", "fix", "target", "base-frame", "no-plot", "quiet"},
-                        {"no-plot", "quiet"});
+  const Options options(
+      static_cast<int>(rest.size()), rest.data(),
+      {"urdf", "base-link", "tip-link", "campaign", "holdout", "params", "out", "loss", "loss-scale-mm",
+       "pivot-threshold", "fix", "target", "base-frame", "geometry-limits", "no-plot", "quiet"},
+      {"no-plot", "quiet"});
   if (campaign_paths.empty() || !options.has("out")) {
     throw std::invalid_argument(
         "calibrate needs --campaign CAMPAIGN.csv[,MORE.csv] and --out DIR (and --urdf FILE, --params FILE, "
@@ -101,6 +102,7 @@ int runCalibrate(int argc, char** argv) {
   calibration.identifiability.relative_pivot_threshold =
       options.number("pivot-threshold", calibration.identifiability.relative_pivot_threshold, {0.0, 1.0, true});
   calibration.fixed = expandedFixNames(splitCommaList(options.get("fix", "")));
+  calibration.limits = geometryLimitsFrom(options);
   calibration.progress = consoleProgress(options);
 
   std::printf("jointcomp calibrate: robot %s (%s), campaign %s\n", robot->name.c_str(), urdf.c_str(),

@@ -1,7 +1,7 @@
 // What calibrate and discover share about where the campaigns were measured: the target on the flange
 // (--target, the campaigns' `# target:`, the parameter file's "tool") and the robot base's pose in the
 // instrument's frame (--base-frame, the campaigns' `# base_frame:`),
-// and the --fix groups ("target", "frame", "base").
+// the --fix groups ("target", "frame", "base"), and how far the fitted geometry may go (--geometry-limits).
 #pragma once
 
 #include <cmath>
@@ -17,6 +17,22 @@
 #include "model/io/urdf_writer.hpp"
 
 namespace jointcomp::cli {
+
+// --geometry-limits OFFSET_DEG,SHIFT_MM,TURN_DEG: what a joint's zero, its axis's place and its axis's turn
+// may be corrected by (GeometryLimits; each above 0); the defaults when not given.
+inline GeometryLimits geometryLimitsFrom(const Options& options) {
+  GeometryLimits limits;
+  if (!options.has("geometry-limits")) return limits;
+  const std::vector<double> values =
+      numberList(options.get("geometry-limits", ""), "geometry-limits", {0.0, 1e6, true});
+  if (values.size() != 3)
+    throw UsageError("--geometry-limits takes OFFSET_DEG,SHIFT_MM,TURN_DEG (three numbers above 0)");
+  constexpr double kRadian = 3.14159265358979323846 / 180.0;
+  limits.offset = values[0] * kRadian;
+  limits.placement_shift = values[1] * 1e-3;
+  limits.placement_turn = values[2] * kRadian;
+  return limits;
+}
 
 // --fix takes parameter names, and "target", "frame" and "base" (the same six as "frame": the base's pose
 // in the instrument's frame) for their groups.

@@ -111,6 +111,7 @@ DiscoveryOptions discoveryOptionsFrom(const Options& options) {
   discovery.calibration.loss = parseRobustLoss(options.get("loss", "huber"));
   discovery.calibration.progress = consoleProgress(options);
   discovery.calibration.fixed = expandedFixNames(splitCommaList(options.get("fix", "")));
+  discovery.calibration.limits = geometryLimitsFrom(options);
   const std::string base = options.get("base", "textbook");
   if (base != "frame" && base != "textbook")
     throw std::invalid_argument("--base must be frame or textbook, not '" + base + "'");
@@ -171,6 +172,7 @@ int runDiscover(int argc, char** argv) {
                          "target",
                          "base-frame",
                          "fix",
+                         "geometry-limits",
                          "no-pairs",
                          "holdout-same-instrument",
                          "no-plot",

@@ -42,6 +42,9 @@ constexpr OptionHelp kOptionHelp[] = {
     {"loss-scale-mm", "scale of the robust loss in mm, above 0 (default: from the least-squares residuals)"},
     {"pivot-threshold", "relative pivot below which a parameter counts as not identifiable, above 0 and at most 1"},
     {"fix", "calibration parameters held at nominal, comma-separated names"},
+    {"geometry-limits",
+     "OFFSET_DEG,SHIFT_MM,TURN_DEG: the largest correction of a joint's zero, of where its axis sits in its link, "
+     "and of the axis's direction that a calibration may fit (default 5.73,20,2.86); a fit beyond is refused"},
     {"base",
      "discovery's base model: textbook (default: frame, target, joint offsets, the identifiable geometry and "
      "compliance, as calibrate fits them, so discover is never worse than calibrate) or frame (frame and target "

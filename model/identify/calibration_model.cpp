@@ -3,6 +3,7 @@
 #include "model/identify/geometric_calibration.hpp"
 
 #include <cmath>
+#include <cstdio>
 
 #include <Eigen/SVD>
 
@@ -193,6 +194,29 @@ std::string geometricParameterUnit(const std::string& name) {
   if (ends("instrument.scale")) return "1";
   if (ends("_rad")) return "rad";
   return "m";
+}
+
+std::string geometryBeyondLimits(const Robot& robot, const GeometricParameters& p, const GeometryLimits& limits) {
+  if (p.dof() != robot.dof()) throw InvalidArgument("geometryBeyondLimits: parameters and robot differ in joint count");
+  std::string out;
+  const auto beyond = [&](const std::string& what, double size, double limit, const char* unit, double shown) {
+    if (size <= limit) return;  // false for NaN: a NaN is beyond
+    char text[240];
+    std::snprintf(text, sizeof(text), "%s %.4g %s beyond the plausible %.4g %s", what.c_str(), size * shown, unit,
+                  limit * shown, unit);
+    out += (out.empty() ? "" : "; ") + std::string(text);
+  };
+  constexpr double kDegree = 180.0 / 3.14159265358979323846;
+  for (int j = 0; j < robot.dof(); ++j) {
+    const std::string& name = robot.joints[static_cast<std::size_t>(j)].name;
+    const Vector6& c = p.placement[static_cast<std::size_t>(j)];
+    beyond(name + ".offset_rad: the joint's zero moves by", std::abs(p.offset[j]), limits.offset, "deg", kDegree);
+    beyond(name + ".placement_d*_m: the joint's axis moves in its link by", c.head<3>().norm(), limits.placement_shift,
+           "mm", 1e3);
+    beyond(name + ".placement_r*_rad: the joint's axis turns in its link by", c.tail<3>().norm(), limits.placement_turn,
+           "deg", kDegree);
+  }
+  return out;
 }
 
 Robot correctedRobot(const Robot& nominal, const GeometricParameters& parameters) {

@@ -237,9 +237,11 @@ public:
                                               std::to_string(features_.candidates.size()) + " candidates");
     result_.stop_reason = "max_steps reached";
     for (int step = 0; step < options_.max_steps; ++step) {
+      const std::size_t taken = result_.steps.size();
       if (!takeStep()) break;
+      if (result_.steps.size() == taken) continue;  // undone after its refit (undone_ says why)
       const DiscoveryStep& s = result_.steps.back();
-      report(options_.calibration.progress, "discovery step " + std::to_string(step + 1) + ": " + s.type +
+      report(options_.calibration.progress, "discovery step " + std::to_string(taken + 1) + ": " + s.type +
                                                 (s.joint_name.empty() ? "" : " " + s.joint_name) + s.detail +
                                                 ", fitted RMS " + std::to_string(s.after.fitted.rms * 1e3) + " mm");
     }
@@ -452,6 +454,7 @@ private:
     record.before = state_;
     std::vector<int> newly_released;  // calibration parameters this step frees
     const std::set<int> free_before(cal_.free.begin(), cal_.free.end());
+    const std::set<int> released_before = released_;
     for (int c : chosen.candidates) {
       offered_[static_cast<std::size_t>(c)] = false;
       for (int idx : features_.releases[static_cast<std::size_t>(c)]) {
@@ -461,12 +464,17 @@ private:
     }
     const std::size_t first_new = active_.size();
     const std::vector<Active> active_before = active_;
-    const std::set<int> released_before = released_;
     acceptCoefficients(chosen);
-    refit(!newly_released.empty());
-    const std::string unphysical = unphysicalActive();
+    std::string unphysical;
+    try {
+      refit(!newly_released.empty());
+      unphysical = unphysicalActive();
+    } catch (const ImplausibleGeometry& e) {
+      unphysical = std::string("not physical: ") + e.what();  // a freed offset or placement beyond its limit
+    }
     if (!unphysical.empty()) {
-      // The joint refit carried an effect beyond what is physical: the step is undone and not offered again.
+      // The joint refit carried an effect or the geometry beyond what is physical: the step is undone and not
+      // offered again.
       active_ = active_before;
       released_ = released_before;
       refit(true);

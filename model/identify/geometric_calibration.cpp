@@ -466,6 +466,18 @@ FitOutcome fitKeepingCompliancePlausible(const Robot& robot, const CalibrationDa
   return fit;
 }
 
+// Refuses a fit whose geometry no real robot has: the corrections it needs are the URDF's or the data's.
+void refuseImplausibleGeometry(const Robot& robot, const GeometricParameters& estimate, const GeometryLimits& limits,
+                               const std::string& source) {
+  const std::string beyond = geometryBeyondLimits(robot, estimate, limits);
+  if (beyond.empty()) return;
+  throw ImplausibleGeometry(
+      source + ": the calibration's geometry is not a robot's: " + beyond +
+      ". A correction this large describes the URDF or the data: check the joint's zero and axis direction "
+      "against the maker's DH table, and the campaign's joint order and units (--geometry-limits "
+      "OFFSET_DEG,SHIFT_MM,TURN_DEG allows more)");
+}
+
 // The compliance acts on the load torques of the robot the calibration describes (what the written URDF
 // gives), not the nominal one's: refit on those. The placements change the torques by a little, so a
 // second round changes them by far less than the noise. The residual left in `fit` is the rows' error as
@@ -703,6 +715,7 @@ GeometricCalibrationResult calibrateGeometry(const JointErrorModel& prior,
     refitOnCalibratedTorques(prior, campaigns, setup_of_campaign, options, choice, data, fit);
   }
   result.estimate = GeometricParameters::fromVector(fit.values, n, setups);
+  refuseImplausibleGeometry(robot, result.estimate, options.limits, source);
   result.free = choice.free;
   result.loss_scale = fit.loss_scale;
   result.iterations = fit.solver.iterations;

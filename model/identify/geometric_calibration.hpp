@@ -43,6 +43,7 @@
 #include <string>
 #include <vector>
 
+#include "model/common/errors.hpp"
 #include "model/common/progress.hpp"
 #include "model/effects/joint_error_model.hpp"
 #include "model/identify/identifiability.hpp"
@@ -118,6 +119,28 @@ std::string geometricParameterUnit(const std::string& name);
 // The robot with its joint placements corrected: placement_i * Trans(d_i) * Exp(r_i). Offsets and
 // compliance are joint errors (the "offset" and "compliance" effects), not geometry.
 Robot correctedRobot(const Robot& nominal, const GeometricParameters& parameters);
+
+// How far a real robot's geometry can be from its URDF: a joint's zero (a mastering error; 0.1 rad, 5.7 deg,
+// is a whole motor turn slipped on a gear of 63:1 or more) and where its axis sits in its link (machining
+// and assembly, tenths of a millimetre and of a degree on real arms; the UR10 of ../shared/data moves by at
+// most 0.8 mm and 1.3 mrad). A calibration that needs more is describing its URDF or its data, not the
+// robot, and is refused (ImplausibleGeometry).
+struct GeometryLimits {
+  double offset = 0.1;            // rad, |offset| of each joint
+  double placement_shift = 0.02;  // m, |(dx, dy, dz)| of each joint's placement
+  double placement_turn = 0.05;   // rad, |(rx, ry, rz)|, the angle the axis is turned by (2.9 deg)
+};
+
+// A calibration whose fitted geometry lies beyond its GeometryLimits.
+class ImplausibleGeometry : public InvalidArgument {
+public:
+  using InvalidArgument::InvalidArgument;
+};
+
+// Empty when every joint's offset and placement of `p` lies within `limits`; else each one beyond them,
+// named, with its size and its limit ("joint_3.offset_rad 0.2 rad (11.5 deg) beyond the plausible ...").
+// NaN limits or parameters are beyond.
+std::string geometryBeyondLimits(const Robot& robot, const GeometricParameters& p, const GeometryLimits& limits);
 
 // The rows of a campaign in the form the measurement model needs.
 struct CalibrationData {
@@ -195,6 +218,8 @@ struct GeometricCalibrationOptions {
   // so its instrument scale applies; false: another set-up, evaluated without it
   bool same_instrument = false;
   std::vector<std::string> fixed;  // parameter names held at nominal whatever the data say
+  // What the fitted offsets and placements may come to: a fit beyond is refused (ImplausibleGeometry).
+  GeometryLimits limits;
   IdentifiabilityOptions identifiability;
   RobustLoss loss = RobustLoss::Huber;
   // Scale k of the robust loss (m); 0: loss_scale_sigmas times the robust per-axis sigma of the
