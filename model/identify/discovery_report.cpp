@@ -304,15 +304,15 @@ std::string discoverySummary(const DiscoveryResult& result, const DiscoveryOptio
         std::snprintf(line, sizeof(line), "    %-48s %.6g\n", p.name.c_str(), p.value);
       summary << line;
     }
-    if (!s.rejected.empty()) summary << "    rejected, does not transfer: " << s.rejected << "\n";
+    if (!s.rejected.empty()) summary << "    rejected: " << s.rejected << "\n";
   }
-  std::snprintf(line, sizeof(line),
-                "stopped: %s\nfinal: fitted RMS %.4f mm, held-out RMS [mm] %s; noise floor %.4f mm (3-D RMS)%s\n",
+  char floor[64] = "not known (--noise-floor-mm gives it)";
+  if (result.noise_floor > 0.0) std::snprintf(floor, sizeof(floor), "%.4f mm (3-D RMS)", result.noise_floor * 1e3);
+  std::snprintf(line, sizeof(line), "stopped: %s\nfinal: fitted RMS %.4f mm, held-out RMS [mm] %s; noise floor %s\n",
                 result.stop_reason.c_str(), result.final_state.fitted.rms * 1e3,
-                heldRms(result.final_state, sources).c_str(), result.noise_floor * 1e3,
-                result.noise_floor > 0.0 ? "" : " (not known: give the noise floor)");
+                heldRms(result.final_state, sources).c_str(), floor);
   summary << line;
-  if (!result.rejected_at_stop.empty()) summary << "rejected, does not transfer: " << result.rejected_at_stop << "\n";
+  if (!result.rejected_at_stop.empty()) summary << "rejected: " << result.rejected_at_stop << "\n";
   summary << finalParameters(result);
   if (result.unexplained.above_floor || !result.unexplained.floor_known) summary << result.unexplained.summary << "\n";
   // Paths: Ra and Rz of the Z error, base model -> final model.

@@ -256,7 +256,7 @@ Choice chooseCandidate(const Selection& s) {
     if (e.passes() && (!best || e.fit.cv < best->fit.cv)) best = &e;
     if (e.gains && !e.passes() && e.fit.cv < rejected_cv) {
       rejected_cv = e.fit.cv;
-      choice.rejected = label(s, e) + ": " + (e.unphysical.empty() ? e.hurt : e.unphysical);
+      choice.rejected = label(s, e) + ": " + (e.unphysical.empty() ? "does not transfer, " + e.hurt : e.unphysical);
     }
   }
   // Of the candidates tied with the best, the one with the fewest (effective) parameters, then the lowest BIC:

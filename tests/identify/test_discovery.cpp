@@ -176,6 +176,7 @@ TEST(Discovery, RejectsATermThatHelpsOnePartAndHurtsAnother) {
   EXPECT_FALSE(found(r, "offset", 2));
   EXPECT_THAT(r.rejected_at_stop, ::testing::HasSubstr("offset joint 3"));
   EXPECT_THAT(r.rejected_at_stop, ::testing::HasSubstr("part"));
+  EXPECT_THAT(r.rejected_at_stop, ::testing::HasSubstr("offset joint 3: does not transfer, CV error"));
   // The same offset everywhere transfers and is found.
   const DiscoveryResult everywhere = discoverEffects(rx170Model(), {biased}, {}, options);
   EXPECT_TRUE(found(everywhere, "offset", 2));

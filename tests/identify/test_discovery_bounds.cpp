@@ -173,6 +173,8 @@ TEST(DiscoveryBounds, ALinkBentAgainstItsLoadIsNotDiscovered) {
     }
   }
   EXPECT_NE(rejected.find("against its load"), std::string::npos) << rejected;
+  // Refused as not physical, which is not said to be a failure to transfer.
+  EXPECT_EQ(rejected.find("does not transfer"), std::string::npos) << rejected;
 }
 
 }  // namespace
