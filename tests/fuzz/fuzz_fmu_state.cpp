@@ -190,19 +190,23 @@ void writeSeeds(const std::string& dir) {
       fmi2EnterInitializationMode(c) != fmi2OK) {
     die("cannot initialise");
   }
-  saveFmi2State(c, dir + "/initialization_mode.bin");
-  if (fmi2ExitInitializationMode(c) != fmi2OK) die("cannot leave initialisation mode");
-  const double h = 0.004;
-  for (int k = 0; k < 25; ++k) {
+  // The joints' desired angles at step k (k = 0 during initialisation: an input set then makes the FMU
+  // follow its inputs rather than its built-in demo move).
+  const auto setDesired = [&](int k) {
     std::vector<fmi2ValueReference> vrs;
     std::vector<fmi2Real> q;
     for (int j = 0; j < fmuTable().dof(); ++j) {
       vrs.push_back(static_cast<fmi2ValueReference>(fmuTable().roles.q_desired[j]));
       q.push_back(0.002 * (j + 1) * k);
     }
-    if (fmi2SetReal(c, vrs.data(), vrs.size(), q.data()) != fmi2OK || fmi2DoStep(c, k * h, h, kFmi2True) != fmi2OK) {
-      die("cannot step");
-    }
+    return fmi2SetReal(c, vrs.data(), vrs.size(), q.data()) == fmi2OK;
+  };
+  if (!setDesired(0)) die("cannot set the desired angles during initialisation");
+  saveFmi2State(c, dir + "/initialization_mode.bin");
+  if (fmi2ExitInitializationMode(c) != fmi2OK) die("cannot leave initialisation mode");
+  const double h = 0.004;
+  for (int k = 0; k < 25; ++k) {
+    if (!setDesired(k) || fmi2DoStep(c, k * h, h, kFmi2True) != fmi2OK) die("cannot step");
   }
   saveFmi2State(c, dir + "/step_mode.bin");
   if (fmi2Terminate(c) != fmi2OK) die("cannot terminate");
