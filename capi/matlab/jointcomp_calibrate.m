@@ -5,7 +5,8 @@ function [calibrated, report] = jointcomp_calibrate(robot, campaign_path, holdou
 %   CAMPAIGN_PATH (one file, or a cell array of files: campaigns from different instrument set-ups each
 %   get their own frame) and checks the result on HOLDOUT_PATHS (a cell array of campaign files, may be {}).
 %   OPTIONS is a struct with the fields of jc_calibrate's options_json (loss, loss_scale_mm,
-%   pivot_threshold, fixed), may be omitted. CALIBRATED is a new robot handle (free it with
+%   pivot_threshold, fixed, max_offset_deg, max_placement_shift_mm, max_placement_turn_deg), may be omitted.
+%   CALIBRATED is a new robot handle (free it with
 %   JOINTCOMP_ROBOT_FREE); REPORT is the report decoded from JSON (jsondecode).
 if nargin < 3
     holdout_paths = {};

@@ -44,6 +44,17 @@ RobustLoss lossOption(JsonFields& fields) {
   return parseRobustLoss(name);
 }
 
+// "max_offset_deg", "max_placement_shift_mm", "max_placement_turn_deg": how far the fitted geometry may go
+// (GeometryLimits; the defaults where not given).
+void readGeometryLimits(JsonFields& fields, GeometryLimits& limits) {
+  constexpr double kRadian = 3.14159265358979323846 / 180.0;
+  if (fields.has("max_offset_deg")) limits.offset = fields.positiveNumber("max_offset_deg") * kRadian;
+  if (fields.has("max_placement_shift_mm"))
+    limits.placement_shift = fields.positiveNumber("max_placement_shift_mm") * 1e-3;
+  if (fields.has("max_placement_turn_deg"))
+    limits.placement_turn = fields.positiveNumber("max_placement_turn_deg") * kRadian;
+}
+
 std::vector<std::string> textList(JsonFields& fields, const std::string& key) {
   std::vector<std::string> items;
   const nlohmann::json& array = fields.array(key);
@@ -268,6 +279,7 @@ jc_status jc_calibrate(jc_robot* nominal, const char* campaign_path, const char*
         options.identifiability.relative_pivot_threshold = fields.positiveNumber("pivot_threshold");
       }
       if (fields.has("fixed")) options.fixed = textList(fields, "fixed");
+      readGeometryLimits(fields, options.limits);
     });
     std::vector<MeasurementCampaign> campaigns;
     std::string joined;
@@ -318,6 +330,7 @@ jc_status jc_discover(jc_robot* nominal, const char* campaign_paths, const char*
       if (fields.has("min_cv_gain")) options.min_cv_gain = fields.nonNegativeNumber("min_cv_gain");
       if (fields.has("noise_floor_mm")) options.noise_floor = fields.nonNegativeNumber("noise_floor_mm") * 1e-3;
       if (fields.has("loss")) options.calibration.loss = lossOption(fields);
+      readGeometryLimits(fields, options.calibration.limits);
       if (fields.has("types")) {
         options.types = textList(fields, "types");
         for (const std::string& type : options.types) {

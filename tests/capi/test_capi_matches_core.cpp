@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
 #include <jointcomp/jointcomp.h>
 #include <unistd.h>
@@ -516,6 +517,22 @@ TEST_F(CapiMatchesCore, SimulationIdentificationAndCalibration) {
   EXPECT_EQ(parametersOf(extended), parametersToJson(found.model, drives_, &found_frames.tool,
                                                      found_frames.base_frame ? &*found_frames.base_frame : nullptr));
   EXPECT_EQ(jc_robot_free(extended), JC_OK);
+
+  // The geometry limits reach the fit: the fitted joint offsets (of the noise, a few microradians) lie
+  // beyond a limit of 1e-12 deg, so that both calls are refused naming an offset; a limit that is not a
+  // positive number is refused naming its key.
+  jc_robot* refused = nullptr;
+  EXPECT_EQ(jc_calibrate(handle_, poses_path.c_str(), nullptr, R"({"max_offset_deg": 1e-12})", &refused, nullptr),
+            JC_ERROR_INVALID_ARGUMENT);
+  EXPECT_THAT(jc_last_error(), ::testing::HasSubstr(".offset_rad: the joint's zero moves by"));
+  EXPECT_EQ(refused, nullptr);
+  EXPECT_EQ(jc_discover(handle_, poses_path.c_str(), nullptr, R"({"max_steps": 1, "max_offset_deg": 1e-12})", &refused,
+                        nullptr),
+            JC_ERROR_INVALID_ARGUMENT);
+  EXPECT_THAT(jc_last_error(), ::testing::HasSubstr(".offset_rad: the joint's zero moves by"));
+  EXPECT_EQ(jc_calibrate(handle_, poses_path.c_str(), nullptr, R"({"max_placement_turn_deg": -1})", &refused, nullptr),
+            JC_ERROR_INVALID_ARGUMENT);
+  EXPECT_THAT(jc_last_error(), ::testing::HasSubstr("max_placement_turn_deg"));
   std::remove(sweep_path.c_str());
   std::remove(poses_path.c_str());
 }

@@ -358,7 +358,9 @@ JOINTCOMP_API jc_status jc_identify_transmission_error(jc_robot* nominal, const 
    from different instrument set-ups each get their own frame); held-out campaigns (holdout_paths, may be NULL) are
    checked with only their instrument frame re-fitted. options: "loss": "huber" (default), "cauchy" or "none";
    "loss_scale_mm" (> 0; default: from the residuals); "pivot_threshold" (default 1e-4); "fixed" (names of
-   parameters held at nominal, as the report names them). *calibrated: the corrected robot. */
+   parameters held at nominal, as the report names them); "max_offset_deg" (5.73), "max_placement_shift_mm"
+   (20), "max_placement_turn_deg" (2.86): a fit whose joint zero, axis position or axis direction moves further
+   is refused with JC_ERROR_INVALID_ARGUMENT naming the joint. *calibrated: the corrected robot. */
 JOINTCOMP_API jc_status jc_calibrate(jc_robot* nominal, const char* campaign_path, const char* holdout_paths,
                                      const char* options_json, jc_robot** calibrated, jc_report** report);
 /** Residual discovery: the effects the model misses, added one at a time while they lower the time-blocked
@@ -366,9 +368,10 @@ JOINTCOMP_API jc_status jc_calibrate(jc_robot* nominal, const char* campaign_pat
    campaigns (at least one); holdout_paths: NULL or the held-out ones. options: "base": "textbook" (default,
    as jc_calibrate fits it) or "frame"; "max_steps" (default 8); "max_harmonic_order" (default 4); "folds"
    (default 5); "min_cv_gain" (default 0.02); "noise_floor_mm" (default: from the campaigns); "types" (effect
-   types to try, default all); "loss" as for jc_calibrate; "table_knots" (default [16, 32, 64, 128]),
-   "max_prior_weight" (10), "max_ridge_weight" (1), "transfer_significance" (3), "min_group_share" (0.05),
-   "angle_ranges" (5), "pairs" (true). *extended: the robot with the discovered effects. */
+   types to try, default all); "loss" and the geometry limits as for jc_calibrate;
+   "table_knots" (default [16, 32, 64, 128]), "max_prior_weight" (10), "max_ridge_weight" (1),
+   "transfer_significance" (3), "min_group_share" (0.05), "angle_ranges" (5), "pairs" (true). *extended: the
+   robot with the discovered effects. */
 JOINTCOMP_API jc_status jc_discover(jc_robot* nominal, const char* campaign_paths, const char* holdout_paths,
                                     const char* options_json, jc_robot** extended, jc_report** report);
 /** The report as JSON (the same document the command-line tool writes as report.json); buffer as for

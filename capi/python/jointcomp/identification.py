@@ -102,7 +102,8 @@ def identify_transmission_error(nominal, campaign_path, **options):
 def calibrate(nominal, campaigns, holdouts=None, **options):
     """Kinematic calibration on ``campaigns`` (one path or several: campaigns from different instrument
     set-ups each get their own frame), checked on ``holdouts`` (paths; their instrument frame re-fitted).
-    Options: loss ("huber", "cauchy", "none"), loss_scale_mm, pivot_threshold, fixed (names)."""
+    Options: loss ("huber", "cauchy", "none"), loss_scale_mm, pivot_threshold, fixed (names), and the
+    geometry limits max_offset_deg, max_placement_shift_mm, max_placement_turn_deg (a fit beyond is refused)."""
     if campaigns is None:
         raise TypeError("campaigns: a path or a sequence of paths is needed, not None")
     return _run(_native.lib.jc_calibrate, nominal.handle, _paths(campaigns, "campaigns"),
