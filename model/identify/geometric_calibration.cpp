@@ -475,7 +475,8 @@ void refuseImplausibleGeometry(const Robot& robot, const GeometricParameters& es
       source + ": the calibration's geometry is not a robot's: " + beyond +
       ". A correction this large describes the URDF or the data: check the joint's zero and axis direction "
       "against the maker's DH table, and the campaign's joint order and units (--geometry-limits "
-      "OFFSET_DEG,SHIFT_MM,TURN_DEG allows more)");
+      "OFFSET_DEG,SHIFT_MM,TURN_DEG, or the C API's max_offset_deg, max_placement_shift_mm and "
+      "max_placement_turn_deg, allow more)");
 }
 
 // The compliance acts on the load torques of the robot the calibration describes (what the written URDF
