@@ -27,10 +27,10 @@ inline GeometryLimits geometryLimitsFrom(const Options& options) {
       numberList(options.get("geometry-limits", ""), "geometry-limits", {0.0, 1e6, true});
   if (values.size() != 3)
     throw UsageError("--geometry-limits takes OFFSET_DEG,SHIFT_MM,TURN_DEG (three numbers above 0)");
-  constexpr double kRadian = 3.14159265358979323846 / 180.0;
-  limits.offset = values[0] * kRadian;
+  constexpr double kDegree = 3.14159265358979323846 / 180.0;  // rad
+  limits.offset = values[0] * kDegree;
   limits.placement_shift = values[1] * 1e-3;
-  limits.placement_turn = values[2] * kRadian;
+  limits.placement_turn = values[2] * kDegree;
   return limits;
 }
 

@@ -47,12 +47,11 @@ RobustLoss lossOption(JsonFields& fields) {
 // "max_offset_deg", "max_placement_shift_mm", "max_placement_turn_deg": how far the fitted geometry may go
 // (GeometryLimits; the defaults where not given).
 void readGeometryLimits(JsonFields& fields, GeometryLimits& limits) {
-  constexpr double kRadian = 3.14159265358979323846 / 180.0;
-  if (fields.has("max_offset_deg")) limits.offset = fields.positiveNumber("max_offset_deg") * kRadian;
+  if (fields.has("max_offset_deg")) limits.offset = fields.positiveNumber("max_offset_deg") * kDegree;
   if (fields.has("max_placement_shift_mm"))
     limits.placement_shift = fields.positiveNumber("max_placement_shift_mm") * 1e-3;
   if (fields.has("max_placement_turn_deg"))
-    limits.placement_turn = fields.positiveNumber("max_placement_turn_deg") * kRadian;
+    limits.placement_turn = fields.positiveNumber("max_placement_turn_deg") * kDegree;
 }
 
 std::vector<std::string> textList(JsonFields& fields, const std::string& key) {

@@ -206,15 +206,16 @@ std::string geometryBeyondLimits(const Robot& robot, const GeometricParameters& 
                   limit * shown, unit);
     out += (out.empty() ? "" : "; ") + std::string(text);
   };
-  constexpr double kDegree = 180.0 / 3.14159265358979323846;
+  constexpr double kDegreesPerRadian = 180.0 / 3.14159265358979323846;
   for (int j = 0; j < robot.dof(); ++j) {
     const std::string& name = robot.joints[static_cast<std::size_t>(j)].name;
     const Vector6& c = p.placement[static_cast<std::size_t>(j)];
-    beyond(name + ".offset_rad: the joint's zero moves by", std::abs(p.offset[j]), limits.offset, "deg", kDegree);
+    beyond(name + ".offset_rad: the joint's zero moves by", std::abs(p.offset[j]), limits.offset, "deg",
+           kDegreesPerRadian);
     beyond(name + ".placement_d*_m: the joint's axis moves in its link by", c.head<3>().norm(), limits.placement_shift,
            "mm", 1e3);
     beyond(name + ".placement_r*_rad: the joint's axis turns in its link by", c.tail<3>().norm(), limits.placement_turn,
-           "deg", kDegree);
+           "deg", kDegreesPerRadian);
   }
   return out;
 }
